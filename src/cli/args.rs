@@ -1,0 +1,124 @@
+//! Arguments shared by the catching subcommands, and their parsers.
+
+use clap::Args;
+use fieldhouse::fielding::{Limits, TrialConfig};
+use fieldhouse::perception::PerceptionConfig;
+use fieldhouse::physics::{AirModel, BallSpec, NATHAN_AIR_DENSITY};
+use glam::DVec2;
+
+/// The physical and perceptual setting of a catch.
+#[derive(Args, Debug, Clone)]
+pub struct Setting {
+    /// Air model: `nathan` (drag and Magnus lift) or `vacuum` (gravity only).
+    #[arg(long, default_value = "nathan", value_parser = parse_str::<AirModel>)]
+    pub air: AirModel,
+    /// Air density in kg/m³ (default: 70 °F at sea level, 50 % humidity).
+    #[arg(long, default_value_t = NATHAN_AIR_DENSITY, value_parser = positive)]
+    pub air_density: f64,
+    /// Ball preset: `baseball` or `cricket`.
+    #[arg(long, default_value = "baseball", value_parser = parse_str::<BallSpec>)]
+    pub ball: BallSpec,
+    /// Fielder limits: `human` (8.5 m/s, 4.5 m/s², 0.3 s reaction) or `none`.
+    #[arg(long, default_value = "human", value_parser = parse_str::<Limits>)]
+    pub limits: Limits,
+    /// Simulation rate in ticks per second.
+    #[arg(long, default_value_t = 60, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub tick_hz: u32,
+    /// Height of the fielder's eye in metres.
+    #[arg(long, default_value_t = 1.7, value_parser = positive)]
+    pub eye_height: f64,
+    /// Visuomotor delay in seconds (0 = off).
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    pub delay: f64,
+    /// Standard deviation of Gaussian noise on the optical angles, in degrees (0 = off).
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    pub noise_deg: f64,
+    /// Ticks between samples for the optical rate differences (widen it with noise).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=60))]
+    pub difference_span: u32,
+    /// Horizontal catching reach in metres.
+    #[arg(long, default_value_t = 1.0, value_parser = positive)]
+    pub reach: f64,
+}
+
+impl Setting {
+    pub fn dt(&self) -> f64 {
+        1.0 / f64::from(self.tick_hz)
+    }
+
+    pub fn trial_config(&self, seed: u64, record_trace: bool) -> TrialConfig {
+        let mut config = TrialConfig {
+            limits: self.limits,
+            perception: PerceptionConfig {
+                eye_height_m: self.eye_height,
+                delay_s: self.delay,
+                noise_rad: self.noise_deg.to_radians(),
+                difference_span: self.difference_span as usize,
+            },
+            record_trace,
+            seed,
+            ..TrialConfig::default()
+        };
+        config.zone.reach_m = self.reach;
+        config
+    }
+}
+
+pub fn parse_str<T: std::str::FromStr<Err = String>>(s: &str) -> Result<T, String> {
+    s.parse()
+}
+
+fn finite(s: &str) -> Result<f64, String> {
+    let x: f64 = s.trim().parse().map_err(|_| format!("\"{s}\" is not a number"))?;
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(format!("{s} is not a finite number"))
+    }
+}
+
+pub fn any_number(s: &str) -> Result<f64, String> {
+    finite(s)
+}
+
+pub fn positive(s: &str) -> Result<f64, String> {
+    let x = finite(s)?;
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("{s} must be greater than 0"))
+    }
+}
+
+pub fn non_negative(s: &str) -> Result<f64, String> {
+    let x = finite(s)?;
+    if x >= 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("{s} must not be negative"))
+    }
+}
+
+/// A ground position written `X,Z` in metres; either may be negative (`-12.5,40`).
+pub fn ground_point(s: &str) -> Result<DVec2, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    match parts.as_slice() {
+        [x, z] => Ok(DVec2::new(finite(x)?, finite(z)?)),
+        _ => Err(format!("\"{s}\" is not a position; write it as X,Z in metres, e.g. -12.5,40")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ground_points_parse_with_signs_and_reject_junk() {
+        assert_eq!(ground_point("-12.5,40"), Ok(DVec2::new(-12.5, 40.0)));
+        assert_eq!(ground_point(" 3 , -4 "), Ok(DVec2::new(3.0, -4.0)));
+        assert!(ground_point("3").unwrap_err().contains("X,Z"));
+        assert!(ground_point("3,4,5").is_err());
+        assert!(ground_point("nan,4").unwrap_err().contains("finite"));
+        assert!(ground_point("a,4").unwrap_err().contains("not a number"));
+    }
+}

@@ -1,0 +1,55 @@
+//! The command line: one subcommand per job, `--json` for one machine-readable document on
+//! stdout, logs and progress on stderr.
+
+mod args;
+mod catch;
+mod plots;
+mod sweep;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "fieldhouse",
+    version,
+    about = "A multi-agent team sports simulation server",
+    long_about = "fieldhouse simulates team sports with agents that act on what they perceive. \
+        Today it runs fly-ball catching experiments: outfielders chasing baseballs or cricket \
+        balls with Chapman's optical acceleration cancellation, the Linear Optical Trajectory, \
+        or trajectory prediction.\n\nSet FIELDHOUSE_LOG (e.g. FIELDHOUSE_LOG=debug) for more log output on stderr."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// One fielder, one fly ball: did it catch it, and how did it run?
+    Catch(catch::CatchArgs),
+    /// Many fly balls, every strategy on the same balls: catch rates, efforts, path shapes.
+    CatchSweep(sweep::SweepArgs),
+}
+
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_env("FIELDHOUSE_LOG")
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let result = match cli.command {
+        Command::Catch(args) => catch::run(args),
+        Command::CatchSweep(args) => sweep::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,208 @@
+//! SVG plots of a sweep: what the fielders did and what they saw. People would rather look
+//! at these than read them.
+
+use anyhow::{anyhow, Result};
+use fieldhouse::fielding::{SweepCase, SweepReport, TrialResult};
+use glam::DVec2;
+use plotters::prelude::*;
+use std::path::Path;
+
+const SIZE: (u32, u32) = (720, 540);
+const COLOURS: [RGBColor; 5] = [
+    RGBColor(0, 114, 178),
+    RGBColor(213, 94, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(204, 121, 167),
+    RGBColor(230, 159, 0),
+];
+
+fn colour(i: usize) -> RGBColor {
+    COLOURS[i % COLOURS.len()]
+}
+
+fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+    anyhow!("drawing failed: {e:?}")
+}
+
+/// Smallest range that holds `xs`, padded by 5 %.
+fn span(xs: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (lo, hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+    if !lo.is_finite() || !hi.is_finite() {
+        return 0.0..1.0;
+    }
+    let pad = ((hi - lo) * 0.05).max(0.5);
+    (lo - pad)..(hi + pad)
+}
+
+/// A titled chart with a series per strategy, drawn into `file`.
+fn line_chart(
+    file: &Path,
+    title: &str,
+    (x_desc, y_desc): (&str, &str),
+    series: &[(String, Vec<(f64, f64)>)],
+    marks: &[(String, (f64, f64))],
+    equal_axes: bool,
+) -> Result<()> {
+    let root = SVGBackend::new(file, SIZE).into_drawing_area();
+    root.fill(&WHITE).map_err(plot_err)?;
+    let all = || series.iter().flat_map(|(_, pts)| pts.iter()).chain(marks.iter().map(|(_, p)| p));
+    let (mut xr, mut yr) = (span(all().map(|p| p.0)), span(all().map(|p| p.1)));
+    if equal_axes {
+        // Keep metres square so a path's curvature is not distorted.
+        let aspect = f64::from(SIZE.0 - 60) / f64::from(SIZE.1 - 80);
+        let (w, h) = (xr.end - xr.start, yr.end - yr.start);
+        if w / h < aspect {
+            let grow = (h * aspect - w) / 2.0;
+            xr = (xr.start - grow)..(xr.end + grow);
+        } else {
+            let grow = (w / aspect - h) / 2.0;
+            yr = (yr.start - grow)..(yr.end + grow);
+        }
+    }
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(36)
+        .y_label_area_size(48)
+        .build_cartesian_2d(xr, yr)
+        .map_err(plot_err)?;
+    chart.configure_mesh().x_desc(x_desc).y_desc(y_desc).draw().map_err(plot_err)?;
+    for (i, (name, pts)) in series.iter().enumerate() {
+        let c = colour(i);
+        chart
+            .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))
+            .map_err(plot_err)?
+            .label(name.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
+    }
+    for (label, p) in marks {
+        chart
+            .draw_series(std::iter::once(Cross::new(*p, 5, BLACK.stroke_width(2))))
+            .map_err(plot_err)?;
+        chart
+            .draw_series(std::iter::once(Text::new(label.clone(), *p, ("sans-serif", 13))))
+            .map_err(plot_err)?;
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(plot_err)?;
+    root.present().map_err(plot_err)?;
+    Ok(())
+}
+
+fn label(r: &TrialResult) -> String {
+    format!("{} ({})", r.strategy, if r.outcome.caught { "caught" } else { "missed" })
+}
+
+/// Three plots of one launch: the fielders' paths seen from above, tan ψ against time,
+/// and the ball's image on a plane facing home plate.
+pub fn draw_launch(dir: &Path, index: usize, case: &SweepCase, results: &[TrialResult], eye: f64) -> Result<()> {
+    let l = &case.launch;
+    let about = format!(
+        "launch {index}: {:.0} m/s at {:.0}°, azimuth {:.0}°",
+        l.speed_m_s, l.elevation_deg, l.azimuth_deg
+    );
+    let landing = case.flight.landing.pos;
+    let mut paths: Vec<(String, Vec<(f64, f64)>)> = results
+        .iter()
+        .map(|r| (label(r), r.path.iter().map(|p| (p.x, p.y)).collect()))
+        .collect();
+    paths.push((
+        "ball (ground track)".into(),
+        case.flight.samples.iter().map(|s| (s.pos.x, s.pos.z)).filter(|p| (DVec2::new(p.0, p.1) - case.start).length() < 80.0).collect(),
+    ));
+    line_chart(
+        &dir.join(format!("launch-{index}-paths.svg")),
+        &format!("Fielders' paths from above — {about}"),
+        ("x (m)", "z (m)"),
+        &paths,
+        &[
+            ("start".into(), (case.start.x, case.start.y)),
+            ("lands".into(), (landing.x, landing.z)),
+        ],
+        true,
+    )?;
+
+    // tan ψ runs off to infinity as a missed ball passes overhead: plot the part a
+    // fielder could still use, up to three times the largest value a catcher saw.
+    let tan_psi: Vec<(String, Vec<(f64, f64)>)> = results
+        .iter()
+        .map(|r| (label(r), r.trace.iter().filter(|e| e.tan_psi > 0.0 && e.tan_psi < 4.0).map(|e| (e.t, e.tan_psi)).collect()))
+        .collect();
+    line_chart(
+        &dir.join(format!("launch-{index}-tan-psi.svg")),
+        &format!("Optical elevation tan ψ — {about}"),
+        ("time (s)", "tan ψ"),
+        &tan_psi,
+        &[],
+        false,
+    )?;
+
+    let home = DVec2::new(case.flight.samples[0].pos.x, case.flight.samples[0].pos.z);
+    let image: Vec<(String, Vec<(f64, f64)>)> = results
+        .iter()
+        .map(|r| {
+            let pts = r
+                .trace
+                .iter()
+                .filter_map(|e| {
+                    let f = DVec2::from_array(e.fielder);
+                    let forward = (home - f).normalize_or(DVec2::X);
+                    let rel = DVec2::new(e.ball[0], e.ball[2]) - f;
+                    let depth = rel.dot(forward);
+                    let (u, v) = (rel.dot(DVec2::new(-forward.y, forward.x)) / depth, (e.ball[1] - eye) / depth);
+                    (depth > 2.0 && v.abs() < 4.0 && u.abs() < 4.0).then_some((u, v))
+                })
+                .collect();
+            (label(r), pts)
+        })
+        .collect();
+    line_chart(
+        &dir.join(format!("launch-{index}-image.svg")),
+        &format!("The ball's image on a plane facing home — {about}"),
+        ("lateral tan (u = L/D)", "vertical tan (v = Y/D)"),
+        &image,
+        &[],
+        false,
+    )
+}
+
+/// A bar chart of each strategy's catch rate on catchable balls.
+pub fn draw_rates(dir: &Path, report: &SweepReport) -> Result<()> {
+    let file = dir.join("catch-rates.svg");
+    let root = SVGBackend::new(&file, SIZE).into_drawing_area();
+    root.fill(&WHITE).map_err(plot_err)?;
+    let n = report.strategies.len();
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!("Catch rate on catchable balls ({} launches, seed {})", report.n, report.seed),
+            ("sans-serif", 18),
+        )
+        .margin(12)
+        .x_label_area_size(36)
+        .y_label_area_size(48)
+        .build_cartesian_2d(0.0..n as f64, 0.0..100.0)
+        .map_err(plot_err)?;
+    let names: Vec<String> = report.strategies.iter().map(|s| s.strategy.to_string()).collect();
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(n)
+        .x_label_formatter(&|x| names.get(x.floor() as usize).cloned().unwrap_or_default())
+        .y_desc("% of catchable balls caught")
+        .draw()
+        .map_err(plot_err)?;
+    chart
+        .draw_series(report.strategies.iter().enumerate().map(|(i, s)| {
+            Rectangle::new(
+                [(i as f64 + 0.15, 0.0), (i as f64 + 0.85, 100.0 * s.catchable_rate)],
+                colour(i).filled(),
+            )
+        }))
+        .map_err(plot_err)?;
+    root.present().map_err(plot_err)?;
+    Ok(())
+}

@@ -1,0 +1,16 @@
+//! Fielders who catch fly balls from what they see: their bodies, the catch test, the
+//! strategies from the catching literature, single trials and sweeps over many launches.
+
+mod body;
+mod catch_zone;
+mod path_shape;
+pub mod strategy;
+mod sweep;
+mod trial;
+
+pub use body::{Body, Limits};
+pub use catch_zone::{CatchZone, Pass};
+pub use path_shape::{OpticalFit, PathShape};
+pub use strategy::{Brain, Forecast, StrategyKind};
+pub use sweep::{LaunchDistribution, Sweep, SweepCase, SweepReport, StrategySummary};
+pub use trial::{Outcome, TraceEntry, Trial, TrialConfig, TrialResult};

@@ -1,0 +1,152 @@
+//! Shapes that tell the catching theories apart: how a fielder's path bends, and how
+//! straight the ball's optical trajectory stays.
+
+use super::trial::counts_optically;
+use glam::{DVec2, DVec3};
+use serde::Serialize;
+
+/// A run's bend relative to the straight line (chord) from where the fielder started to
+/// where it ended.
+///
+/// The signed deviation of each point is its distance from the chord, positive on the
+/// side of home plate. A path *convex toward home* bulges toward the batter (mean
+/// deviation > 0), one *concave* bulges away from home (< 0); a path whose largest
+/// deviation is under 2 % of the chord (or 0.25 m) counts as straight.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PathShape {
+    Straight,
+    ConvexTowardHome,
+    ConcaveAwayFromHome,
+}
+
+impl PathShape {
+    pub fn of(path: &[DVec2], home: DVec2) -> PathShape {
+        let (Some(&start), Some(&end)) = (path.first(), path.last()) else {
+            return PathShape::Straight;
+        };
+        let chord = end - start;
+        let length = chord.length();
+        if length < 1e-9 {
+            return PathShape::Straight;
+        }
+        let normal = DVec2::new(-chord.y, chord.x) / length;
+        // Orient the normal toward home so a positive deviation means "toward the batter".
+        let toward_home = if (home - start).dot(normal) >= 0.0 { 1.0 } else { -1.0 };
+        let (mut max_abs, mut sum) = (0.0f64, 0.0);
+        for p in path {
+            let dev = (*p - start).dot(normal) * toward_home;
+            max_abs = max_abs.max(dev.abs());
+            sum += dev;
+        }
+        if max_abs < (0.02 * length).max(0.25) {
+            PathShape::Straight
+        } else if sum > 0.0 {
+            PathShape::ConvexTowardHome
+        } else {
+            PathShape::ConcaveAwayFromHome
+        }
+    }
+}
+
+/// Running sums for two straightness measures of what the fielder saw, accumulated a
+/// tick at a time so a sweep never stores a trace.
+///
+/// * `tan_psi_r2`: R² of a straight-line fit of tan ψ against time. Chapman's law holds
+///   it at 1.
+/// * `image_r2`: how much of the scatter of the image points (u, v) — the ball projected
+///   on a plane facing home plate — lies along their principal axis, λ_max/(λ_max+λ_min).
+///   An image that rises along a straight line (LOT) gives 1.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct OpticalFit {
+    n: f64,
+    t: Moments,
+    tan_psi: Moments,
+    u: Moments,
+    v: Moments,
+    t_tan_psi: f64,
+    uv: f64,
+}
+
+#[derive(Debug, Clone, Copy, Default)]
+struct Moments {
+    sum: f64,
+    sum_sq: f64,
+}
+
+impl Moments {
+    fn add(&mut self, x: f64) {
+        self.sum += x;
+        self.sum_sq += x * x;
+    }
+}
+
+impl OpticalFit {
+    pub fn add(&mut self, t: f64, ball: DVec3, fielder: DVec2, home: DVec2, eye: f64) {
+        if !counts_optically(ball, fielder, eye) {
+            return;
+        }
+        let r = DVec2::new(ball.x, ball.z) - fielder;
+        let forward = (home - fielder).normalize_or(DVec2::X);
+        let depth = r.dot(forward);
+        let tan_psi = (ball.y - eye) / r.length();
+        self.n += 1.0;
+        self.t.add(t);
+        self.tan_psi.add(tan_psi);
+        self.t_tan_psi += t * tan_psi;
+        if depth > 0.0 {
+            let (u, v) = (r.dot(DVec2::new(-forward.y, forward.x)) / depth, (ball.y - eye) / depth);
+            self.u.add(u);
+            self.v.add(v);
+            self.uv += u * v;
+        }
+    }
+
+    fn covariance(&self, a: &Moments, b: &Moments, ab: f64) -> f64 {
+        ab / self.n - (a.sum / self.n) * (b.sum / self.n)
+    }
+
+    /// `None` with fewer than three samples.
+    pub fn tan_psi_r2(&self) -> Option<f64> {
+        if self.n < 3.0 {
+            return None;
+        }
+        let var_t = self.covariance(&self.t, &self.t, self.t.sum_sq);
+        let var_p = self.covariance(&self.tan_psi, &self.tan_psi, self.tan_psi.sum_sq);
+        let cov = self.covariance(&self.t, &self.tan_psi, self.t_tan_psi);
+        Some(if var_p <= 0.0 { 1.0 } else { (cov * cov / (var_t * var_p)).min(1.0) })
+    }
+
+    pub fn image_r2(&self) -> Option<f64> {
+        if self.n < 3.0 {
+            return None;
+        }
+        let a = self.covariance(&self.u, &self.u, self.u.sum_sq);
+        let c = self.covariance(&self.v, &self.v, self.v.sum_sq);
+        let b = self.covariance(&self.u, &self.v, self.uv);
+        let half_trace = 0.5 * (a + c);
+        let root = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+        let (l_max, l_min) = (half_trace + root, (half_trace - root).max(0.0));
+        Some(if l_max <= 0.0 { 1.0 } else { l_max / (l_max + l_min) })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shapes_are_classified_by_their_bulge_relative_to_home() {
+        let home = DVec2::ZERO;
+        // A run from (50, −10) to (50, 10): the chord is parallel to z at x = 50.
+        let arc = |bulge: f64| -> Vec<DVec2> {
+            (0..=20).map(|i| {
+                let s = i as f64 / 20.0;
+                DVec2::new(50.0 + bulge * 4.0 * s * (1.0 - s), -10.0 + 20.0 * s)
+            }).collect()
+        };
+        assert_eq!(PathShape::of(&arc(-3.0), home), PathShape::ConvexTowardHome);
+        assert_eq!(PathShape::of(&arc(3.0), home), PathShape::ConcaveAwayFromHome);
+        assert_eq!(PathShape::of(&arc(0.1), home), PathShape::Straight);
+    }
+}

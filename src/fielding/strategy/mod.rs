@@ -1,0 +1,152 @@
+//! Catching strategies: how a fielder turns what it sees into an acceleration.
+//!
+//! Every strategy but `predictive` reads only the fielder's [`Percept`] and its own body
+//! (a runner knows how it is moving). `predictive` is the "trajectory prediction" theory
+//! and the baseline: it is handed the answer, and so defines which balls are catchable.
+
+mod chapman;
+mod lot;
+mod lot_optical;
+mod predictive;
+
+pub use chapman::Chapman;
+pub use lot::Lot;
+pub use lot_optical::LotOptical;
+pub use predictive::{Forecast, Predictive};
+
+use super::{Body, Limits};
+use crate::perception::Percept;
+use glam::DVec2;
+use serde::{Serialize, Serializer};
+use std::fmt;
+use std::str::FromStr;
+
+/// The ball counts as "clearly above the eye" once its elevation passes about 3°
+/// (tan ψ = 0.05). Below that, optical angles are dominated by the launch height and the
+/// reference values a strategy latches would be meaningless.
+pub const CLEARLY_ABOVE_EYE_TAN_PSI: f64 = 0.05;
+
+/// A strategy's name, as selected on the command line and shown in reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum StrategyKind {
+    Chapman,
+    Chapman1d,
+    Lot,
+    LotOptical,
+    Predictive,
+}
+
+impl StrategyKind {
+    pub const ALL: [StrategyKind; 5] = [
+        StrategyKind::Chapman,
+        StrategyKind::LotOptical,
+        StrategyKind::Predictive,
+        StrategyKind::Lot,
+        StrategyKind::Chapman1d,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            StrategyKind::Chapman => "chapman",
+            StrategyKind::Chapman1d => "chapman-1d",
+            StrategyKind::Lot => "lot",
+            StrategyKind::LotOptical => "lot-optical",
+            StrategyKind::Predictive => "predictive",
+        }
+    }
+}
+
+impl fmt::Display for StrategyKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl Serialize for StrategyKind {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl FromStr for StrategyKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Self::ALL.into_iter().find(|k| k.name() == s).ok_or_else(|| {
+            let names: Vec<_> = Self::ALL.iter().map(|k| k.name()).collect();
+            format!("unknown strategy \"{s}\"; expected one of {}", names.join(", "))
+        })
+    }
+}
+
+/// What a strategy may consult on one tick.
+#[derive(Debug, Clone, Copy)]
+pub struct Situation<'a> {
+    pub percept: &'a Percept,
+    pub body: &'a Body,
+    pub limits: &'a Limits,
+    /// Home plate (the launch point) on the ground: the fielder knows where the batter is.
+    pub home: DVec2,
+    pub t: f64,
+    pub dt: f64,
+}
+
+/// A fielder's running strategy with whatever it remembers between ticks.
+#[derive(Debug, Clone)]
+pub enum Brain {
+    Chapman(Chapman),
+    Lot(Lot),
+    LotOptical(LotOptical),
+    Predictive(Predictive),
+}
+
+impl Brain {
+    /// A new brain of `kind`; `forecast` is only consulted for `predictive`.
+    pub fn new(kind: StrategyKind, forecast: impl FnOnce() -> Forecast) -> Brain {
+        match kind {
+            StrategyKind::Chapman => Brain::Chapman(Chapman::new(true)),
+            StrategyKind::Chapman1d => Brain::Chapman(Chapman::new(false)),
+            StrategyKind::Lot => Brain::Lot(Lot::default()),
+            StrategyKind::LotOptical => Brain::LotOptical(LotOptical::default()),
+            StrategyKind::Predictive => Brain::Predictive(Predictive::new(forecast())),
+        }
+    }
+
+    /// The acceleration the fielder wants this tick (the body clips it to its limits).
+    pub fn command(&mut self, s: &Situation) -> DVec2 {
+        match self {
+            Brain::Chapman(b) => b.command(s),
+            Brain::Lot(b) => b.command(s),
+            Brain::LotOptical(b) => b.command(s),
+            Brain::Predictive(b) => b.command(s),
+        }
+    }
+}
+
+/// The unit vector a quarter turn counter-clockwise in the x–z plane (toward increasing
+/// bearing α, which is measured from +x toward +z).
+pub(crate) fn left_of(u: DVec2) -> DVec2 {
+    DVec2::new(-u.y, u.x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_typos_list_the_choices() {
+        for k in StrategyKind::ALL {
+            assert_eq!(k.name().parse::<StrategyKind>(), Ok(k));
+        }
+        let err = "lott".parse::<StrategyKind>().unwrap_err();
+        assert!(err.contains("\"lott\"") && err.contains("lot-optical"), "{err}");
+    }
+
+    #[test]
+    fn left_of_turns_toward_increasing_bearing() {
+        let a: f64 = 0.3;
+        let u = DVec2::new(a.cos(), a.sin());
+        let b = a + 1e-6;
+        let ahead = DVec2::new(b.cos(), b.sin());
+        assert!((ahead - u).dot(left_of(u)) > 0.0);
+    }
+}

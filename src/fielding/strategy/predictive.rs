@@ -1,0 +1,47 @@
+//! The trajectory-prediction baseline: know where the ball comes down, run there.
+
+use super::Situation;
+use glam::DVec2;
+
+/// Where and when the ball descends through catch height: given to `predictive` only.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Forecast {
+    pub point: DVec2,
+    pub t: f64,
+}
+
+/// Runs to the forecast point in a straight line, time-optimally within the limits.
+///
+/// From rest, the minimum-time run to a point is straight: full acceleration up to top
+/// speed. The wanted speed is the larger of two: the latest-braking speed that stops on
+/// the point, √(2·a_max·distance), for a fielder with time to spare; and the speed that
+/// gets there exactly when the ball does, distance / time left, for one without (braking
+/// would only make it later, so it runs through the point and catches the ball as it
+/// passes). Both are capped at top speed. Without limits only the second applies: a
+/// constant-speed run that arrives just in time.
+#[derive(Debug, Clone)]
+pub struct Predictive {
+    forecast: Forecast,
+}
+
+impl Predictive {
+    pub fn new(forecast: Forecast) -> Predictive {
+        Predictive { forecast }
+    }
+
+    pub fn command(&mut self, s: &Situation) -> DVec2 {
+        let to_go = self.forecast.point - s.body.pos;
+        let distance = to_go.length();
+        let time_left = self.forecast.t - s.t;
+        let on_time = distance / time_left.max(s.dt);
+        let stopping = (2.0 * s.limits.max_accel * distance).sqrt();
+        let wanted_speed = s.limits.max_speed.min(if s.limits.is_limited() {
+            stopping.max(on_time)
+        } else {
+            on_time
+        });
+        let wanted = to_go.normalize_or_zero() * wanted_speed.min(distance / s.dt);
+        (wanted - s.body.vel) / s.dt
+    }
+}
+

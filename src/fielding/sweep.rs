@@ -1,0 +1,218 @@
+//! Many launches, every strategy on the same balls: the experiment that compares the
+//! catching theories.
+
+use super::trial::{Trial, TrialConfig, TrialResult};
+use super::{PathShape, StrategyKind};
+use crate::physics::{AirModel, BallSpec, Flight, Launch};
+use glam::DVec2;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Longest flight simulated; every launch in range lands well before.
+const MAX_FLIGHT_S: f64 = 20.0;
+
+/// The launches of a sweep and where fielders start. Every range is uniform.
+///
+/// The defaults are outfield fly balls: 25–45 m/s off the bat (56–100 mph), 25–65° above
+/// the horizontal, anywhere in fair territory (azimuth 0–90°), 1000–3000 rpm of backspin,
+/// hit from 1 m; the fielder starts 10–40 m from where the ball comes down, in a
+/// uniformly random direction.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LaunchDistribution {
+    pub speed_m_s: (f64, f64),
+    pub elevation_deg: (f64, f64),
+    pub azimuth_deg: (f64, f64),
+    pub spin_rpm: (f64, f64),
+    pub launch_height_m: f64,
+    pub fielder_distance_m: (f64, f64),
+}
+
+impl Default for LaunchDistribution {
+    fn default() -> Self {
+        LaunchDistribution {
+            speed_m_s: (25.0, 45.0),
+            elevation_deg: (25.0, 65.0),
+            azimuth_deg: (0.0, 90.0),
+            spin_rpm: (1000.0, 3000.0),
+            launch_height_m: 1.0,
+            fielder_distance_m: (10.0, 40.0),
+        }
+    }
+}
+
+/// One launch of a sweep with the fielder's start.
+#[derive(Debug, Clone)]
+pub struct SweepCase {
+    pub launch: Launch,
+    pub start: DVec2,
+    pub flight: Flight,
+}
+
+/// The physical setting shared by all launches of a sweep.
+#[derive(Debug, Clone, Copy)]
+pub struct Sweep {
+    pub ball: BallSpec,
+    pub air: AirModel,
+    pub air_density: f64,
+    pub dt: f64,
+    pub trial: TrialConfig,
+}
+
+/// What one strategy did over a whole sweep.
+#[derive(Debug, Clone, Serialize)]
+pub struct StrategySummary {
+    pub strategy: StrategyKind,
+    pub trials: usize,
+    pub caught: usize,
+    pub catch_rate: f64,
+    /// Balls the `predictive` fielder caught, and this strategy's share of them.
+    pub catchable: usize,
+    pub caught_catchable: usize,
+    pub catchable_rate: f64,
+    pub mean_peak_accel: f64,
+    pub max_peak_accel: f64,
+    pub mean_accel: f64,
+    pub mean_peak_speed: f64,
+    pub max_peak_speed: f64,
+    pub share_straight: f64,
+    pub share_convex_toward_home: f64,
+    pub share_concave_away_from_home: f64,
+    /// Medians over trials of the optical straightness measures (see `OpticalFit`).
+    pub median_tan_psi_r2: f64,
+    pub median_image_r2: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct SweepReport {
+    pub n: usize,
+    pub seed: u64,
+    pub distribution: LaunchDistribution,
+    pub strategies: Vec<StrategySummary>,
+}
+
+/// The few numbers a sweep keeps of each trial.
+#[derive(Debug, Clone, Copy)]
+struct Tally {
+    caught: bool,
+    peak_accel: f64,
+    peak_speed: f64,
+    mean_accel: f64,
+    shape: PathShape,
+    tan_psi_r2: Option<f64>,
+    image_r2: Option<f64>,
+}
+
+impl Sweep {
+    /// `n` cases drawn from `dist` with a portable seeded RNG, so a seed names a sweep.
+    pub fn cases(&self, dist: &LaunchDistribution, n: usize, seed: u64) -> Vec<SweepCase> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        (0..n)
+            .map(|_| {
+                let mut uniform = |(lo, hi): (f64, f64)| if hi > lo { rng.gen_range(lo..hi) } else { lo };
+                let launch = Launch {
+                    speed_m_s: uniform(dist.speed_m_s),
+                    elevation_deg: uniform(dist.elevation_deg),
+                    azimuth_deg: uniform(dist.azimuth_deg),
+                    height_m: dist.launch_height_m,
+                    spin_rpm: uniform(dist.spin_rpm),
+                    spin_tilt_deg: 0.0,
+                };
+                let distance = uniform(dist.fielder_distance_m);
+                let bearing = uniform((0.0, std::f64::consts::TAU));
+                let flight = self.fly(&launch);
+                let landing = DVec2::new(flight.landing.pos.x, flight.landing.pos.z);
+                let start = landing + distance * DVec2::new(bearing.cos(), bearing.sin());
+                SweepCase { launch, start, flight }
+            })
+            .collect()
+    }
+
+    pub fn fly(&self, launch: &Launch) -> Flight {
+        let air = launch.air(self.air, self.air_density, &self.ball);
+        Flight::simulate(launch.initial_state(), &air, self.dt, MAX_FLIGHT_S)
+    }
+
+    /// Runs one strategy on one case. Noise (if any) is seeded by the case and strategy.
+    pub fn trial(&self, case_index: usize, case: &SweepCase, strategy: StrategyKind, record_trace: bool) -> TrialResult {
+        let config = TrialConfig {
+            record_trace,
+            seed: self.trial.seed ^ ((case_index as u64) << 8 | strategy as u64),
+            ..self.trial
+        };
+        Trial { flight: &case.flight, config: &config }.run(strategy, case.start)
+    }
+
+    /// Every strategy on every case, in parallel across cases; the report is the same
+    /// whatever the number of threads.
+    pub fn run(&self, cases: &[SweepCase], strategies: &[StrategyKind], dist: &LaunchDistribution, seed: u64) -> SweepReport {
+        let tallies: Vec<(bool, Vec<Tally>)> = cases
+            .par_iter()
+            .enumerate()
+            .map(|(i, case)| {
+                let catchable = self.trial(i, case, StrategyKind::Predictive, false).outcome.caught;
+                let tallies = strategies
+                    .iter()
+                    .map(|&s| {
+                        let r = self.trial(i, case, s, false);
+                        let home = DVec2::new(case.flight.samples[0].pos.x, case.flight.samples[0].pos.z);
+                        Tally {
+                            caught: r.outcome.caught,
+                            peak_accel: r.peak_accel,
+                            peak_speed: r.peak_speed,
+                            mean_accel: r.mean_accel,
+                            shape: PathShape::of(&r.path, home),
+                            tan_psi_r2: r.optical.tan_psi_r2(),
+                            image_r2: r.optical.image_r2(),
+                        }
+                    })
+                    .collect();
+                (catchable, tallies)
+            })
+            .collect();
+        let strategies = strategies
+            .iter()
+            .enumerate()
+            .map(|(k, &strategy)| summarise(strategy, tallies.iter().map(|(c, t)| (*c, &t[k]))))
+            .collect();
+        SweepReport { n: cases.len(), seed, distribution: *dist, strategies }
+    }
+}
+
+fn summarise<'a>(strategy: StrategyKind, tallies: impl Iterator<Item = (bool, &'a Tally)>) -> StrategySummary {
+    let tallies: Vec<(bool, &Tally)> = tallies.collect();
+    let n = tallies.len();
+    let count = |f: &dyn Fn(bool, &Tally) -> bool| tallies.iter().filter(|(c, t)| f(*c, t)).count();
+    let caught = count(&|_, t| t.caught);
+    let catchable = count(&|c, _| c);
+    let caught_catchable = count(&|c, t| c && t.caught);
+    let share = |shape: PathShape| count(&|_, t| t.shape == shape) as f64 / n.max(1) as f64;
+    let mean = |f: &dyn Fn(&Tally) -> f64| tallies.iter().map(|(_, t)| f(t)).sum::<f64>() / n.max(1) as f64;
+    let max = |f: &dyn Fn(&Tally) -> f64| tallies.iter().map(|(_, t)| f(t)).fold(0.0, f64::max);
+    let median = |f: &dyn Fn(&Tally) -> Option<f64>| {
+        let mut xs: Vec<f64> = tallies.iter().filter_map(|(_, t)| f(t)).collect();
+        xs.sort_by(f64::total_cmp);
+        xs.get(xs.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    let rate = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f64 / b as f64 };
+    StrategySummary {
+        strategy,
+        trials: n,
+        caught,
+        catch_rate: rate(caught, n),
+        catchable,
+        caught_catchable,
+        catchable_rate: rate(caught_catchable, catchable),
+        mean_peak_accel: mean(&|t| t.peak_accel),
+        max_peak_accel: max(&|t| t.peak_accel),
+        mean_accel: mean(&|t| t.mean_accel),
+        mean_peak_speed: mean(&|t| t.peak_speed),
+        max_peak_speed: max(&|t| t.peak_speed),
+        share_straight: share(PathShape::Straight),
+        share_convex_toward_home: share(PathShape::ConvexTowardHome),
+        share_concave_away_from_home: share(PathShape::ConcaveAwayFromHome),
+        median_tan_psi_r2: median(&|t| t.tan_psi_r2),
+        median_image_r2: median(&|t| t.image_r2),
+    }
+}

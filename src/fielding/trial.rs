@@ -1,0 +1,186 @@
+//! One fielder chasing one ball, tick by tick: see, decide, move, test for a catch.
+
+use super::strategy::{Brain, Forecast, Situation, StrategyKind, CLEARLY_ABOVE_EYE_TAN_PSI};
+use super::{Body, CatchZone, Limits, OpticalFit};
+use crate::perception::{PerceptionConfig, PerceptionHistory, Sighting};
+use crate::physics::Flight;
+use glam::{DVec2, DVec3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+
+/// Everything about a trial except the ball and the fielder's start.
+#[derive(Debug, Clone, Copy)]
+pub struct TrialConfig {
+    pub limits: Limits,
+    pub perception: PerceptionConfig,
+    pub zone: CatchZone,
+    /// Keep one [`TraceEntry`] a tick (costs an allocation; sweeps leave it off).
+    pub record_trace: bool,
+    /// Seeds the perceptual noise; irrelevant when noise is off.
+    pub seed: u64,
+}
+
+impl Default for TrialConfig {
+    fn default() -> Self {
+        TrialConfig {
+            limits: Limits::HUMAN,
+            perception: PerceptionConfig::default(),
+            zone: CatchZone::default(),
+            record_trace: false,
+            seed: 0,
+        }
+    }
+}
+
+/// How a trial ended.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Outcome {
+    pub caught: bool,
+    /// When the ball was caught, or when it reached the ground.
+    pub time_s: f64,
+    /// Closest horizontal approach while the ball descended through the catch band.
+    pub miss_distance_m: f64,
+    /// Where the ball's free flight first reaches y = 0, even if it was caught before.
+    pub ball_landing: [f64; 2],
+}
+
+/// The state of one tick, as `fieldhouse catch --json` prints it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TraceEntry {
+    pub t: f64,
+    pub ball: [f64; 3],
+    pub fielder: [f64; 2],
+    pub tan_psi: f64,
+    pub alpha: f64,
+    /// The acceleration achieved over the tick that starts here.
+    pub accel: [f64; 2],
+}
+
+#[derive(Debug, Clone)]
+pub struct TrialResult {
+    pub strategy: StrategyKind,
+    pub outcome: Outcome,
+    pub peak_accel: f64,
+    pub peak_speed: f64,
+    /// Time-average of |a| from the first step to the end.
+    pub mean_accel: f64,
+    pub path_length_m: f64,
+    /// The fielder's position every tick.
+    pub path: Vec<DVec2>,
+    pub optical: OpticalFit,
+    pub trace: Vec<TraceEntry>,
+}
+
+/// A fielder of one strategy against one precomputed flight.
+pub struct Trial<'a> {
+    pub flight: &'a Flight,
+    pub config: &'a TrialConfig,
+}
+
+impl Trial<'_> {
+    /// The point and time the ball descends through the middle of the catch band: what
+    /// the `predictive` fielder is told.
+    pub fn forecast(&self) -> Forecast {
+        let zone = &self.config.zone;
+        let mid = 0.5 * (zone.min_height_m + zone.max_height_m);
+        let s = self.flight.descending_through(mid).unwrap_or(self.flight.landing);
+        Forecast { point: DVec2::new(s.pos.x, s.pos.z), t: s.t }
+    }
+
+    pub fn run(&self, strategy: StrategyKind, start: DVec2) -> TrialResult {
+        let (flight, cfg) = (self.flight, self.config);
+        let dt = flight.dt;
+        let eye = cfg.perception.eye_height_m;
+        let home = {
+            let p = flight.samples[0].pos;
+            DVec2::new(p.x, p.z)
+        };
+        let mut brain = Brain::new(strategy, || self.forecast());
+        let mut history = PerceptionHistory::new(&cfg.perception, dt);
+        let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+        let mut body = Body::at_rest(start);
+        let mut path = Vec::with_capacity(flight.samples.len());
+        let mut trace = Vec::with_capacity(if cfg.record_trace { flight.samples.len() } else { 0 });
+        let mut optical = OpticalFit::default();
+        let (mut peak_accel, mut peak_speed, mut accel_sum, mut moving_ticks) = (0.0f64, 0.0f64, 0.0, 0usize);
+        let mut miss = f64::INFINITY;
+        let mut caught_at = None;
+
+        for n in 0..flight.samples.len() - 1 {
+            let (ball, next_ball) = (&flight.samples[n], &flight.samples[n + 1]);
+            let truth = Sighting::of(ball.t, ball.pos, body.pos, eye);
+            history.record(truth.blurred(cfg.perception.noise_rad, &mut rng));
+            optical.add(ball.t, ball.pos, body.pos, home, eye);
+
+            let command = match history.percept() {
+                Some(percept) if ball.t >= cfg.limits.reaction_s => brain.command(&Situation {
+                    percept: &percept,
+                    body: &body,
+                    limits: &cfg.limits,
+                    home,
+                    t: ball.t,
+                    dt,
+                }),
+                _ => DVec2::ZERO,
+            };
+            let before = body.pos;
+            path.push(before);
+            let accel = body.advance(command, &cfg.limits, dt);
+            if ball.t >= cfg.limits.reaction_s {
+                accel_sum += accel.length();
+                moving_ticks += 1;
+            }
+            peak_accel = peak_accel.max(accel.length());
+            peak_speed = peak_speed.max(body.vel.length());
+            if cfg.record_trace {
+                trace.push(TraceEntry {
+                    t: ball.t,
+                    ball: ball.pos.to_array(),
+                    fielder: before.to_array(),
+                    tan_psi: truth.tan_psi(),
+                    alpha: truth.alpha,
+                    accel: accel.to_array(),
+                });
+            }
+            if let Some(pass) = cfg.zone.pass(ball.pos, next_ball.pos, before, body.pos) {
+                miss = miss.min(pass.closest_m);
+                if let Some(s) = pass.caught_s {
+                    caught_at = Some(ball.t + s * dt);
+                    break;
+                }
+            }
+        }
+        path.push(body.pos);
+        let landing = flight.landing.pos;
+        if miss.is_infinite() {
+            // The ball never came down through the band (a ball launched below it).
+            miss = (DVec2::new(landing.x, landing.z) - body.pos).length();
+        }
+        let path_length_m = path.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+        TrialResult {
+            strategy,
+            outcome: Outcome {
+                caught: caught_at.is_some(),
+                time_s: caught_at.unwrap_or(flight.landing.t),
+                miss_distance_m: miss,
+                ball_landing: [landing.x, landing.z],
+            },
+            peak_accel,
+            peak_speed,
+            mean_accel: accel_sum / moving_ticks.max(1) as f64,
+            path_length_m,
+            path,
+            optical,
+            trace,
+        }
+    }
+}
+
+/// Whether a sighting is one the optical measures should count: ball clearly above the
+/// eye and not yet nearly overhead (where tan ψ runs off to infinity for every strategy
+/// that is about to miss, and says nothing about the image path before it).
+pub(crate) fn counts_optically(ball: DVec3, fielder: DVec2, eye: f64) -> bool {
+    let d = (DVec2::new(ball.x, ball.z) - fielder).length();
+    d > 2.0 && (ball.y - eye) / d > CLEARLY_ABOVE_EYE_TAN_PSI
+}

@@ -1,0 +1,3 @@
+pub mod fielding;
+pub mod perception;
+pub mod physics;

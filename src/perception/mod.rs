@@ -1,0 +1,96 @@
+//! What a fielder can see: the optical angles of the ball from its own eye, and their rates
+//! estimated by differences over its own perception history (as Gillies & Dodgson do).
+//!
+//! A strategy reads only a [`Percept`]: never the ball's future, never its true state
+//! (with noise or delay switched on, what it reads is what its eye would have reported).
+
+mod history;
+
+pub use history::{Percept, PerceptionHistory};
+
+use glam::{DVec2, DVec3};
+use rand::Rng;
+use rand_distr::{Distribution, Normal};
+use serde::Serialize;
+
+/// The sensory side of a fielder.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PerceptionConfig {
+    /// Eye height above the ground, h.
+    pub eye_height_m: f64,
+    /// Visuomotor delay: a strategy acts on what the eye saw this long ago. Off by default.
+    pub delay_s: f64,
+    /// Standard deviation of Gaussian noise added to both optical angles. Off by default.
+    pub noise_rad: f64,
+    /// Ticks between the samples used for finite differences. One tick is exact enough
+    /// without noise; with noise a wider span keeps the second difference usable.
+    pub difference_span: usize,
+}
+
+impl Default for PerceptionConfig {
+    fn default() -> Self {
+        PerceptionConfig {
+            eye_height_m: 1.7,
+            delay_s: 0.0,
+            noise_rad: 0.0,
+            difference_span: 1,
+        }
+    }
+}
+
+/// One look at the ball: the line of sight from the eye, as angles plus a distance cue.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sighting {
+    pub t: f64,
+    /// Elevation angle ψ of the ball above the horizontal through the eye.
+    pub psi: f64,
+    /// Bearing α of the ball, measured from +x toward +z (a fixed reference direction).
+    pub alpha: f64,
+    /// Horizontal distance d from the fielder to the ball. The optical strategies do not
+    /// need it to pick a direction; they use it only to scale a gain (binocular disparity
+    /// and the ball's angular size give a human this cue at fly-ball ranges).
+    pub distance: f64,
+}
+
+impl Sighting {
+    /// The noise-free sighting of a ball at `ball` from a fielder standing at `fielder`.
+    pub fn of(t: f64, ball: DVec3, fielder: DVec2, eye_height: f64) -> Sighting {
+        let dx = ball.x - fielder.x;
+        let dz = ball.z - fielder.y;
+        let distance = dx.hypot(dz);
+        Sighting {
+            t,
+            psi: (ball.y - eye_height).atan2(distance),
+            alpha: dz.atan2(dx),
+            distance,
+        }
+    }
+
+    /// The same sighting with Gaussian noise of `sd` radians on both angles.
+    pub fn blurred(mut self, sd: f64, rng: &mut impl Rng) -> Sighting {
+        if sd > 0.0 {
+            let normal = Normal::new(0.0, sd).expect("noise sd is finite and positive");
+            self.psi += normal.sample(rng);
+            self.alpha += normal.sample(rng);
+        }
+        self
+    }
+
+    pub fn tan_psi(&self) -> f64 {
+        self.psi.tan()
+    }
+
+    /// Unit vector on the ground from the fielder toward the ball.
+    pub fn toward_ball(&self) -> DVec2 {
+        DVec2::new(self.alpha.cos(), self.alpha.sin())
+    }
+
+    /// The ball relative to the eye, rebuilt from angles and distance.
+    pub fn relative_position(&self) -> DVec3 {
+        DVec3::new(
+            self.distance * self.alpha.cos(),
+            self.distance * self.psi.tan(),
+            self.distance * self.alpha.sin(),
+        )
+    }
+}
