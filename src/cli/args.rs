@@ -69,7 +69,10 @@ pub fn parse_str<T: std::str::FromStr<Err = String>>(s: &str) -> Result<T, Strin
 }
 
 fn finite(s: &str) -> Result<f64, String> {
-    let x: f64 = s.trim().parse().map_err(|_| format!("\"{s}\" is not a number"))?;
+    let x: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a number"))?;
     if x.is_finite() {
         Ok(x)
     } else {
@@ -104,7 +107,9 @@ pub fn ground_point(s: &str) -> Result<DVec2, String> {
     let parts: Vec<&str> = s.split(',').collect();
     match parts.as_slice() {
         [x, z] => Ok(DVec2::new(finite(x)?, finite(z)?)),
-        _ => Err(format!("\"{s}\" is not a position; write it as X,Z in metres, e.g. -12.5,40")),
+        _ => Err(format!(
+            "\"{s}\" is not a position; write it as X,Z in metres, e.g. -12.5,40"
+        )),
     }
 }
 

@@ -57,7 +57,9 @@ fn elevation(s: &str) -> Result<f64, String> {
     if x > -90.0 && x < 90.0 {
         Ok(x)
     } else {
-        Err(format!("elevation {s} must lie strictly between -90 and 90 degrees"))
+        Err(format!(
+            "elevation {s} must lie strictly between -90 and 90 degrees"
+        ))
     }
 }
 
@@ -84,7 +86,11 @@ pub fn run(args: CatchArgs) -> anyhow::Result<()> {
     let air = launch.air(s.air, s.air_density, &s.ball);
     let flight = Flight::simulate(launch.initial_state(), &air, s.dt(), MAX_FLIGHT_S);
     let config = s.trial_config(args.seed, args.json);
-    let result = Trial { flight: &flight, config: &config }.run(args.strategy, args.fielder);
+    let result = Trial {
+        flight: &flight,
+        config: &config,
+    }
+    .run(args.strategy, args.fielder);
     if args.json {
         let report = CatchReport {
             outcome: result.outcome,

@@ -26,7 +26,9 @@ fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
 
 /// Smallest range that holds `xs`, padded by 5 %.
 fn span(xs: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
-    let (lo, hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+    let (lo, hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+        (lo.min(x), hi.max(x))
+    });
     if !lo.is_finite() || !hi.is_finite() {
         return 0.0..1.0;
     }
@@ -45,7 +47,12 @@ fn line_chart(
 ) -> Result<()> {
     let root = SVGBackend::new(file, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(plot_err)?;
-    let all = || series.iter().flat_map(|(_, pts)| pts.iter()).chain(marks.iter().map(|(_, p)| p));
+    let all = || {
+        series
+            .iter()
+            .flat_map(|(_, pts)| pts.iter())
+            .chain(marks.iter().map(|(_, p)| p))
+    };
     let (mut xr, mut yr) = (span(all().map(|p| p.0)), span(all().map(|p| p.1)));
     if equal_axes {
         // Keep metres square so a path's curvature is not distorted.
@@ -66,7 +73,12 @@ fn line_chart(
         .y_label_area_size(48)
         .build_cartesian_2d(xr, yr)
         .map_err(plot_err)?;
-    chart.configure_mesh().x_desc(x_desc).y_desc(y_desc).draw().map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .draw()
+        .map_err(plot_err)?;
     for (i, (name, pts)) in series.iter().enumerate() {
         let c = colour(i);
         chart
@@ -80,7 +92,11 @@ fn line_chart(
             .draw_series(std::iter::once(Cross::new(*p, 5, BLACK.stroke_width(2))))
             .map_err(plot_err)?;
         chart
-            .draw_series(std::iter::once(Text::new(label.clone(), *p, ("sans-serif", 13))))
+            .draw_series(std::iter::once(Text::new(
+                label.clone(),
+                *p,
+                ("sans-serif", 13),
+            )))
             .map_err(plot_err)?;
     }
     chart
@@ -94,12 +110,22 @@ fn line_chart(
 }
 
 fn label(r: &TrialResult) -> String {
-    format!("{} ({})", r.strategy, if r.outcome.caught { "caught" } else { "missed" })
+    format!(
+        "{} ({})",
+        r.strategy,
+        if r.outcome.caught { "caught" } else { "missed" }
+    )
 }
 
 /// Three plots of one launch: the fielders' paths seen from above, tan ψ against time,
 /// and the ball's image on a plane facing home plate.
-pub fn draw_launch(dir: &Path, index: usize, case: &SweepCase, results: &[TrialResult], eye: f64) -> Result<()> {
+pub fn draw_launch(
+    dir: &Path,
+    index: usize,
+    case: &SweepCase,
+    results: &[TrialResult],
+    eye: f64,
+) -> Result<()> {
     let l = &case.launch;
     let about = format!(
         "launch {index}: {:.0} m/s at {:.0}°, azimuth {:.0}°",
@@ -112,7 +138,12 @@ pub fn draw_launch(dir: &Path, index: usize, case: &SweepCase, results: &[TrialR
         .collect();
     paths.push((
         "ball (ground track)".into(),
-        case.flight.samples.iter().map(|s| (s.pos.x, s.pos.z)).filter(|p| (DVec2::new(p.0, p.1) - case.start).length() < 80.0).collect(),
+        case.flight
+            .samples
+            .iter()
+            .map(|s| (s.pos.x, s.pos.z))
+            .filter(|p| (DVec2::new(p.0, p.1) - case.start).length() < 80.0)
+            .collect(),
     ));
     line_chart(
         &dir.join(format!("launch-{index}-paths.svg")),
@@ -130,7 +161,16 @@ pub fn draw_launch(dir: &Path, index: usize, case: &SweepCase, results: &[TrialR
     // fielder could still use, up to three times the largest value a catcher saw.
     let tan_psi: Vec<(String, Vec<(f64, f64)>)> = results
         .iter()
-        .map(|r| (label(r), r.trace.iter().filter(|e| e.tan_psi > 0.0 && e.tan_psi < 4.0).map(|e| (e.t, e.tan_psi)).collect()))
+        .map(|r| {
+            (
+                label(r),
+                r.trace
+                    .iter()
+                    .filter(|e| e.tan_psi > 0.0 && e.tan_psi < 4.0)
+                    .map(|e| (e.t, e.tan_psi))
+                    .collect(),
+            )
+        })
         .collect();
     line_chart(
         &dir.join(format!("launch-{index}-tan-psi.svg")),
@@ -153,7 +193,10 @@ pub fn draw_launch(dir: &Path, index: usize, case: &SweepCase, results: &[TrialR
                     let forward = (home - f).normalize_or(DVec2::X);
                     let rel = DVec2::new(e.ball[0], e.ball[2]) - f;
                     let depth = rel.dot(forward);
-                    let (u, v) = (rel.dot(DVec2::new(-forward.y, forward.x)) / depth, (e.ball[1] - eye) / depth);
+                    let (u, v) = (
+                        rel.dot(DVec2::new(-forward.y, forward.x)) / depth,
+                        (e.ball[1] - eye) / depth,
+                    );
                     (depth > 2.0 && v.abs() < 4.0 && u.abs() < 4.0).then_some((u, v))
                 })
                 .collect();
@@ -178,7 +221,10 @@ pub fn draw_rates(dir: &Path, report: &SweepReport) -> Result<()> {
     let n = report.strategies.len();
     let mut chart = ChartBuilder::on(&root)
         .caption(
-            format!("Catch rate on catchable balls ({} launches, seed {})", report.n, report.seed),
+            format!(
+                "Catch rate on catchable balls ({} launches, seed {})",
+                report.n, report.seed
+            ),
             ("sans-serif", 18),
         )
         .margin(12)
@@ -186,7 +232,11 @@ pub fn draw_rates(dir: &Path, report: &SweepReport) -> Result<()> {
         .y_label_area_size(48)
         .build_cartesian_2d(0.0..n as f64, 0.0..100.0)
         .map_err(plot_err)?;
-    let names: Vec<String> = report.strategies.iter().map(|s| s.strategy.to_string()).collect();
+    let names: Vec<String> = report
+        .strategies
+        .iter()
+        .map(|s| s.strategy.to_string())
+        .collect();
     chart
         .configure_mesh()
         .disable_x_mesh()
@@ -198,7 +248,10 @@ pub fn draw_rates(dir: &Path, report: &SweepReport) -> Result<()> {
     chart
         .draw_series(report.strategies.iter().enumerate().map(|(i, s)| {
             Rectangle::new(
-                [(i as f64 + 0.15, 0.0), (i as f64 + 0.85, 100.0 * s.catchable_rate)],
+                [
+                    (i as f64 + 0.15, 0.0),
+                    (i as f64 + 0.85, 100.0 * s.catchable_rate),
+                ],
                 colour(i).filled(),
             )
         }))

@@ -62,7 +62,11 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
     if let Some(dir) = &args.svg {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
         for (i, case) in cases.iter().take(PLOTTED_LAUNCHES).enumerate() {
-            let results: Vec<_> = args.strategies.iter().map(|&k| sweep.trial(i, case, k, true)).collect();
+            let results: Vec<_> = args
+                .strategies
+                .iter()
+                .map(|&k| sweep.trial(i, case, k, true))
+                .collect();
             plots::draw_launch(dir, i, case, &results, s.eye_height)?;
         }
         plots::draw_rates(dir, &report)?;
@@ -84,8 +88,19 @@ fn print_table(report: &SweepReport) {
     );
     println!(
         "{:<12} {:>7} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>7} {:>7} {:>8} {:>8}",
-        "strategy", "caught", "catchable", "a mean", "a peak", "a max", "v peak", "v max",
-        "straight", "convex", "concave", "tanψ R²", "image R²"
+        "strategy",
+        "caught",
+        "catchable",
+        "a mean",
+        "a peak",
+        "a max",
+        "v peak",
+        "v max",
+        "straight",
+        "convex",
+        "concave",
+        "tanψ R²",
+        "image R²"
     );
     for s in &report.strategies {
         println!("{}", row(s));

@@ -17,7 +17,11 @@ pub struct Limits {
 impl Limits {
     /// Default human limits: 8.5 m/s (between the MLB average sprint of 8.2 m/s and an
     /// elite 9 m/s), 4.5 m/s² (Höfer et al. 2018), 0.3 s to react.
-    pub const HUMAN: Limits = Limits { max_speed: 8.5, max_accel: 4.5, reaction_s: 0.3 };
+    pub const HUMAN: Limits = Limits {
+        max_speed: 8.5,
+        max_accel: 4.5,
+        reaction_s: 0.3,
+    };
 
     /// No limits, like the animated fielders of Gillies & Dodgson (1999).
     pub const NONE: Limits = Limits {
@@ -37,7 +41,9 @@ impl FromStr for Limits {
         match s {
             "human" => Ok(Self::HUMAN),
             "none" => Ok(Self::NONE),
-            other => Err(format!("unknown limits \"{other}\"; expected one of human, none")),
+            other => Err(format!(
+                "unknown limits \"{other}\"; expected one of human, none"
+            )),
         }
     }
 }
@@ -51,7 +57,10 @@ pub struct Body {
 
 impl Body {
     pub fn at_rest(pos: DVec2) -> Body {
-        Body { pos, vel: DVec2::ZERO }
+        Body {
+            pos,
+            vel: DVec2::ZERO,
+        }
     }
 
     /// Moves for `dt` under the commanded acceleration, clipped to the limits (direction

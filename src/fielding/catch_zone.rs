@@ -16,7 +16,11 @@ pub struct CatchZone {
 impl Default for CatchZone {
     /// *Assumption*: about 1 m of reach (arm plus a lean), from the shins to a jump.
     fn default() -> Self {
-        CatchZone { reach_m: 1.0, min_height_m: 0.3, max_height_m: 2.4 }
+        CatchZone {
+            reach_m: 1.0,
+            min_height_m: 0.3,
+            max_height_m: 2.4,
+        }
     }
 }
 
@@ -33,7 +37,13 @@ pub struct Pass {
 impl CatchZone {
     /// Examines the tick from (ball0, fielder0) to (ball1, fielder1). Returns `None` when
     /// the ball is not descending through the height band during the tick.
-    pub fn pass(&self, ball0: DVec3, ball1: DVec3, fielder0: DVec2, fielder1: DVec2) -> Option<Pass> {
+    pub fn pass(
+        &self,
+        ball0: DVec3,
+        ball1: DVec3,
+        fielder0: DVec2,
+        fielder1: DVec2,
+    ) -> Option<Pass> {
         let dy = ball1.y - ball0.y;
         if dy >= 0.0 {
             return None;
@@ -59,13 +69,20 @@ impl CatchZone {
             Some(s_enter)
         } else if closest_m <= self.reach_m {
             // |r0 + dr·s|² = reach², the smaller root: the first moment within reach.
-            let (b, c) = (r0.dot(dr), r0.length_squared() - self.reach_m * self.reach_m);
+            let (b, c) = (
+                r0.dot(dr),
+                r0.length_squared() - self.reach_m * self.reach_m,
+            );
             let s = (-b - (b * b - dd * c).max(0.0).sqrt()) / dd;
             Some(s.clamp(s_enter, closest_s))
         } else {
             None
         };
-        Some(Pass { closest_s, closest_m, caught_s })
+        Some(Pass {
+            closest_s,
+            closest_m,
+            caught_s,
+        })
     }
 }
 
@@ -79,7 +96,12 @@ mod tests {
         // endpoint is within reach or in the band, the middle of the tick is.
         let zone = CatchZone::default();
         let p = zone
-            .pass(DVec3::new(-5.0, 3.0, 0.0), DVec3::new(5.0, 0.0, 0.0), DVec2::ZERO, DVec2::ZERO)
+            .pass(
+                DVec3::new(-5.0, 3.0, 0.0),
+                DVec3::new(5.0, 0.0, 0.0),
+                DVec2::ZERO,
+                DVec2::ZERO,
+            )
             .unwrap();
         assert!(p.caught_s.is_some());
         assert!(p.closest_m < 1e-12);
@@ -91,14 +113,26 @@ mod tests {
     #[test]
     fn a_rising_ball_is_never_caught() {
         let zone = CatchZone::default();
-        assert!(zone.pass(DVec3::new(0.0, 1.0, 0.0), DVec3::new(0.0, 1.5, 0.0), DVec2::ZERO, DVec2::ZERO).is_none());
+        assert!(zone
+            .pass(
+                DVec3::new(0.0, 1.0, 0.0),
+                DVec3::new(0.0, 1.5, 0.0),
+                DVec2::ZERO,
+                DVec2::ZERO
+            )
+            .is_none());
     }
 
     #[test]
     fn out_of_reach_reports_the_miss_distance() {
         let zone = CatchZone::default();
         let p = zone
-            .pass(DVec3::new(3.0, 1.5, -1.0), DVec3::new(3.0, 1.0, 1.0), DVec2::ZERO, DVec2::ZERO)
+            .pass(
+                DVec3::new(3.0, 1.5, -1.0),
+                DVec3::new(3.0, 1.0, 1.0),
+                DVec2::ZERO,
+                DVec2::ZERO,
+            )
             .unwrap();
         assert!(p.caught_s.is_none());
         assert!((p.closest_m - 3.0).abs() < 1e-12);

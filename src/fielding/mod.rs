@@ -12,5 +12,5 @@ pub use body::{Body, Limits};
 pub use catch_zone::{CatchZone, Pass};
 pub use path_shape::{OpticalFit, PathShape};
 pub use strategy::{Brain, Forecast, StrategyKind};
-pub use sweep::{LaunchDistribution, Sweep, SweepCase, SweepReport, StrategySummary};
+pub use sweep::{LaunchDistribution, StrategySummary, Sweep, SweepCase, SweepReport};
 pub use trial::{Outcome, TraceEntry, Trial, TrialConfig, TrialResult};

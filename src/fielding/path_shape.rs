@@ -32,7 +32,11 @@ impl PathShape {
         }
         let normal = DVec2::new(-chord.y, chord.x) / length;
         // Orient the normal toward home so a positive deviation means "toward the batter".
-        let toward_home = if (home - start).dot(normal) >= 0.0 { 1.0 } else { -1.0 };
+        let toward_home = if (home - start).dot(normal) >= 0.0 {
+            1.0
+        } else {
+            -1.0
+        };
         let (mut max_abs, mut sum) = (0.0f64, 0.0);
         for p in path {
             let dev = (*p - start).dot(normal) * toward_home;
@@ -95,7 +99,10 @@ impl OpticalFit {
         self.tan_psi.add(tan_psi);
         self.t_tan_psi += t * tan_psi;
         if depth > 0.0 {
-            let (u, v) = (r.dot(DVec2::new(-forward.y, forward.x)) / depth, (ball.y - eye) / depth);
+            let (u, v) = (
+                r.dot(DVec2::new(-forward.y, forward.x)) / depth,
+                (ball.y - eye) / depth,
+            );
             self.u.add(u);
             self.v.add(v);
             self.uv += u * v;
@@ -114,7 +121,11 @@ impl OpticalFit {
         let var_t = self.covariance(&self.t, &self.t, self.t.sum_sq);
         let var_p = self.covariance(&self.tan_psi, &self.tan_psi, self.tan_psi.sum_sq);
         let cov = self.covariance(&self.t, &self.tan_psi, self.t_tan_psi);
-        Some(if var_p <= 0.0 { 1.0 } else { (cov * cov / (var_t * var_p)).min(1.0) })
+        Some(if var_p <= 0.0 {
+            1.0
+        } else {
+            (cov * cov / (var_t * var_p)).min(1.0)
+        })
     }
 
     pub fn image_r2(&self) -> Option<f64> {
@@ -127,7 +138,11 @@ impl OpticalFit {
         let half_trace = 0.5 * (a + c);
         let root = (0.25 * (a - c) * (a - c) + b * b).sqrt();
         let (l_max, l_min) = (half_trace + root, (half_trace - root).max(0.0));
-        Some(if l_max <= 0.0 { 1.0 } else { l_max / (l_max + l_min) })
+        Some(if l_max <= 0.0 {
+            1.0
+        } else {
+            l_max / (l_max + l_min)
+        })
     }
 }
 
@@ -140,13 +155,18 @@ mod tests {
         let home = DVec2::ZERO;
         // A run from (50, −10) to (50, 10): the chord is parallel to z at x = 50.
         let arc = |bulge: f64| -> Vec<DVec2> {
-            (0..=20).map(|i| {
-                let s = i as f64 / 20.0;
-                DVec2::new(50.0 + bulge * 4.0 * s * (1.0 - s), -10.0 + 20.0 * s)
-            }).collect()
+            (0..=20)
+                .map(|i| {
+                    let s = i as f64 / 20.0;
+                    DVec2::new(50.0 + bulge * 4.0 * s * (1.0 - s), -10.0 + 20.0 * s)
+                })
+                .collect()
         };
         assert_eq!(PathShape::of(&arc(-3.0), home), PathShape::ConvexTowardHome);
-        assert_eq!(PathShape::of(&arc(3.0), home), PathShape::ConcaveAwayFromHome);
+        assert_eq!(
+            PathShape::of(&arc(3.0), home),
+            PathShape::ConcaveAwayFromHome
+        );
         assert_eq!(PathShape::of(&arc(0.1), home), PathShape::Straight);
     }
 }

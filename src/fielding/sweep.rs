@@ -110,7 +110,8 @@ impl Sweep {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         (0..n)
             .map(|_| {
-                let mut uniform = |(lo, hi): (f64, f64)| if hi > lo { rng.gen_range(lo..hi) } else { lo };
+                let mut uniform =
+                    |(lo, hi): (f64, f64)| if hi > lo { rng.gen_range(lo..hi) } else { lo };
                 let launch = Launch {
                     speed_m_s: uniform(dist.speed_m_s),
                     elevation_deg: uniform(dist.elevation_deg),
@@ -124,7 +125,11 @@ impl Sweep {
                 let flight = self.fly(&launch);
                 let landing = DVec2::new(flight.landing.pos.x, flight.landing.pos.z);
                 let start = landing + distance * DVec2::new(bearing.cos(), bearing.sin());
-                SweepCase { launch, start, flight }
+                SweepCase {
+                    launch,
+                    start,
+                    flight,
+                }
             })
             .collect()
     }
@@ -135,28 +140,48 @@ impl Sweep {
     }
 
     /// Runs one strategy on one case. Noise (if any) is seeded by the case and strategy.
-    pub fn trial(&self, case_index: usize, case: &SweepCase, strategy: StrategyKind, record_trace: bool) -> TrialResult {
+    pub fn trial(
+        &self,
+        case_index: usize,
+        case: &SweepCase,
+        strategy: StrategyKind,
+        record_trace: bool,
+    ) -> TrialResult {
         let config = TrialConfig {
             record_trace,
             seed: self.trial.seed ^ ((case_index as u64) << 8 | strategy as u64),
             ..self.trial
         };
-        Trial { flight: &case.flight, config: &config }.run(strategy, case.start)
+        Trial {
+            flight: &case.flight,
+            config: &config,
+        }
+        .run(strategy, case.start)
     }
 
     /// Every strategy on every case, in parallel across cases; the report is the same
     /// whatever the number of threads.
-    pub fn run(&self, cases: &[SweepCase], strategies: &[StrategyKind], dist: &LaunchDistribution, seed: u64) -> SweepReport {
+    pub fn run(
+        &self,
+        cases: &[SweepCase],
+        strategies: &[StrategyKind],
+        dist: &LaunchDistribution,
+        seed: u64,
+    ) -> SweepReport {
         let tallies: Vec<(bool, Vec<Tally>)> = cases
             .par_iter()
             .enumerate()
             .map(|(i, case)| {
-                let catchable = self.trial(i, case, StrategyKind::Predictive, false).outcome.caught;
+                let catchable = self
+                    .trial(i, case, StrategyKind::Predictive, false)
+                    .outcome
+                    .caught;
                 let tallies = strategies
                     .iter()
                     .map(|&s| {
                         let r = self.trial(i, case, s, false);
-                        let home = DVec2::new(case.flight.samples[0].pos.x, case.flight.samples[0].pos.z);
+                        let home =
+                            DVec2::new(case.flight.samples[0].pos.x, case.flight.samples[0].pos.z);
                         Tally {
                             caught: r.outcome.caught,
                             peak_accel: r.peak_accel,
@@ -176,11 +201,19 @@ impl Sweep {
             .enumerate()
             .map(|(k, &strategy)| summarise(strategy, tallies.iter().map(|(c, t)| (*c, &t[k]))))
             .collect();
-        SweepReport { n: cases.len(), seed, distribution: *dist, strategies }
+        SweepReport {
+            n: cases.len(),
+            seed,
+            distribution: *dist,
+            strategies,
+        }
     }
 }
 
-fn summarise<'a>(strategy: StrategyKind, tallies: impl Iterator<Item = (bool, &'a Tally)>) -> StrategySummary {
+fn summarise<'a>(
+    strategy: StrategyKind,
+    tallies: impl Iterator<Item = (bool, &'a Tally)>,
+) -> StrategySummary {
     let tallies: Vec<(bool, &Tally)> = tallies.collect();
     let n = tallies.len();
     let count = |f: &dyn Fn(bool, &Tally) -> bool| tallies.iter().filter(|(c, t)| f(*c, t)).count();
@@ -188,7 +221,9 @@ fn summarise<'a>(strategy: StrategyKind, tallies: impl Iterator<Item = (bool, &'
     let catchable = count(&|c, _| c);
     let caught_catchable = count(&|c, t| c && t.caught);
     let share = |shape: PathShape| count(&|_, t| t.shape == shape) as f64 / n.max(1) as f64;
-    let mean = |f: &dyn Fn(&Tally) -> f64| tallies.iter().map(|(_, t)| f(t)).sum::<f64>() / n.max(1) as f64;
+    let mean = |f: &dyn Fn(&Tally) -> f64| {
+        tallies.iter().map(|(_, t)| f(t)).sum::<f64>() / n.max(1) as f64
+    };
     let max = |f: &dyn Fn(&Tally) -> f64| tallies.iter().map(|(_, t)| f(t)).fold(0.0, f64::max);
     let median = |f: &dyn Fn(&Tally) -> Option<f64>| {
         let mut xs: Vec<f64> = tallies.iter().filter_map(|(_, t)| f(t)).collect();

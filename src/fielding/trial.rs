@@ -84,8 +84,14 @@ impl Trial<'_> {
     pub fn forecast(&self) -> Forecast {
         let zone = &self.config.zone;
         let mid = 0.5 * (zone.min_height_m + zone.max_height_m);
-        let s = self.flight.descending_through(mid).unwrap_or(self.flight.landing);
-        Forecast { point: DVec2::new(s.pos.x, s.pos.z), t: s.t }
+        let s = self
+            .flight
+            .descending_through(mid)
+            .unwrap_or(self.flight.landing);
+        Forecast {
+            point: DVec2::new(s.pos.x, s.pos.z),
+            t: s.t,
+        }
     }
 
     pub fn run(&self, strategy: StrategyKind, start: DVec2) -> TrialResult {
@@ -101,9 +107,14 @@ impl Trial<'_> {
         let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
         let mut body = Body::at_rest(start);
         let mut path = Vec::with_capacity(flight.samples.len());
-        let mut trace = Vec::with_capacity(if cfg.record_trace { flight.samples.len() } else { 0 });
+        let mut trace = Vec::with_capacity(if cfg.record_trace {
+            flight.samples.len()
+        } else {
+            0
+        });
         let mut optical = OpticalFit::default();
-        let (mut peak_accel, mut peak_speed, mut accel_sum, mut moving_ticks) = (0.0f64, 0.0f64, 0.0, 0usize);
+        let (mut peak_accel, mut peak_speed, mut accel_sum, mut moving_ticks) =
+            (0.0f64, 0.0f64, 0.0, 0usize);
         let mut miss = f64::INFINITY;
         let mut caught_at = None;
 

@@ -110,7 +110,10 @@ mod tests {
 
     #[test]
     fn delay_shows_an_older_sighting() {
-        let cfg = PerceptionConfig { delay_s: 0.1, ..Default::default() };
+        let cfg = PerceptionConfig {
+            delay_s: 0.1,
+            ..Default::default()
+        };
         let dt = 0.01;
         let mut h = PerceptionHistory::new(&cfg, dt);
         for n in 0..30 {
@@ -127,7 +130,12 @@ mod tests {
         for n in 0..3 {
             // The ball crosses the −x axis, where atan2 jumps from +π to −π.
             let z = 0.1 - 0.1 * n as f64;
-            h.record(Sighting::of(n as f64 * dt, DVec3::new(-10.0, 5.0, z), DVec2::ZERO, 1.7));
+            h.record(Sighting::of(
+                n as f64 * dt,
+                DVec3::new(-10.0, 5.0, z),
+                DVec2::ZERO,
+                1.7,
+            ));
         }
         let rate = h.percept().unwrap().alpha_rate;
         assert!(rate > 0.0 && rate < 0.2, "{rate}");

@@ -60,7 +60,10 @@ impl BallState {
         if after.vel.y > 0.0 {
             after.fly(rest, air)
         } else {
-            BallState { t: self.t + dt, ..after.step(rest, air, ground) }
+            BallState {
+                t: self.t + dt,
+                ..after.step(rest, air, ground)
+            }
         }
     }
 }
@@ -120,11 +123,18 @@ impl Flight {
                 let prev = samples[n - 2];
                 let f = ground_crossing(&prev, &s);
                 let landed = prev.fly(f * dt, air);
-                BallState { pos: DVec3::new(landed.pos.x, 0.0, landed.pos.z), ..landed }
+                BallState {
+                    pos: DVec3::new(landed.pos.x, 0.0, landed.pos.z),
+                    ..landed
+                }
             }
             _ => s,
         };
-        Flight { dt, samples, landing }
+        Flight {
+            dt,
+            samples,
+            landing,
+        }
     }
 
     /// Ball state at tick `n`, clamped to the last sample.
@@ -138,9 +148,14 @@ impl Flight {
         self.samples.windows(2).find_map(|w| {
             let (a, b) = (&w[0], &w[1]);
             (a.pos.y >= y && b.pos.y < y && b.vel.y < 0.0).then(|| {
-                let shifted = |s: &BallState| BallState { pos: s.pos - DVec3::Y * y, ..*s };
+                let shifted = |s: &BallState| BallState {
+                    pos: s.pos - DVec3::Y * y,
+                    ..*s
+                };
                 let f = ground_crossing(&shifted(a), &shifted(b));
-                let h = |ca: f64, cb: f64, va: f64, vb: f64| hermite(ca, va * self.dt, cb, vb * self.dt, f);
+                let h = |ca: f64, cb: f64, va: f64, vb: f64| {
+                    hermite(ca, va * self.dt, cb, vb * self.dt, f)
+                };
                 BallState {
                     t: a.t + f * self.dt,
                     pos: DVec3::new(
@@ -180,7 +195,10 @@ mod tests {
     fn vacuum_flight_matches_the_closed_form() {
         let l = launch(44.704, 30.0, 0.0);
         let f = fly(&l, AirModel::Vacuum, 1.0 / 60.0);
-        let (vx, vy) = (44.704 * 30f64.to_radians().cos(), 44.704 * 30f64.to_radians().sin());
+        let (vx, vy) = (
+            44.704 * 30f64.to_radians().cos(),
+            44.704 * 30f64.to_radians().sin(),
+        );
         let t = 2.0 * vy / -GRAVITY.y;
         assert!((f.landing.t - t).abs() < 1e-9, "{} vs {t}", f.landing.t);
         assert!((f.landing.pos.x - vx * t).abs() < 1e-7);
@@ -197,7 +215,11 @@ mod tests {
     fn nathan_worked_figure() {
         // 100 mph at 30°, 2000 rpm backspin, from the ground: about 124 m after about 5.5 s.
         let f = fly(&launch(44.704, 30.0, 0.0), AirModel::Nathan, 1.0 / 60.0);
-        assert!((f.landing.pos.x - 123.9).abs() < 1.5, "range {}", f.landing.pos.x);
+        assert!(
+            (f.landing.pos.x - 123.9).abs() < 1.5,
+            "range {}",
+            f.landing.pos.x
+        );
         assert!((f.landing.t - 5.46).abs() < 0.1, "time {}", f.landing.t);
     }
 
@@ -206,7 +228,11 @@ mod tests {
         let l = launch(42.0, 45.0, 1.0);
         let coarse = fly(&l, AirModel::Nathan, 1.0 / 60.0);
         let fine = fly(&l, AirModel::Nathan, 1.0 / 120.0);
-        assert!(coarse.landing.t > 5.5, "not a 6 s flight: {}", coarse.landing.t);
+        assert!(
+            coarse.landing.t > 5.5,
+            "not a 6 s flight: {}",
+            coarse.landing.t
+        );
         let moved = (coarse.landing.pos - fine.landing.pos).length();
         assert!(moved < 0.01, "landing moved {moved} m");
     }

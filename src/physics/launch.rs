@@ -22,7 +22,10 @@ pub struct Launch {
 
 impl Launch {
     pub fn direction(&self) -> DVec3 {
-        let (el, az) = (self.elevation_deg.to_radians(), self.azimuth_deg.to_radians());
+        let (el, az) = (
+            self.elevation_deg.to_radians(),
+            self.azimuth_deg.to_radians(),
+        );
         DVec3::new(el.cos() * az.cos(), el.sin(), el.cos() * az.sin())
     }
 

@@ -71,10 +71,16 @@ impl Serialize for StrategyKind {
 impl FromStr for StrategyKind {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Self::ALL.into_iter().find(|k| k.name() == s).ok_or_else(|| {
-            let names: Vec<_> = Self::ALL.iter().map(|k| k.name()).collect();
-            format!("unknown strategy \"{s}\"; expected one of {}", names.join(", "))
-        })
+        Self::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<_> = Self::ALL.iter().map(|k| k.name()).collect();
+                format!(
+                    "unknown strategy \"{s}\"; expected one of {}",
+                    names.join(", ")
+                )
+            })
     }
 }
 
@@ -138,7 +144,10 @@ mod tests {
             assert_eq!(k.name().parse::<StrategyKind>(), Ok(k));
         }
         let err = "lott".parse::<StrategyKind>().unwrap_err();
-        assert!(err.contains("\"lott\"") && err.contains("lot-optical"), "{err}");
+        assert!(
+            err.contains("\"lott\"") && err.contains("lot-optical"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -44,4 +44,3 @@ impl Predictive {
         (wanted - s.body.vel) / s.dt
     }
 }
-
