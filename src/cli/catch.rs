@@ -12,6 +12,7 @@ const MAX_FLIGHT_S: f64 = 60.0;
 
 #[derive(Args, Debug)]
 #[command(
+    allow_negative_numbers = true,
     about = "One fielder, one fly ball: did it catch it, and how did it run?",
     after_help = "The ball starts at (0, launch height, 0); azimuth is measured from +x toward +z, y is up.\n\
         Example: fieldhouse catch --strategy chapman --speed 40 --elevation 40 --azimuth 30 --fielder 70,55"
@@ -24,10 +25,10 @@ pub struct CatchArgs {
     #[arg(long = "speed", value_name = "M_PER_S", value_parser = positive)]
     speed: f64,
     /// Launch angle above the horizontal, in degrees.
-    #[arg(long, value_name = "DEG", value_parser = elevation, allow_hyphen_values = true)]
+    #[arg(long, value_name = "DEG", value_parser = elevation)]
     elevation: f64,
     /// Horizontal launch direction in degrees, from +x toward +z.
-    #[arg(long, value_name = "DEG", value_parser = any_number, allow_hyphen_values = true)]
+    #[arg(long, value_name = "DEG", value_parser = any_number)]
     azimuth: f64,
     /// Where the fielder starts, `X,Z` in metres (negative values are fine: -12.5,40).
     #[arg(long, value_name = "X,Z", value_parser = ground_point, allow_hyphen_values = true)]
@@ -40,7 +41,7 @@ pub struct CatchArgs {
     spin: f64,
     /// Tilt of the spin's lift about the velocity, in degrees: 0 backspin, 90 side spin
     /// curving toward increasing azimuth.
-    #[arg(long, value_name = "DEG", default_value_t = 0.0, value_parser = any_number, allow_hyphen_values = true)]
+    #[arg(long, value_name = "DEG", default_value_t = 0.0, value_parser = any_number)]
     spin_tilt: f64,
     /// Seed for perceptual noise (only matters with --noise-deg).
     #[arg(long, default_value_t = 0)]

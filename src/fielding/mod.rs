@@ -3,6 +3,8 @@
 
 mod body;
 mod catch_zone;
+#[cfg(test)]
+mod oracles;
 mod path_shape;
 pub mod strategy;
 mod sweep;

@@ -149,8 +149,8 @@ impl Trial<'_> {
                     t: ball.t,
                     ball: ball.pos.to_array(),
                     fielder: before.to_array(),
-                    tan_psi: truth.tan_psi(),
-                    alpha: truth.alpha,
+                    tan_psi: truth.tan_psi,
+                    alpha: truth.alpha(),
                     accel: accel.to_array(),
                 });
             }

@@ -2,7 +2,6 @@
 
 use super::{PerceptionConfig, Sighting};
 use std::collections::VecDeque;
-use std::f64::consts::{PI, TAU};
 
 /// The last few sightings, newest at the back; just long enough for a delayed second
 /// difference, so its cost does not grow with the flight.
@@ -61,26 +60,19 @@ impl PerceptionHistory {
             &self.sightings[newest],
         );
         let h = self.span as f64 * self.dt;
-        let (t0, t1, t2) = (s0.tan_psi(), s1.tan_psi(), s2.tan_psi());
+        let (t0, t1, t2) = (s0.tan_psi, s1.tan_psi, s2.tan_psi);
+        // The signed angle between the two bearings: no wrap-around at ±π to handle.
+        let (b1, b2) = (s1.toward_ball, s2.toward_ball);
+        let turned = b1.perp_dot(b2).atan2(b1.dot(b2));
         Some(Percept {
             sighting: *s2,
             tan_psi: t2,
             tan_psi_rate: (t2 - t1) / h,
             optical_acceleration: (t2 - 2.0 * t1 + t0) / (h * h),
-            alpha_rate: wrap(s2.alpha - s1.alpha) / h,
+            alpha_rate: turned / h,
             relative_position: s2.relative_position(),
             relative_velocity: (s2.relative_position() - s1.relative_position()) / h,
         })
-    }
-}
-
-/// An angle difference brought into (−π, π].
-fn wrap(a: f64) -> f64 {
-    let r = a.rem_euclid(TAU);
-    if r > PI {
-        r - TAU
-    } else {
-        r
     }
 }
 

@@ -38,14 +38,19 @@ impl Default for PerceptionConfig {
     }
 }
 
-/// One look at the ball: the line of sight from the eye, as angles plus a distance cue.
+/// One look at the ball: the line of sight from the eye, plus a distance cue.
+///
+/// Stored as tan ψ and the unit bearing vector rather than as angles: those are what the
+/// strategies compute with, and keeping them saves every tick the trigonometry that
+/// turning angles back into them would cost. The angles themselves are derived on demand.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sighting {
     pub t: f64,
-    /// Elevation angle ψ of the ball above the horizontal through the eye.
-    pub psi: f64,
-    /// Bearing α of the ball, measured from +x toward +z (a fixed reference direction).
-    pub alpha: f64,
+    /// tan ψ, ψ the elevation of the ball above the horizontal through the eye.
+    pub tan_psi: f64,
+    /// Unit vector on the ground from the fielder toward the ball: (cos α, sin α), the
+    /// bearing α measured from +x toward +z (a fixed reference direction).
+    pub toward_ball: DVec2,
     /// Horizontal distance d from the fielder to the ball. The optical strategies do not
     /// need it to pick a direction; they use it only to scale a gain (binocular disparity
     /// and the ball's angular size give a human this cue at fly-ball ranges).
@@ -55,42 +60,43 @@ pub struct Sighting {
 impl Sighting {
     /// The noise-free sighting of a ball at `ball` from a fielder standing at `fielder`.
     pub fn of(t: f64, ball: DVec3, fielder: DVec2, eye_height: f64) -> Sighting {
-        let dx = ball.x - fielder.x;
-        let dz = ball.z - fielder.y;
-        let distance = dx.hypot(dz);
+        let offset = DVec2::new(ball.x - fielder.x, ball.z - fielder.y);
+        let distance = offset.length();
         Sighting {
             t,
-            psi: (ball.y - eye_height).atan2(distance),
-            alpha: dz.atan2(dx),
+            tan_psi: (ball.y - eye_height) / distance,
+            toward_ball: offset.normalize_or(DVec2::X),
             distance,
         }
     }
 
-    /// The same sighting with Gaussian noise of `sd` radians on both angles.
-    pub fn blurred(mut self, sd: f64, rng: &mut impl Rng) -> Sighting {
-        if sd > 0.0 {
-            let normal = Normal::new(0.0, sd).expect("noise sd is finite and positive");
-            self.psi += normal.sample(rng);
-            self.alpha += normal.sample(rng);
+    /// The same sighting with Gaussian noise of `sd` radians on both optical angles.
+    pub fn blurred(self, sd: f64, rng: &mut impl Rng) -> Sighting {
+        if sd <= 0.0 {
+            return self;
         }
-        self
+        let normal = Normal::new(0.0, sd).expect("noise sd is finite and positive");
+        let psi = self.psi() + normal.sample(rng);
+        let alpha = self.alpha() + normal.sample(rng);
+        Sighting {
+            tan_psi: psi.tan(),
+            toward_ball: DVec2::from_angle(alpha),
+            ..self
+        }
     }
 
-    pub fn tan_psi(&self) -> f64 {
-        self.psi.tan()
+    /// Elevation ψ in radians.
+    pub fn psi(&self) -> f64 {
+        self.tan_psi.atan()
     }
 
-    /// Unit vector on the ground from the fielder toward the ball.
-    pub fn toward_ball(&self) -> DVec2 {
-        DVec2::new(self.alpha.cos(), self.alpha.sin())
+    /// Bearing α in radians, in (−π, π].
+    pub fn alpha(&self) -> f64 {
+        self.toward_ball.y.atan2(self.toward_ball.x)
     }
 
-    /// The ball relative to the eye, rebuilt from angles and distance.
+    /// The ball relative to the eye, rebuilt from the line of sight and distance.
     pub fn relative_position(&self) -> DVec3 {
-        DVec3::new(
-            self.distance * self.alpha.cos(),
-            self.distance * self.psi.tan(),
-            self.distance * self.alpha.sin(),
-        )
+        self.distance * DVec3::new(self.toward_ball.x, self.tan_psi, self.toward_ball.y)
     }
 }

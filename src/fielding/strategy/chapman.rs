@@ -68,7 +68,7 @@ impl Chapman {
         } else {
             0.0
         };
-        let toward = p.sighting.toward_ball();
+        let toward = p.sighting.toward_ball;
         a1 * toward + a2 * left_of(toward)
     }
 }

@@ -1,0 +1,316 @@
+//! The `fieldhouse` binary as a user runs it: `catch` and `catch-sweep`, their JSON, their
+//! plots and their errors.
+
+use serde_json::Value;
+use std::process::{Command, Output};
+
+fn fieldhouse(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args(args)
+        .env_remove("FIELDHOUSE_LOG")
+        .output()
+        .expect("the binary runs")
+}
+
+fn json(args: &[&str]) -> Value {
+    let out = fieldhouse(args);
+    assert!(
+        out.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("stdout is exactly one JSON document")
+}
+
+fn num(v: &Value) -> f64 {
+    v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
+}
+
+#[test]
+fn catch_json_reports_the_outcome_and_a_trace_entry_per_tick() {
+    let doc = json(&[
+        "catch",
+        "--strategy",
+        "chapman",
+        "--speed",
+        "38",
+        "--elevation",
+        "45",
+        "--azimuth",
+        "30",
+        "--fielder",
+        "-12.5,40",
+        "--tick-hz",
+        "50",
+        "--json",
+    ]);
+    let outcome = &doc["outcome"];
+    assert!(outcome["caught"].is_boolean());
+    for key in ["time_s", "miss_distance_m"] {
+        assert!(num(&outcome[key]) >= 0.0);
+    }
+    assert_eq!(outcome["ball_landing"].as_array().unwrap().len(), 2);
+    for key in ["peak_accel", "peak_speed", "path_length_m"] {
+        assert!(num(&doc[key]) >= 0.0, "{key}");
+    }
+    let trace = doc["trace"].as_array().unwrap();
+    assert!(trace.len() > 100);
+    // Negative coordinates are taken as written: the fielder starts at (−12.5, 40).
+    assert_eq!(trace[0]["fielder"], serde_json::json!([-12.5, 40.0]));
+    for (n, e) in trace.iter().enumerate() {
+        assert!(
+            (num(&e["t"]) - n as f64 / 50.0).abs() < 1e-9,
+            "one entry per tick"
+        );
+        assert_eq!(e["ball"].as_array().unwrap().len(), 3);
+        assert_eq!(e["accel"].as_array().unwrap().len(), 2);
+        assert!(e["tan_psi"].is_number() && e["alpha"].is_number());
+    }
+    // The trace ends at the catch, or with the ball at the ground.
+    let last_t = num(&trace.last().unwrap()["t"]);
+    assert!(num(&outcome["time_s"]) >= last_t);
+}
+
+#[test]
+fn chapmans_closed_form_holds_through_the_binary() {
+    // Vacuum, launched at eye height, fielder where the ball returns to eye height:
+    // tan ψ = g·t / (2·V·cos θ); at V = 30 m/s and θ = 45° the slope is 0.2312 s⁻¹.
+    let (v, theta, g) = (30.0f64, 45f64.to_radians(), 9.81);
+    let x = v * v * (2.0 * theta).sin() / g;
+    let doc = json(&[
+        "catch",
+        "--strategy",
+        "chapman",
+        "--speed",
+        "30",
+        "--elevation",
+        "45",
+        "--azimuth",
+        "0",
+        "--fielder",
+        &format!("{x},0"),
+        "--air",
+        "vacuum",
+        "--launch-height",
+        "1.7",
+        "--eye-height",
+        "1.7",
+        "--json",
+    ]);
+    assert_eq!(doc["outcome"]["caught"], true);
+    let slope = g / (2.0 * v * theta.cos());
+    for e in doc["trace"].as_array().unwrap() {
+        let (t, tan_psi) = (num(&e["t"]), num(&e["tan_psi"]));
+        assert!(
+            (tan_psi - slope * t).abs() < 1e-6,
+            "t = {t}: {tan_psi} vs {}",
+            slope * t
+        );
+    }
+    // ball_landing: where the free flight reaches y = 0, from 1.7 m up.
+    let vy = v * theta.sin();
+    let t_land = (vy + (vy * vy + 2.0 * g * 1.7).sqrt()) / g;
+    let landing = doc["outcome"]["ball_landing"].as_array().unwrap();
+    assert!((num(&landing[0]) - v * theta.cos() * t_land).abs() < 1e-6);
+    assert!(num(&landing[1]).abs() < 1e-9);
+}
+
+#[test]
+fn a_hopeless_fielder_misses_and_says_by_how_much() {
+    let doc = json(&[
+        "catch",
+        "--strategy",
+        "predictive",
+        "--speed",
+        "30",
+        "--elevation",
+        "30",
+        "--azimuth",
+        "0",
+        "--fielder",
+        "0,-150",
+        "--json",
+    ]);
+    assert_eq!(doc["outcome"]["caught"], false);
+    assert!(num(&doc["outcome"]["miss_distance_m"]) > 50.0);
+}
+
+#[test]
+fn catch_prints_a_readable_summary_without_json() {
+    let out = fieldhouse(&[
+        "catch",
+        "--strategy",
+        "lot-optical",
+        "--speed",
+        "40",
+        "--elevation",
+        "40",
+        "--azimuth",
+        "45",
+        "--fielder",
+        "70,55",
+    ]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("lot-optical fielder")
+            && (text.contains("CAUGHT") || text.contains("missed")),
+        "{text}"
+    );
+}
+
+#[test]
+fn bad_arguments_get_clear_errors() {
+    let base = [
+        "catch",
+        "--speed",
+        "30",
+        "--elevation",
+        "45",
+        "--azimuth",
+        "0",
+        "--fielder",
+        "90,0",
+    ];
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["--strategy", "lott"],
+            "expected one of chapman, lot-optical, predictive, lot, chapman-1d",
+        ),
+        (
+            &["--strategy", "chapman", "--limits", "superhuman"],
+            "expected one of human, none",
+        ),
+        (
+            &["--strategy", "chapman", "--air", "thin"],
+            "expected one of nathan, vacuum",
+        ),
+        (
+            &["--strategy", "chapman", "--ball", "softball"],
+            "expected one of baseball, cricket",
+        ),
+        (&["--strategy", "chapman", "--tick-hz", "0"], "--tick-hz"),
+        (
+            &["--strategy", "chapman", "--eye-height", "-1"],
+            "must be greater than 0",
+        ),
+        (
+            &["--strategy", "chapman", "--delay", "nan"],
+            "not a finite number",
+        ),
+    ];
+    for (extra, expected) in cases {
+        let args: Vec<&str> = base.iter().chain(extra.iter()).copied().collect();
+        let out = fieldhouse(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expected), "{args:?}: {err}");
+        assert!(out.stdout.is_empty());
+    }
+    let out = fieldhouse(&[
+        "catch",
+        "--strategy",
+        "chapman",
+        "--speed",
+        "30",
+        "--elevation",
+        "95",
+        "--azimuth",
+        "0",
+        "--fielder",
+        "1,2",
+    ]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("between -90 and 90"));
+    let out = fieldhouse(&[
+        "catch",
+        "--strategy",
+        "chapman",
+        "--speed",
+        "30",
+        "--elevation",
+        "45",
+        "--azimuth",
+        "0",
+        "--fielder",
+        "12",
+    ]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("X,Z"));
+}
+
+#[test]
+fn sweep_json_compares_every_strategy_on_the_same_launches() {
+    let doc = json(&["catch-sweep", "--n", "60", "--seed", "4", "--json"]);
+    assert_eq!(doc["n"], 60);
+    let strategies = doc["strategies"].as_array().unwrap();
+    let names: Vec<&str> = strategies
+        .iter()
+        .map(|s| s["strategy"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        ["chapman", "lot-optical", "predictive", "lot", "chapman-1d"]
+    );
+    let catchable = strategies[0]["catchable"].as_u64().unwrap();
+    for s in strategies {
+        // Catchability is one property of the launches, the same for every strategy.
+        assert_eq!(s["catchable"].as_u64().unwrap(), catchable);
+        assert_eq!(s["trials"], 60);
+        let shares = num(&s["share_straight"])
+            + num(&s["share_convex_toward_home"])
+            + num(&s["share_concave_away_from_home"]);
+        assert!((shares - 1.0).abs() < 1e-9);
+    }
+    // The same seed gives the same report.
+    assert_eq!(
+        doc,
+        json(&["catch-sweep", "--n", "60", "--seed", "4", "--json"])
+    );
+}
+
+#[test]
+fn sweep_draws_svg_plots() {
+    let dir = std::env::temp_dir().join(format!("fieldhouse-svg-{}", std::process::id()));
+    let out = fieldhouse(&[
+        "catch-sweep",
+        "--n",
+        "8",
+        "--strategies",
+        "chapman,lot-optical",
+        "--svg",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert!(names.contains(&"catch-rates.svg".to_string()));
+    for kind in ["paths", "tan-psi", "image"] {
+        assert!(names.contains(&format!("launch-0-{kind}.svg")), "{names:?}");
+    }
+    let svg = std::fs::read_to_string(dir.join("launch-0-paths.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("chapman") && svg.trim_end().ends_with("</svg>"));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn unknown_strategy_in_a_sweep_list_is_named() {
+    let out = fieldhouse(&["catch-sweep", "--strategies", "chapman,lott", "--n", "5"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown strategy \"lott\""));
+}
+
+#[test]
+fn help_explains_the_subcommands() {
+    let out = fieldhouse(&["--help"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("catch") && text.contains("catch-sweep"));
+    let out = fieldhouse(&["catch", "--help"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("--fielder <X,Z>") && text.contains("negative values are fine"));
+}
