@@ -106,12 +106,13 @@ struct Tally {
 
 impl Sweep {
     /// `n` cases drawn from `dist` with a portable seeded RNG, so a seed names a sweep.
+    /// The draws are sequential (that fixes the cases); the flights, which cost more than
+    /// everything else here, are flown in parallel.
     pub fn cases(&self, dist: &LaunchDistribution, n: usize, seed: u64) -> Vec<SweepCase> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        (0..n)
+        let mut uniform = |(lo, hi): (f64, f64)| if hi > lo { rng.gen_range(lo..hi) } else { lo };
+        let draws: Vec<(Launch, DVec2)> = (0..n)
             .map(|_| {
-                let mut uniform =
-                    |(lo, hi): (f64, f64)| if hi > lo { rng.gen_range(lo..hi) } else { lo };
                 let launch = Launch {
                     speed_m_s: uniform(dist.speed_m_s),
                     elevation_deg: uniform(dist.elevation_deg),
@@ -122,14 +123,15 @@ impl Sweep {
                 };
                 let distance = uniform(dist.fielder_distance_m);
                 let bearing = uniform((0.0, std::f64::consts::TAU));
+                (launch, distance * DVec2::from_angle(bearing))
+            })
+            .collect();
+        draws
+            .into_par_iter()
+            .map(|(launch, from_landing)| {
                 let flight = self.fly(&launch);
                 let landing = DVec2::new(flight.landing.pos.x, flight.landing.pos.z);
-                let start = landing + distance * DVec2::new(bearing.cos(), bearing.sin());
-                SweepCase {
-                    launch,
-                    start,
-                    flight,
-                }
+                SweepCase { launch, start: landing + from_landing, flight }
             })
             .collect()
     }

@@ -72,19 +72,50 @@ impl Air {
     }
 
     /// Acceleration of the ball when it moves at `v`.
+    ///
+    /// This runs four times a tick for every ball in flight, so it is written to need two
+    /// square roots and one division: with S = r·ω/|v|, Nathan's
+    /// CL = 1.120·S/(0.583 + 2.333·S) = 1.120·r·ω / (0.583·|v| + 2.333·r·ω).
     pub fn acceleration(&self, v: DVec3) -> DVec3 {
         if self.model == AirModel::Vacuum {
             return GRAVITY;
         }
-        let speed = v.length();
-        if speed < 1e-9 {
+        let speed_sq = v.length_squared();
+        if speed_sq < 1e-18 {
             return GRAVITY;
         }
-        let drag = -self.k * self.drag_coefficient * speed * v;
+        let speed = speed_sq.sqrt();
+        let drag = v * (-self.k * self.drag_coefficient * speed);
         // Lift is perpendicular to velocity and spin axis, along ω̂ × v̂ normalised.
-        let lift_dir = self.spin_axis.cross(v).normalize_or_zero();
-        let cl = self.ball.lift_coefficient(self.surface_speed / speed);
-        let lift = self.k * cl * speed * speed * lift_dir;
+        let across = self.spin_axis.cross(v);
+        let across_sq = across.length_squared();
+        if across_sq < 1e-18 || self.surface_speed == 0.0 {
+            return GRAVITY + drag;
+        }
+        let (a, lift_scale) = (self.surface_speed, self.ball.lift_scale);
+        let lift = across
+            * (self.k * lift_scale * 1.120 * a * speed_sq
+                / ((0.583 * speed + 2.333 * a) * across_sq.sqrt()));
         GRAVITY + drag + lift
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_path_matches_the_textbook_forces() {
+        let ball = BallSpec::BASEBALL;
+        let axis = DVec3::new(0.3, -0.2, 0.9).normalize();
+        let air = Air::new(AirModel::Nathan, NATHAN_AIR_DENSITY, &ball, 2500.0, axis);
+        let v = DVec3::new(30.0, 12.0, -7.0);
+        let k = 0.5 * NATHAN_AIR_DENSITY * ball.area_m2() / ball.mass_kg;
+        let speed = v.length();
+        let s = ball.radius_m * 2500.0 * std::f64::consts::TAU / 60.0 / speed;
+        let drag = -k * ball.drag_coefficient(2500.0) * speed * v;
+        let lift = k * ball.lift_coefficient(s) * speed * speed * axis.cross(v).normalize();
+        let expected = GRAVITY + drag + lift;
+        assert!((air.acceleration(v) - expected).length() < 1e-12 * expected.length());
     }
 }
