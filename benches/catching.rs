@@ -26,7 +26,10 @@ fn sweeps(c: &mut Criterion) {
     let s = sweep();
     let mut group = c.benchmark_group("catch_sweep");
     group.sample_size(10);
-    for (launches, strategies) in [(2_000usize, &StrategyKind::ALL[..]), (10_000, &[StrategyKind::Chapman][..])] {
+    for (launches, strategies) in [
+        (2_000usize, &StrategyKind::ALL[..]),
+        (10_000, &[StrategyKind::Chapman][..]),
+    ] {
         group.throughput(Throughput::Elements((launches * strategies.len()) as u64));
         let name = format!("{launches}x{}", strategies.len());
         group.bench_function(BenchmarkId::from_parameter(name), |b| {
@@ -50,9 +53,13 @@ fn single(c: &mut Criterion) {
         spin_rpm: 2000.0,
         spin_tilt_deg: 0.0,
     };
-    c.bench_function("flight_nathan_60hz", |b| b.iter(|| black_box(s.fly(black_box(&launch)))));
+    c.bench_function("flight_nathan_60hz", |b| {
+        b.iter(|| black_box(s.fly(black_box(&launch))))
+    });
     for k in StrategyKind::ALL {
-        c.bench_function(&format!("trial_{k}"), |b| b.iter(|| black_box(s.trial(0, &cases[0], k, false))));
+        c.bench_function(&format!("trial_{k}"), |b| {
+            b.iter(|| black_box(s.trial(0, &cases[0], k, false)))
+        });
     }
 }
 

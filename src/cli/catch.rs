@@ -6,6 +6,7 @@ use fieldhouse::fielding::{Outcome, StrategyKind, TraceEntry, Trial};
 use fieldhouse::physics::{Flight, Launch};
 use glam::DVec2;
 use serde::Serialize;
+use std::io::Write;
 
 /// Longest flight simulated for a single catch.
 const MAX_FLIGHT_S: f64 = 60.0;
@@ -39,10 +40,10 @@ pub struct CatchArgs {
     /// Backspin in revolutions per minute.
     #[arg(long, value_name = "RPM", default_value_t = 2000.0, value_parser = non_negative)]
     spin: f64,
-    /// Tilt of the spin's lift about the velocity, in degrees: 0 backspin, 90 side spin
-    /// curving toward increasing azimuth.
+    /// Spin axis, as the tilt of the spin's lift about the velocity in degrees: 0 is pure
+    /// backspin (lift up), 90 side spin curving toward increasing azimuth, -90 the other way.
     #[arg(long, value_name = "DEG", default_value_t = 0.0, value_parser = any_number)]
-    spin_tilt: f64,
+    spin_axis: f64,
     /// Seed for perceptual noise (only matters with --noise-deg).
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -74,7 +75,7 @@ struct CatchReport<'a> {
     trace: &'a [TraceEntry],
 }
 
-pub fn run(args: CatchArgs) -> anyhow::Result<()> {
+pub fn run(args: CatchArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let s = &args.setting;
     let launch = Launch {
         speed_m_s: args.speed,
@@ -82,7 +83,7 @@ pub fn run(args: CatchArgs) -> anyhow::Result<()> {
         azimuth_deg: args.azimuth,
         height_m: args.launch_height,
         spin_rpm: args.spin,
-        spin_tilt_deg: args.spin_tilt,
+        spin_tilt_deg: args.spin_axis,
     };
     let air = launch.air(s.air, s.air_density, &s.ball);
     let flight = Flight::simulate(launch.initial_state(), &air, s.dt(), MAX_FLIGHT_S);
@@ -100,12 +101,13 @@ pub fn run(args: CatchArgs) -> anyhow::Result<()> {
             path_length_m: result.path_length_m,
             trace: &result.trace,
         };
-        println!("{}", serde_json::to_string(&report)?);
+        writeln!(out, "{}", serde_json::to_string(&report)?)?;
         return Ok(());
     }
     let o = &result.outcome;
     let [lx, lz] = o.ball_landing;
-    println!(
+    writeln!(
+        out,
         "ball: {} m/s at {}°, azimuth {}°, {} rpm, {} air; lands at ({lx:.1}, {lz:.1}) after {:.2} s",
         args.speed,
         args.elevation,
@@ -113,15 +115,17 @@ pub fn run(args: CatchArgs) -> anyhow::Result<()> {
         args.spin,
         s.air.name(),
         flight.landing.t
-    );
+    )?;
     let verdict = if o.caught { "CAUGHT" } else { "missed" };
-    println!(
+    writeln!(
+        out,
         "{} fielder from ({}, {}): {verdict} at {:.2} s, closest {:.2} m",
         args.strategy, args.fielder.x, args.fielder.y, o.time_s, o.miss_distance_m
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "ran {:.1} m; peak speed {:.2} m/s; peak acceleration {:.2} m/s²",
         result.path_length_m, result.peak_speed, result.peak_accel
-    );
+    )?;
     Ok(())
 }

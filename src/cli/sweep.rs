@@ -5,6 +5,7 @@ use super::plots;
 use anyhow::Context;
 use clap::Args;
 use fieldhouse::fielding::{LaunchDistribution, StrategyKind, StrategySummary, Sweep, SweepReport};
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -41,7 +42,7 @@ pub struct SweepArgs {
     setting: Setting,
 }
 
-pub fn run(args: SweepArgs) -> anyhow::Result<()> {
+pub fn run(args: SweepArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let s = &args.setting;
     let sweep = Sweep {
         ball: s.ball,
@@ -74,20 +75,22 @@ pub fn run(args: SweepArgs) -> anyhow::Result<()> {
         tracing::info!(dir = %dir.display(), "plots written");
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
     } else {
-        print_table(&report);
+        print_table(&report, out)?;
     }
     Ok(())
 }
 
-fn print_table(report: &SweepReport) {
+fn print_table(report: &SweepReport, out: &mut impl Write) -> std::io::Result<()> {
     let catchable = report.strategies.first().map_or(0, |s| s.catchable);
-    println!(
+    writeln!(
+        out,
         "{} launches (seed {}), {} catchable by the predictive baseline",
         report.n, report.seed, catchable
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "{:<12} {:>7} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>7} {:>7} {:>8} {:>8}",
         "strategy",
         "caught",
@@ -102,12 +105,12 @@ fn print_table(report: &SweepReport) {
         "concave",
         "tanψ R²",
         "image R²"
-    );
+    )?;
     for s in &report.strategies {
-        println!("{}", row(s));
+        writeln!(out, "{}", row(s))?;
     }
-    println!("a mean: time-averaged |a| (m/s²); a peak / v peak: per-trial peaks averaged; a max / v max: largest over all trials");
-    println!("path shapes vs the chord from start to end (convex bulges toward home); R²: straightness of tan ψ(t) and of the image path (medians)");
+    writeln!(out, "a mean: time-averaged |a| (m/s²); a peak / v peak: per-trial peaks averaged; a max / v max: largest over all trials")?;
+    writeln!(out, "path shapes vs the chord from start to end (convex bulges toward home); R²: straightness of tan ψ(t) and of the image path (medians)")
 }
 
 fn row(s: &StrategySummary) -> String {

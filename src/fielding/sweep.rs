@@ -131,7 +131,11 @@ impl Sweep {
             .map(|(launch, from_landing)| {
                 let flight = self.fly(&launch);
                 let landing = DVec2::new(flight.landing.pos.x, flight.landing.pos.z);
-                SweepCase { launch, start: landing + from_landing, flight }
+                SweepCase {
+                    launch,
+                    start: landing + from_landing,
+                    flight,
+                }
             })
             .collect()
     }
