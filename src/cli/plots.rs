@@ -7,7 +7,9 @@ use glam::DVec2;
 use plotters::prelude::*;
 use std::path::Path;
 
-const SIZE: (u32, u32) = (720, 540);
+const SIZE: (u32, u32) = (860, 540);
+/// Width of the legend panel to the right of a line chart.
+const LEGEND_WIDTH: u32 = 170;
 const COLOURS: [RGBColor; 5] = [
     RGBColor(0, 114, 178),
     RGBColor(213, 94, 0),
@@ -36,27 +38,39 @@ fn span(xs: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     (lo - pad)..(hi + pad)
 }
 
-/// A titled chart with a series per strategy, drawn into `file`.
+/// A line drawn on a chart: a name for the legend, points, and whether it is a
+/// reference (drawn thin and grey, like the ball's ground track) or a strategy's.
+struct Line {
+    name: String,
+    points: Vec<(f64, f64)>,
+    reference: bool,
+}
+
+/// A titled chart with a line per strategy and the legend in a panel of its own on the
+/// right, so it never hides data; drawn into `file`.
 fn line_chart(
     file: &Path,
     title: &str,
     (x_desc, y_desc): (&str, &str),
-    series: &[(String, Vec<(f64, f64)>)],
+    lines: &[Line],
     marks: &[(String, (f64, f64))],
     equal_axes: bool,
 ) -> Result<()> {
     let root = SVGBackend::new(file, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(plot_err)?;
+    let root = root.titled(title, ("sans-serif", 18)).map_err(plot_err)?;
+    let (plot, legend) = root.split_horizontally(SIZE.0 - LEGEND_WIDTH);
     let all = || {
-        series
+        lines
             .iter()
-            .flat_map(|(_, pts)| pts.iter())
+            .flat_map(|l| l.points.iter())
             .chain(marks.iter().map(|(_, p)| p))
     };
     let (mut xr, mut yr) = (span(all().map(|p| p.0)), span(all().map(|p| p.1)));
     if equal_axes {
         // Keep metres square so a path's curvature is not distorted.
-        let aspect = f64::from(SIZE.0 - 60) / f64::from(SIZE.1 - 80);
+        let (w_px, h_px) = plot.dim_in_pixel();
+        let aspect = f64::from(w_px - 60) / f64::from(h_px - 50);
         let (w, h) = (xr.end - xr.start, yr.end - yr.start);
         if w / h < aspect {
             let grow = (h * aspect - w) / 2.0;
@@ -66,8 +80,7 @@ fn line_chart(
             yr = (yr.start - grow)..(yr.end + grow);
         }
     }
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 18))
+    let mut chart = ChartBuilder::on(&plot)
         .margin(12)
         .x_label_area_size(36)
         .y_label_area_size(48)
@@ -79,13 +92,21 @@ fn line_chart(
         .y_desc(y_desc)
         .draw()
         .map_err(plot_err)?;
-    for (i, (name, pts)) in series.iter().enumerate() {
-        let c = colour(i);
+    let styles: Vec<ShapeStyle> = lines
+        .iter()
+        .scan(0, |strategy, l| {
+            Some(if l.reference {
+                RGBColor(150, 150, 150).stroke_width(1)
+            } else {
+                *strategy += 1;
+                colour(*strategy - 1).stroke_width(2)
+            })
+        })
+        .collect();
+    for (l, style) in lines.iter().zip(&styles) {
         chart
-            .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))
-            .map_err(plot_err)?
-            .label(name.as_str())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
+            .draw_series(LineSeries::new(l.points.iter().copied(), *style))
+            .map_err(plot_err)?;
     }
     for (label, p) in marks {
         chart
@@ -99,12 +120,15 @@ fn line_chart(
             )))
             .map_err(plot_err)?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(plot_err)?;
+    for (i, (l, style)) in lines.iter().zip(&styles).enumerate() {
+        let y = 40 + 22 * i as i32;
+        legend
+            .draw(&PathElement::new(vec![(4, y), (26, y)], *style))
+            .map_err(plot_err)?;
+        legend
+            .draw(&Text::new(l.name.clone(), (32, y - 7), ("sans-serif", 13)))
+            .map_err(plot_err)?;
+    }
     root.present().map_err(plot_err)?;
     Ok(())
 }
@@ -132,19 +156,33 @@ pub fn draw_launch(
         l.speed_m_s, l.elevation_deg, l.azimuth_deg
     );
     let landing = case.flight.landing.pos;
-    let mut paths: Vec<(String, Vec<(f64, f64)>)> = results
+    let mut paths: Vec<Line> = results
         .iter()
-        .map(|r| (label(r), r.path.iter().map(|p| (p.x, p.y)).collect()))
+        .map(|r| Line {
+            name: label(r),
+            points: r.path.iter().map(|p| (p.x, p.y)).collect(),
+            reference: false,
+        })
         .collect();
-    paths.push((
-        "ball (ground track)".into(),
-        case.flight
+    // Show the ball's ground track only near the fielders, so their paths stay legible.
+    let excursion = results
+        .iter()
+        .flat_map(|r| r.path.iter())
+        .chain(std::iter::once(&DVec2::new(landing.x, landing.z)))
+        .map(|p| (*p - case.start).length())
+        .fold(15.0, f64::max);
+    paths.push(Line {
+        name: "ball (ground track)".into(),
+        points: case
+            .flight
             .samples
             .iter()
-            .map(|s| (s.pos.x, s.pos.z))
-            .filter(|p| (DVec2::new(p.0, p.1) - case.start).length() < 80.0)
+            .map(|s| DVec2::new(s.pos.x, s.pos.z))
+            .filter(|p| (*p - case.start).length() < 1.5 * excursion)
+            .map(|p| (p.x, p.y))
             .collect(),
-    ));
+        reference: true,
+    });
     line_chart(
         &dir.join(format!("launch-{index}-paths.svg")),
         &format!("Fielders' paths from above — {about}"),
@@ -158,18 +196,18 @@ pub fn draw_launch(
     )?;
 
     // tan ψ runs off to infinity as a missed ball passes overhead: plot the part a
-    // fielder could still use, up to three times the largest value a catcher saw.
-    let tan_psi: Vec<(String, Vec<(f64, f64)>)> = results
+    // fielder could still use.
+    let tan_psi: Vec<Line> = results
         .iter()
-        .map(|r| {
-            (
-                label(r),
-                r.trace
-                    .iter()
-                    .filter(|e| e.tan_psi > 0.0 && e.tan_psi < 4.0)
-                    .map(|e| (e.t, e.tan_psi))
-                    .collect(),
-            )
+        .map(|r| Line {
+            name: label(r),
+            points: r
+                .trace
+                .iter()
+                .filter(|e| e.tan_psi > 0.0 && e.tan_psi < 4.0)
+                .map(|e| (e.t, e.tan_psi))
+                .collect(),
+            reference: false,
         })
         .collect();
     line_chart(
@@ -182,7 +220,7 @@ pub fn draw_launch(
     )?;
 
     let home = DVec2::new(case.flight.samples[0].pos.x, case.flight.samples[0].pos.z);
-    let image: Vec<(String, Vec<(f64, f64)>)> = results
+    let image: Vec<Line> = results
         .iter()
         .map(|r| {
             let pts = r
@@ -197,10 +235,14 @@ pub fn draw_launch(
                         rel.dot(DVec2::new(-forward.y, forward.x)) / depth,
                         (e.ball[1] - eye) / depth,
                     );
-                    (depth > 2.0 && v.abs() < 4.0 && u.abs() < 4.0).then_some((u, v))
+                    (depth > 2.0 && v.abs() < 1.5 && u.abs() < 1.5).then_some((u, v))
                 })
                 .collect();
-            (label(r), pts)
+            Line {
+                name: label(r),
+                points: pts,
+                reference: false,
+            }
         })
         .collect();
     line_chart(
@@ -218,7 +260,7 @@ pub fn draw_rates(dir: &Path, report: &SweepReport) -> Result<()> {
     let file = dir.join("catch-rates.svg");
     let root = SVGBackend::new(&file, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(plot_err)?;
-    let n = report.strategies.len();
+    let n = report.strategies.len() as u32;
     let mut chart = ChartBuilder::on(&root)
         .caption(
             format!(
@@ -230,7 +272,7 @@ pub fn draw_rates(dir: &Path, report: &SweepReport) -> Result<()> {
         .margin(12)
         .x_label_area_size(36)
         .y_label_area_size(48)
-        .build_cartesian_2d(0.0..n as f64, 0.0..100.0)
+        .build_cartesian_2d((0..n - 1).into_segmented(), 0.0..100.0)
         .map_err(plot_err)?;
     let names: Vec<String> = report
         .strategies
@@ -240,21 +282,31 @@ pub fn draw_rates(dir: &Path, report: &SweepReport) -> Result<()> {
     chart
         .configure_mesh()
         .disable_x_mesh()
-        .x_labels(n)
-        .x_label_formatter(&|x| names.get(x.floor() as usize).cloned().unwrap_or_default())
+        .x_label_formatter(&|x| match x {
+            SegmentValue::CenterOf(i) => names.get(*i as usize).cloned().unwrap_or_default(),
+            _ => String::new(),
+        })
         .y_desc("% of catchable balls caught")
         .draw()
         .map_err(plot_err)?;
     chart
-        .draw_series(report.strategies.iter().enumerate().map(|(i, s)| {
-            Rectangle::new(
-                [
-                    (i as f64 + 0.15, 0.0),
-                    (i as f64 + 0.85, 100.0 * s.catchable_rate),
-                ],
-                colour(i).filled(),
-            )
-        }))
+        .draw_series(
+            Histogram::vertical(&chart)
+                .margin(24)
+                .style_func(|x, _| match x {
+                    SegmentValue::Exact(i) | SegmentValue::CenterOf(i) => {
+                        colour(*i as usize).filled()
+                    }
+                    SegmentValue::Last => BLACK.filled(),
+                })
+                .data(
+                    report
+                        .strategies
+                        .iter()
+                        .zip(0..)
+                        .map(|(s, i)| (i, 100.0 * s.catchable_rate)),
+                ),
+        )
         .map_err(plot_err)?;
     root.present().map_err(plot_err)?;
     Ok(())
