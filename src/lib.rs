@@ -14,10 +14,12 @@
 //! * [`fielding`]: fielders with human limits, the sub-tick catch test, the catching
 //!   strategies (Chapman/OAC with Tresilian's lateral term, Gillies & Dodgson's LOT,
 //!   McBeath's optical LOT, trajectory prediction), single trials and sweeps.
+//! * [`names`]: the names users type for presets, and the error a wrong one gets.
 //!
 //! The `fieldhouse` binary (`src/main.rs`, `src/cli/`) is a thin shell: it parses the
 //! command line, runs the core, prints text or JSON and draws SVG plots.
 
 pub mod fielding;
+pub mod names;
 pub mod perception;
 pub mod physics;

@@ -2,6 +2,7 @@
 
 use clap::Args;
 use fieldhouse::fielding::{Limits, TrialConfig};
+use fieldhouse::names::UnknownName;
 use fieldhouse::perception::PerceptionConfig;
 use fieldhouse::physics::{AirModel, BallSpec, NATHAN_AIR_DENSITY};
 use glam::DVec2;
@@ -64,7 +65,7 @@ impl Setting {
     }
 }
 
-pub fn parse_str<T: std::str::FromStr<Err = String>>(s: &str) -> Result<T, String> {
+pub fn parse_str<T: std::str::FromStr<Err = UnknownName>>(s: &str) -> Result<T, UnknownName> {
     s.parse()
 }
 

@@ -1,6 +1,7 @@
 //! A fielder's body: a point on the ground with a human's speed, acceleration and
 //! reaction time.
 
+use crate::names::{lookup, UnknownName};
 use glam::DVec2;
 use serde::Serialize;
 use std::str::FromStr;
@@ -36,15 +37,9 @@ impl Limits {
 }
 
 impl FromStr for Limits {
-    type Err = String;
+    type Err = UnknownName;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s {
-            "human" => Ok(Self::HUMAN),
-            "none" => Ok(Self::NONE),
-            other => Err(format!(
-                "unknown limits \"{other}\"; expected one of human, none"
-            )),
-        }
+        lookup("limits", s, &["human", "none"], &[Self::HUMAN, Self::NONE])
     }
 }
 

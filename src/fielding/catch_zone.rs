@@ -27,8 +27,6 @@ impl Default for CatchZone {
 /// One tick's worth of relative motion, ball and fielder both moving linearly inside it.
 #[derive(Debug, Clone, Copy)]
 pub struct Pass {
-    /// Fraction of the tick at which the ball is closest while in the height band.
-    pub closest_s: f64,
     pub closest_m: f64,
     /// Fraction of the tick at which the ball first comes within reach, if it does.
     pub caught_s: Option<f64>,
@@ -79,7 +77,6 @@ impl CatchZone {
             None
         };
         Some(Pass {
-            closest_s,
             closest_m,
             caught_s,
         })

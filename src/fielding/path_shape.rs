@@ -1,7 +1,7 @@
 //! Shapes that tell the catching theories apart: how a fielder's path bends, and how
 //! straight the ball's optical trajectory stays.
 
-use super::trial::counts_optically;
+use super::strategy::CLEARLY_ABOVE_EYE_TAN_PSI;
 use glam::{DVec2, DVec3};
 use serde::Serialize;
 
@@ -144,6 +144,14 @@ impl OpticalFit {
             l_max / (l_max + l_min)
         })
     }
+}
+
+/// Whether a sighting is one the optical measures should count: ball clearly above the
+/// eye and not yet nearly overhead (where tan ψ runs off to infinity for every strategy
+/// that is about to miss, and says nothing about the image path before it).
+fn counts_optically(ball: DVec3, fielder: DVec2, eye: f64) -> bool {
+    let d = (DVec2::new(ball.x, ball.z) - fielder).length();
+    d > 2.0 && (ball.y - eye) / d > CLEARLY_ABOVE_EYE_TAN_PSI
 }
 
 #[cfg(test)]

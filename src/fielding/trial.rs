@@ -1,10 +1,10 @@
 //! One fielder chasing one ball, tick by tick: see, decide, move, test for a catch.
 
-use super::strategy::{Brain, Forecast, Situation, StrategyKind, CLEARLY_ABOVE_EYE_TAN_PSI};
+use super::strategy::{Brain, Forecast, Situation, StrategyKind};
 use super::{Body, CatchZone, Limits, OpticalFit};
 use crate::perception::{PerceptionConfig, PerceptionHistory, Sighting};
 use crate::physics::Flight;
-use glam::{DVec2, DVec3};
+use glam::DVec2;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -186,12 +186,4 @@ impl Trial<'_> {
             trace,
         }
     }
-}
-
-/// Whether a sighting is one the optical measures should count: ball clearly above the
-/// eye and not yet nearly overhead (where tan ψ runs off to infinity for every strategy
-/// that is about to miss, and says nothing about the image path before it).
-pub(crate) fn counts_optically(ball: DVec3, fielder: DVec2, eye: f64) -> bool {
-    let d = (DVec2::new(ball.x, ball.z) - fielder).length();
-    d > 2.0 && (ball.y - eye) / d > CLEARLY_ABOVE_EYE_TAN_PSI
 }

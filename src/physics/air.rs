@@ -1,6 +1,7 @@
 //! The air a ball flies through: none (vacuum) or Nathan's drag-and-lift model.
 
 use super::{BallSpec, GRAVITY};
+use crate::names::{lookup, UnknownName};
 use glam::DVec3;
 use serde::Serialize;
 use std::str::FromStr;
@@ -27,15 +28,14 @@ impl AirModel {
 }
 
 impl FromStr for AirModel {
-    type Err = String;
+    type Err = UnknownName;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s {
-            "vacuum" => Ok(Self::Vacuum),
-            "nathan" => Ok(Self::Nathan),
-            other => Err(format!(
-                "unknown air model \"{other}\"; expected one of nathan, vacuum"
-            )),
-        }
+        lookup(
+            "air model",
+            s,
+            &["nathan", "vacuum"],
+            &[Self::Nathan, Self::Vacuum],
+        )
     }
 }
 

@@ -1,5 +1,6 @@
 //! Ball presets: size, mass and the aerodynamic coefficients that belong to each ball.
 
+use crate::names::{lookup, UnknownName};
 use serde::Serialize;
 use std::str::FromStr;
 
@@ -62,15 +63,14 @@ impl BallSpec {
 }
 
 impl FromStr for BallSpec {
-    type Err = String;
+    type Err = UnknownName;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s {
-            "baseball" => Ok(Self::BASEBALL),
-            "cricket" => Ok(Self::CRICKET),
-            other => Err(format!(
-                "unknown ball \"{other}\"; expected one of baseball, cricket"
-            )),
-        }
+        lookup(
+            "ball",
+            s,
+            &["baseball", "cricket"],
+            &[Self::BASEBALL, Self::CRICKET],
+        )
     }
 }
 
@@ -95,7 +95,7 @@ mod tests {
 
     #[test]
     fn unknown_ball_names_the_choices() {
-        let err = "softball".parse::<BallSpec>().unwrap_err();
+        let err = "softball".parse::<BallSpec>().unwrap_err().to_string();
         assert!(err.contains("softball") && err.contains("baseball, cricket"));
     }
 }

@@ -137,11 +137,6 @@ impl Flight {
         }
     }
 
-    /// Ball state at tick `n`, clamped to the last sample.
-    pub fn at(&self, n: usize) -> &BallState {
-        &self.samples[n.min(self.samples.len() - 1)]
-    }
-
     /// The first descending instant the ball's height passes `y`, interpolated inside the
     /// tick with the Hermite cubic; `None` if it never comes down through it.
     pub fn descending_through(&self, y: f64) -> Option<BallState> {

@@ -15,6 +15,7 @@ pub use lot_optical::LotOptical;
 pub use predictive::{Forecast, Predictive};
 
 use super::{Body, Limits};
+use crate::names::{lookup, UnknownName};
 use crate::perception::Percept;
 use glam::DVec2;
 use serde::{Serialize, Serializer};
@@ -69,18 +70,10 @@ impl Serialize for StrategyKind {
 }
 
 impl FromStr for StrategyKind {
-    type Err = String;
+    type Err = UnknownName;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Self::ALL
-            .into_iter()
-            .find(|k| k.name() == s)
-            .ok_or_else(|| {
-                let names: Vec<_> = Self::ALL.iter().map(|k| k.name()).collect();
-                format!(
-                    "unknown strategy \"{s}\"; expected one of {}",
-                    names.join(", ")
-                )
-            })
+        const NAMES: [&str; 5] = ["chapman", "lot-optical", "predictive", "lot", "chapman-1d"];
+        lookup("strategy", s, &NAMES, &Self::ALL)
     }
 }
 
@@ -142,8 +135,9 @@ mod tests {
     fn names_round_trip_and_typos_list_the_choices() {
         for k in StrategyKind::ALL {
             assert_eq!(k.name().parse::<StrategyKind>(), Ok(k));
+            assert_eq!(k.to_string(), k.name());
         }
-        let err = "lott".parse::<StrategyKind>().unwrap_err();
+        let err = "lott".parse::<StrategyKind>().unwrap_err().to_string();
         assert!(
             err.contains("\"lott\"") && err.contains("lot-optical"),
             "{err}"
