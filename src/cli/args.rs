@@ -1,7 +1,7 @@
 //! Arguments shared by the catching subcommands, and their parsers.
 
 use clap::Args;
-use fieldhouse::fielding::{Limits, TrialConfig};
+use fieldhouse::fielding::{CatchZone, FielderConfig, Limits, TrialConfig};
 use fieldhouse::names::UnknownName;
 use fieldhouse::perception::PerceptionConfig;
 use fieldhouse::physics::{AirModel, BallSpec, NATHAN_AIR_DENSITY};
@@ -48,20 +48,23 @@ impl Setting {
     }
 
     pub fn trial_config(&self, seed: u64, record_trace: bool) -> TrialConfig {
-        let mut config = TrialConfig {
-            limits: self.limits,
-            perception: PerceptionConfig {
-                eye_height_m: self.eye_height,
-                delay_s: self.delay,
-                noise_rad: self.noise_deg.to_radians(),
-                difference_span: self.difference_span as usize,
+        TrialConfig {
+            fielder: FielderConfig {
+                limits: self.limits,
+                perception: PerceptionConfig {
+                    eye_height_m: self.eye_height,
+                    delay_s: self.delay,
+                    noise_rad: self.noise_deg.to_radians(),
+                    difference_span: self.difference_span as usize,
+                },
+                noise_seed: seed,
+            },
+            zone: CatchZone {
+                reach_m: self.reach,
+                ..CatchZone::default()
             },
             record_trace,
-            seed,
-            ..TrialConfig::default()
-        };
-        config.zone.reach_m = self.reach;
-        config
+        }
     }
 }
 

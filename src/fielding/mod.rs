@@ -3,6 +3,7 @@
 
 mod body;
 mod catch_zone;
+mod fielder;
 #[cfg(test)]
 mod oracles;
 mod path_shape;
@@ -12,6 +13,7 @@ mod trial;
 
 pub use body::{Body, Limits};
 pub use catch_zone::{CatchZone, Pass};
+pub use fielder::{Fielder, FielderConfig, Step};
 pub use path_shape::{OpticalFit, PathShape};
 pub use strategy::{Brain, Forecast, StrategyKind};
 pub use sweep::{LaunchDistribution, StrategySummary, Sweep, SweepCase, SweepReport};

@@ -29,7 +29,10 @@ fn sweep(limits: Limits) -> Sweep {
         air_density: NATHAN_AIR_DENSITY,
         dt: DT,
         trial: TrialConfig {
-            limits,
+            fielder: FielderConfig {
+                limits,
+                ..FielderConfig::default()
+            },
             ..TrialConfig::default()
         },
     }

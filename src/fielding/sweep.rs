@@ -153,11 +153,11 @@ impl Sweep {
         strategy: StrategyKind,
         record_trace: bool,
     ) -> TrialResult {
-        let config = TrialConfig {
+        let mut config = TrialConfig {
             record_trace,
-            seed: self.trial.seed ^ ((case_index as u64) << 8 | strategy as u64),
             ..self.trial
         };
+        config.fielder.noise_seed ^= (case_index as u64) << 8 | strategy as u64;
         Trial {
             flight: &case.flight,
             config: &config,

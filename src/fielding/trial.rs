@@ -1,36 +1,19 @@
 //! One fielder chasing one ball, tick by tick: see, decide, move, test for a catch.
 
-use super::strategy::{Brain, Forecast, Situation, StrategyKind};
-use super::{Body, CatchZone, Limits, OpticalFit};
-use crate::perception::{PerceptionConfig, PerceptionHistory, Sighting};
+use super::fielder::{Fielder, FielderConfig};
+use super::strategy::{Forecast, StrategyKind};
+use super::{CatchZone, OpticalFit};
 use crate::physics::Flight;
 use glam::DVec2;
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 /// Everything about a trial except the ball and the fielder's start.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 pub struct TrialConfig {
-    pub limits: Limits,
-    pub perception: PerceptionConfig,
+    pub fielder: FielderConfig,
     pub zone: CatchZone,
     /// Keep one [`TraceEntry`] a tick (costs an allocation; sweeps leave it off).
     pub record_trace: bool,
-    /// Seeds the perceptual noise; irrelevant when noise is off.
-    pub seed: u64,
-}
-
-impl Default for TrialConfig {
-    fn default() -> Self {
-        TrialConfig {
-            limits: Limits::HUMAN,
-            perception: PerceptionConfig::default(),
-            zone: CatchZone::default(),
-            record_trace: false,
-            seed: 0,
-        }
-    }
 }
 
 /// How a trial ended.
@@ -97,15 +80,11 @@ impl Trial<'_> {
     pub fn run(&self, strategy: StrategyKind, start: DVec2) -> TrialResult {
         let (flight, cfg) = (self.flight, self.config);
         let dt = flight.dt;
-        let eye = cfg.perception.eye_height_m;
-        let home = {
-            let p = flight.samples[0].pos;
-            DVec2::new(p.x, p.z)
-        };
-        let mut brain = Brain::new(strategy, || self.forecast());
-        let mut history = PerceptionHistory::new(&cfg.perception, dt);
-        let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
-        let mut body = Body::at_rest(start);
+        let eye = cfg.fielder.perception.eye_height_m;
+        let reaction_s = cfg.fielder.limits.reaction_s;
+        let home = flight.samples[0].pos;
+        let home = DVec2::new(home.x, home.z);
+        let mut fielder = Fielder::new(strategy, start, home, &cfg.fielder, dt, || self.forecast());
         let mut path = Vec::with_capacity(flight.samples.len());
         let mut trace = Vec::with_capacity(if cfg.record_trace {
             flight.samples.len()
@@ -118,43 +97,33 @@ impl Trial<'_> {
         let mut miss = f64::INFINITY;
         let mut caught_at = None;
 
-        for n in 0..flight.samples.len() - 1 {
-            let (ball, next_ball) = (&flight.samples[n], &flight.samples[n + 1]);
-            let truth = Sighting::of(ball.t, ball.pos, body.pos, eye);
-            history.record(truth.blurred(cfg.perception.noise_rad, &mut rng));
-            optical.add(ball.t, ball.pos, body.pos, home, eye);
-
-            let command = match history.percept() {
-                Some(percept) if ball.t >= cfg.limits.reaction_s => brain.command(&Situation {
-                    percept: &percept,
-                    body: &body,
-                    limits: &cfg.limits,
-                    home,
-                    t: ball.t,
-                    dt,
-                }),
-                _ => DVec2::ZERO,
-            };
-            let before = body.pos;
+        for pair in flight.samples.windows(2) {
+            let (ball, next_ball) = (&pair[0], &pair[1]);
+            let before = fielder.body.pos;
             path.push(before);
-            let accel = body.advance(command, &cfg.limits, dt);
-            if ball.t >= cfg.limits.reaction_s {
-                accel_sum += accel.length();
+            optical.add(ball.t, ball.pos, before, home, eye);
+            let step = fielder.step(ball.t, ball.pos, dt);
+            let accel = step.accel.length();
+            if ball.t >= reaction_s {
+                accel_sum += accel;
                 moving_ticks += 1;
             }
-            peak_accel = peak_accel.max(accel.length());
-            peak_speed = peak_speed.max(body.vel.length());
+            peak_accel = peak_accel.max(accel);
+            peak_speed = peak_speed.max(fielder.body.vel.length());
             if cfg.record_trace {
                 trace.push(TraceEntry {
                     t: ball.t,
                     ball: ball.pos.to_array(),
                     fielder: before.to_array(),
-                    tan_psi: truth.tan_psi,
-                    alpha: truth.alpha(),
-                    accel: accel.to_array(),
+                    tan_psi: step.sighting.tan_psi,
+                    alpha: step.sighting.alpha(),
+                    accel: step.accel.to_array(),
                 });
             }
-            if let Some(pass) = cfg.zone.pass(ball.pos, next_ball.pos, before, body.pos) {
+            if let Some(pass) = cfg
+                .zone
+                .pass(ball.pos, next_ball.pos, before, fielder.body.pos)
+            {
                 miss = miss.min(pass.closest_m);
                 if let Some(s) = pass.caught_s {
                     caught_at = Some(ball.t + s * dt);
@@ -162,11 +131,11 @@ impl Trial<'_> {
                 }
             }
         }
-        path.push(body.pos);
+        path.push(fielder.body.pos);
         let landing = flight.landing.pos;
         if miss.is_infinite() {
             // The ball never came down through the band (a ball launched below it).
-            miss = (DVec2::new(landing.x, landing.z) - body.pos).length();
+            miss = (DVec2::new(landing.x, landing.z) - fielder.body.pos).length();
         }
         let path_length_m = path.windows(2).map(|w| (w[1] - w[0]).length()).sum();
         TrialResult {
