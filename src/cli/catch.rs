@@ -14,6 +14,7 @@ const MAX_FLIGHT_S: f64 = 60.0;
 #[derive(Args, Debug)]
 #[command(
     allow_negative_numbers = true,
+    args_override_self = true,
     about = "One fielder, one fly ball: did it catch it, and how did it run?",
     after_help = "The ball starts at (0, launch height, 0); azimuth is measured from +x toward +z, y is up.\n\
         Example: fieldhouse catch --strategy chapman --speed 40 --elevation 40 --azimuth 30 --fielder 70,55"

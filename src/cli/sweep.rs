@@ -15,6 +15,7 @@ const PLOTTED_LAUNCHES: usize = 6;
 #[derive(Args, Debug)]
 #[command(
     allow_negative_numbers = true,
+    args_override_self = true,
     about = "Many fly balls, every strategy on the same balls: catch rates, efforts, path shapes",
     after_help = "Launches: speed 25–45 m/s, elevation 25–65°, azimuth 0–90°, backspin 1000–3000 rpm, \
         from 1 m; the fielder starts 10–40 m from the landing point in a random direction (all uniform).\n\
