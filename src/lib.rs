@@ -20,6 +20,7 @@
 //! command line, runs the core, prints text or JSON and draws SVG plots.
 
 pub mod fielding;
+pub mod motion;
 pub mod names;
 pub mod perception;
 pub mod physics;
