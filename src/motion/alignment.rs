@@ -1,0 +1,198 @@
+//! The ground alignment of two weighted point clouds (Kovar, Gleicher & Pighin 2002): the
+//! rotation about the vertical axis and the translation on the ground that best map one
+//! onto the other, in closed form.
+
+use glam::{DVec2, DVec3};
+
+/// A rigid motion of the ground: rotate by `theta` about +y, then translate by `offset`
+/// (x, z). It maps (x, z) to (x·cos θ + z·sin θ + x₀, −x·sin θ + z·cos θ + z₀): the
+/// rotation is by θ about +y in a right-handed, y-up frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroundTransform {
+    pub theta: f64,
+    pub offset: DVec2,
+}
+
+impl GroundTransform {
+    pub const IDENTITY: GroundTransform = GroundTransform {
+        theta: 0.0,
+        offset: DVec2::ZERO,
+    };
+
+    pub fn apply(&self, p: DVec3) -> DVec3 {
+        let (sin, cos) = self.theta.sin_cos();
+        DVec3::new(
+            p.x * cos + p.z * sin + self.offset.x,
+            p.y,
+            -p.x * sin + p.z * cos + self.offset.y,
+        )
+    }
+}
+
+/// Weighted sums over pairs of points (p, p′) that the closed form needs. Accumulate
+/// with [`Moments::add`]; the same sums also give the aligned distance without a second
+/// pass over the points.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Moments {
+    w: f64,
+    x: f64,
+    z: f64,
+    x2: f64,
+    z2: f64,
+    /// Σw(x·x′ + z·z′) and Σw(x·z′ − x′·z).
+    dot: f64,
+    cross: f64,
+    /// Σw·|p|² and Σw·|p′|² (all three axes), Σw·y·y′.
+    norm: f64,
+    norm2: f64,
+    yy: f64,
+}
+
+impl Moments {
+    /// Adds the pair (p, p′) with weight w; p′ is the cloud to be moved onto p.
+    #[inline]
+    pub fn add(&mut self, w: f64, p: DVec3, q: DVec3) {
+        self.w += w;
+        self.x += w * p.x;
+        self.z += w * p.z;
+        self.x2 += w * q.x;
+        self.z2 += w * q.z;
+        self.dot += w * (p.x * q.x + p.z * q.z);
+        self.cross += w * (p.x * q.z - q.x * p.z);
+        self.norm += w * p.length_squared();
+        self.norm2 += w * q.length_squared();
+        self.yy += w * p.y * q.y;
+    }
+
+    /// Moments from sums computed elsewhere (unit weights, `w` points): Σx, Σz, Σ|p|² of
+    /// each cloud and the cross sums Σ(x x′ + z z′), Σ(x z′ − x′ z), Σ y y′. Lets a caller
+    /// that compares many windows reuse per-frame sums instead of revisiting points.
+    pub fn from_sums(w: f64, p: [f64; 3], q: [f64; 3], cross: [f64; 3]) -> Moments {
+        Moments {
+            w,
+            x: p[0],
+            z: p[1],
+            norm: p[2],
+            x2: q[0],
+            z2: q[1],
+            norm2: q[2],
+            dot: cross[0],
+            cross: cross[1],
+            yy: cross[2],
+        }
+    }
+
+    /// The transform that best maps the p′ cloud onto the p cloud (least weighted squares).
+    pub fn alignment(&self) -> GroundTransform {
+        let w = self.w;
+        let theta = (self.cross - (self.x * self.z2 - self.x2 * self.z) / w)
+            .atan2(self.dot - (self.x * self.x2 + self.z * self.z2) / w);
+        let (sin, cos) = theta.sin_cos();
+        GroundTransform {
+            theta,
+            offset: DVec2::new(
+                (self.x - self.x2 * cos - self.z2 * sin) / w,
+                (self.z + self.x2 * sin - self.z2 * cos) / w,
+            ),
+        }
+    }
+
+    /// Σw·|p − T(p′)|² for the best alignment T, from the sums alone.
+    ///
+    /// Expanding the square with T(p′) = R·p′ + t (R about y, t on the ground):
+    /// Σw|p|² + Σw|p′|² + W|t|² − 2·Σw p·Rp′ − 2·t·Σw p + 2·t·R·Σw p′, where
+    /// Σw p·Rp′ = cos θ·Σw(x x′ + z z′) + sin θ·Σw(x z′ − x′ z) + Σw y y′.
+    pub fn aligned_distance(&self) -> f64 {
+        let t = self.alignment();
+        let (sin, cos) = t.theta.sin_cos();
+        let p_rq = cos * self.dot + sin * self.cross + self.yy;
+        // R·Σw p′ on the ground.
+        let rq = DVec2::new(
+            self.x2 * cos + self.z2 * sin,
+            -self.x2 * sin + self.z2 * cos,
+        );
+        let sum_p = DVec2::new(self.x, self.z);
+        let d = self.norm + self.norm2 + self.w * t.offset.length_squared()
+            - 2.0 * p_rq
+            - 2.0 * t.offset.dot(sum_p)
+            + 2.0 * t.offset.dot(rq);
+        d.max(0.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn cloud(rng: &mut ChaCha8Rng, n: usize) -> Vec<(f64, DVec3)> {
+        (0..n)
+            .map(|_| {
+                let w = rng.gen_range(0.1..2.0);
+                let p = DVec3::new(
+                    rng.gen_range(-3.0..3.0),
+                    rng.gen_range(0.0..2.0),
+                    rng.gen_range(-3.0..3.0),
+                );
+                (w, p)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn recovers_a_known_rigid_motion_exactly() {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        for _ in 0..50 {
+            let truth = GroundTransform {
+                theta: rng.gen_range(-3.1..3.1),
+                offset: DVec2::new(rng.gen_range(-10.0..10.0), rng.gen_range(-10.0..10.0)),
+            };
+            // p = T(p′): the alignment of p′ onto p must be T itself, at distance 0.
+            let moved = cloud(&mut rng, 12);
+            let mut m = Moments::default();
+            for (w, q) in &moved {
+                m.add(*w, truth.apply(*q), *q);
+            }
+            let found = m.alignment();
+            let dtheta = (found.theta - truth.theta + std::f64::consts::PI)
+                .rem_euclid(std::f64::consts::TAU)
+                - std::f64::consts::PI;
+            assert!(dtheta.abs() < 1e-9, "{found:?} vs {truth:?}");
+            assert!((found.offset - truth.offset).length() < 1e-9);
+            assert!(m.aligned_distance() < 1e-9, "{}", m.aligned_distance());
+        }
+    }
+
+    #[test]
+    fn aligned_distance_matches_the_direct_sum_and_is_minimal() {
+        let mut rng = ChaCha8Rng::seed_from_u64(2);
+        let a = cloud(&mut rng, 20);
+        let b = cloud(&mut rng, 20);
+        let mut m = Moments::default();
+        for ((w, p), (_, q)) in a.iter().zip(&b) {
+            m.add(*w, *p, *q);
+        }
+        let direct = |t: &GroundTransform| -> f64 {
+            a.iter()
+                .zip(&b)
+                .map(|((w, p), (_, q))| w * (*p - t.apply(*q)).length_squared())
+                .sum()
+        };
+        let best = m.alignment();
+        assert!((m.aligned_distance() - direct(&best)).abs() < 1e-9 * direct(&best));
+        // Any perturbation of the optimum does worse.
+        for (dt, dx, dz) in [
+            (0.01, 0.0, 0.0),
+            (0.0, 0.01, 0.0),
+            (0.0, 0.0, -0.01),
+            (-0.02, 0.01, 0.01),
+        ] {
+            let t = GroundTransform {
+                theta: best.theta + dt,
+                offset: best.offset + DVec2::new(dx, dz),
+            };
+            assert!(direct(&t) > direct(&best));
+        }
+    }
+}

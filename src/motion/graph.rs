@@ -1,0 +1,367 @@
+//! The motion graph of one behaviour: every frame a node, the clips' own frame-to-frame
+//! steps plus the transitions found between similar frames as edges, pruned to its
+//! largest strongly connected component so that no walk gets stuck.
+
+use super::transitions::{self, Transition};
+use super::Clip;
+use glam::{DVec2, DVec3};
+use petgraph::algo::tarjan_scc;
+use petgraph::graph::{DiGraph, NodeIndex};
+use serde::Serialize;
+use thiserror::Error;
+
+/// How a motion graph is built.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct GraphParams {
+    /// Frames compared on each side of a transition (10 at 30 fps: Kovar's ⅓ s), which
+    /// is also the blend length at playback.
+    pub window: usize,
+    /// Largest RMS joint distance (metres, after alignment) a transition may have: lower
+    /// gives smoother cuts, higher a better connected graph.
+    pub threshold_m: f64,
+}
+
+impl Default for GraphParams {
+    fn default() -> Self {
+        GraphParams {
+            window: 10,
+            threshold_m: 0.12,
+        }
+    }
+}
+
+#[derive(Debug, Error)]
+pub enum GraphError {
+    #[error("no clips of behaviour \"{behaviour}\"")]
+    NoClips { behaviour: String },
+    #[error("behaviour \"{behaviour}\": clips are too short for a {window}-frame window")]
+    TooShort { behaviour: String, window: usize },
+}
+
+/// The root's motion over one edge, in the character's own frame at the edge's start:
+/// `dx` forward, `dz` to the left, `dheading` the turn (radians, toward +z positive).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RootStep {
+    pub dx: f64,
+    pub dz: f64,
+    pub dheading: f64,
+}
+
+impl RootStep {
+    fn of(clip: &Clip, f: usize) -> RootStep {
+        let d = clip.root(f + 1) - clip.root(f);
+        let h = clip.heading(f);
+        let forward = DVec2::from_angle(h);
+        RootStep {
+            dx: d.dot(forward),
+            dz: forward.perp_dot(d),
+            dheading: wrap_angle(clip.heading(f + 1) - h),
+        }
+    }
+
+    /// Length of the step on the ground.
+    pub fn length(&self) -> f64 {
+        self.dx.hypot(self.dz)
+    }
+}
+
+/// An angle brought into (−π, π].
+pub fn wrap_angle(a: f64) -> f64 {
+    let r = a.rem_euclid(std::f64::consts::TAU);
+    if r > std::f64::consts::PI {
+        r - std::f64::consts::TAU
+    } else {
+        r
+    }
+}
+
+/// A node: frame `frame` of clip `clip` (an index into [`MotionGraph::clip_names`]), with
+/// how the body moves around it, averaged over ⅔ s (about a stride) so the hips' sway
+/// within a stride does not count as turning.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Node {
+    pub clip: usize,
+    pub frame: usize,
+    /// Root speed along the body's heading, m/s (negative when backing up).
+    pub forward_speed: f64,
+    /// Root speed across the heading, to the left, m/s.
+    pub lateral_speed: f64,
+    /// Turn rate, rad/s, toward +z positive.
+    pub turn_rate: f64,
+}
+
+impl Node {
+    fn of(clip: &Clip, c: usize, f: usize) -> Node {
+        let half = ((clip.fps / 3.0).round() as usize).max(1);
+        let (a, b) = (
+            f.saturating_sub(half),
+            (f + half).min(clip.frame_count() - 1),
+        );
+        let seconds = (b - a).max(1) as f64 / clip.fps;
+        let d = clip.root(b) - clip.root(a);
+        let forward = DVec2::from_angle(clip.heading(f));
+        Node {
+            clip: c,
+            frame: f,
+            forward_speed: d.dot(forward) / seconds,
+            lateral_speed: forward.perp_dot(d) / seconds,
+            turn_rate: wrap_angle(clip.heading(b) - clip.heading(a)) / seconds,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Edge {
+    pub from: u32,
+    pub to: u32,
+    pub step: RootStep,
+    /// Frames the edge takes to play; 1 for the edges of a graph built from clips.
+    pub frames: u32,
+    /// A cut between (or within) clips rather than the clip's own next frame.
+    pub transition: bool,
+}
+
+/// Counts a user checks a graph by.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct GraphStats {
+    pub frames: usize,
+    pub clips: usize,
+    pub transitions_before_pruning: usize,
+    pub transitions_after_pruning: usize,
+    /// Nodes in the largest strongly connected component: the nodes kept.
+    pub largest_scc: usize,
+    /// Fastest root speed in the behaviour's clips (over ⅓ s, so the hips' sway within a
+    /// stride does not count as speed), m/s.
+    pub top_speed_m_s: f64,
+}
+
+/// Constraints that disable edges before a cost map is built.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Constraints {
+    /// Disable every edge whose root moves faster than this (m/s).
+    pub max_speed: Option<f64>,
+}
+
+#[derive(Debug, Clone)]
+pub struct MotionGraph {
+    pub behaviour: String,
+    pub fps: f64,
+    pub params: GraphParams,
+    pub clip_names: Vec<String>,
+    /// Kept nodes; node ids are indices here.
+    pub nodes: Vec<Node>,
+    /// Edges sorted by `from`, then `to`.
+    pub edges: Vec<Edge>,
+    /// `edges[out_start[n]..out_start[n + 1]]` leave node n.
+    out_start: Vec<usize>,
+    /// Each node's joint positions in its own character frame (root on the ground at the
+    /// origin, facing +x), for playback.
+    poses: Vec<DVec3>,
+    joints: usize,
+    pub stats: GraphStats,
+}
+
+impl MotionGraph {
+    /// Builds the graph of `behaviour` from its clips (one subject's, so one skeleton).
+    pub fn build(
+        behaviour: &str,
+        clips: &[&Clip],
+        params: GraphParams,
+    ) -> Result<MotionGraph, GraphError> {
+        if clips.is_empty() {
+            return Err(GraphError::NoClips {
+                behaviour: behaviour.to_string(),
+            });
+        }
+        let found = transitions::find(clips, params.window, params.threshold_m);
+        Self::from_transitions(behaviour, clips, params, &found)
+    }
+
+    fn from_transitions(
+        behaviour: &str,
+        clips: &[&Clip],
+        params: GraphParams,
+        found: &[Transition],
+    ) -> Result<MotionGraph, GraphError> {
+        let offsets: Vec<usize> = clips
+            .iter()
+            .scan(0, |acc, c| {
+                let start = *acc;
+                *acc += c.frame_count();
+                Some(start)
+            })
+            .collect();
+        let frames: usize = clips.iter().map(|c| c.frame_count()).sum();
+        let mut all_edges = Vec::with_capacity(frames + found.len());
+        for (c, clip) in clips.iter().enumerate() {
+            for f in 0..clip.frame_count().saturating_sub(1) {
+                all_edges.push(Edge {
+                    from: (offsets[c] + f) as u32,
+                    to: (offsets[c] + f + 1) as u32,
+                    step: RootStep::of(clip, f),
+                    frames: 1,
+                    transition: false,
+                });
+            }
+        }
+        for t in found {
+            all_edges.push(Edge {
+                from: (offsets[t.from_clip] + t.from) as u32,
+                to: (offsets[t.to_clip] + t.to) as u32,
+                step: RootStep::of(clips[t.from_clip], t.from),
+                frames: 1,
+                transition: true,
+            });
+        }
+
+        let keep = largest_scc(frames, &all_edges);
+        if keep.iter().filter(|k| k.is_some()).count() < 2 {
+            return Err(GraphError::TooShort {
+                behaviour: behaviour.to_string(),
+                window: params.window,
+            });
+        }
+        let mut edges: Vec<Edge> = all_edges
+            .iter()
+            .filter_map(|e| {
+                let (from, to) = (keep[e.from as usize]?, keep[e.to as usize]?);
+                Some(Edge { from, to, ..*e })
+            })
+            .collect();
+        edges.sort_by_key(|e| (e.from, e.to));
+        let node_of = |global: usize| {
+            let c = offsets.partition_point(|&o| o <= global) - 1;
+            Node::of(clips[c], c, global - offsets[c])
+        };
+        let nodes: Vec<Node> = (0..frames)
+            .filter(|&g| keep[g].is_some())
+            .map(node_of)
+            .collect();
+        let mut out_start = vec![0; nodes.len() + 1];
+        for e in &edges {
+            out_start[e.from as usize + 1] += 1;
+        }
+        for n in 0..nodes.len() {
+            out_start[n + 1] += out_start[n];
+        }
+        let joints = clips[0].joint_count();
+        let poses = nodes
+            .iter()
+            .flat_map(|r| local_pose(clips[r.clip], r.frame))
+            .collect();
+        let stats = GraphStats {
+            frames,
+            clips: clips.len(),
+            transitions_before_pruning: found.len(),
+            transitions_after_pruning: edges.iter().filter(|e| e.transition).count(),
+            largest_scc: nodes.len(),
+            top_speed_m_s: clips.iter().map(|c| top_speed(c)).fold(0.0, f64::max),
+        };
+        Ok(MotionGraph {
+            behaviour: behaviour.to_string(),
+            fps: clips[0].fps,
+            params,
+            clip_names: clips.iter().map(|c| c.name.clone()).collect(),
+            nodes,
+            edges,
+            out_start,
+            poses,
+            joints,
+            stats,
+        })
+    }
+
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// The edges leaving `node`, with their indices into [`MotionGraph::edges`].
+    pub fn out_edges(&self, node: u32) -> std::ops::Range<usize> {
+        self.out_start[node as usize]..self.out_start[node as usize + 1]
+    }
+
+    /// Which edges the constraints leave enabled, indexed like [`MotionGraph::edges`].
+    pub fn enabled(&self, constraints: &Constraints) -> Vec<bool> {
+        self.edges
+            .iter()
+            .map(|e| {
+                constraints
+                    .max_speed
+                    .is_none_or(|v| e.step.length() * self.fps <= v)
+            })
+            .collect()
+    }
+
+    /// The default start pose for a cost map: a node running forward at a moderate speed
+    /// (closest to half the behaviour's top speed, moving mostly forward and turning less
+    /// than 0.3 rad/s).
+    pub fn default_start(&self) -> u32 {
+        let target = 0.5 * self.stats.top_speed_m_s;
+        let off = |n: &Node| (n.forward_speed - target).abs();
+        (0..self.nodes.len() as u32)
+            .filter(|&i| {
+                let n = &self.nodes[i as usize];
+                n.forward_speed > 2.0 * n.lateral_speed.abs() && n.turn_rate.abs() < 0.3
+            })
+            .min_by(|&a, &b| off(&self.nodes[a as usize]).total_cmp(&off(&self.nodes[b as usize])))
+            .unwrap_or(0)
+    }
+
+    /// A node's joints in its character frame (root at the origin on the ground, facing +x).
+    pub fn pose(&self, node: u32) -> &[DVec3] {
+        let j = self.joints;
+        &self.poses[node as usize * j..(node as usize + 1) * j]
+    }
+}
+
+/// Marks the nodes of the largest strongly connected component with their new, compact
+/// ids (in order of the old ids, so the numbering is deterministic).
+fn largest_scc(nodes: usize, edges: &[Edge]) -> Vec<Option<u32>> {
+    let mut g: DiGraph<(), ()> = DiGraph::with_capacity(nodes, edges.len());
+    for _ in 0..nodes {
+        g.add_node(());
+    }
+    for e in edges {
+        g.add_edge(
+            NodeIndex::new(e.from as usize),
+            NodeIndex::new(e.to as usize),
+            (),
+        );
+    }
+    let mut components = tarjan_scc(&g);
+    for c in &mut components {
+        c.sort();
+    }
+    let largest = components
+        .iter()
+        .max_by(|a, b| a.len().cmp(&b.len()).then(b[0].cmp(&a[0])))
+        .cloned()
+        .unwrap_or_default();
+    let mut keep = vec![None; nodes];
+    for (new, old) in largest.iter().enumerate() {
+        keep[old.index()] = Some(new as u32);
+    }
+    keep
+}
+
+/// Joint positions of a frame in its own character frame.
+fn local_pose(clip: &Clip, f: usize) -> Vec<DVec3> {
+    let root = clip.root(f);
+    let (sin, cos) = clip.heading(f).sin_cos();
+    clip.frame(f)
+        .iter()
+        .map(|p| {
+            let (x, z) = (p.x - root.x, p.z - root.y);
+            // Rotate by −heading so the body faces +x.
+            DVec3::new(x * cos + z * sin, p.y, -x * sin + z * cos)
+        })
+        .collect()
+}
+
+/// Fastest root speed over a ⅓ s span, which averages out the sway within a stride.
+fn top_speed(clip: &Clip) -> f64 {
+    let span = ((clip.fps / 3.0).round() as usize).max(1);
+    (0..clip.frame_count().saturating_sub(span))
+        .map(|f| (clip.root(f + span) - clip.root(f)).length() * clip.fps / span as f64)
+        .fold(0.0, f64::max)
+}

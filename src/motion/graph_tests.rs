@@ -1,0 +1,177 @@
+//! Motion-graph properties on small clips made in the test: exact alignment, strong
+//! connectivity, constraints.
+
+use super::*;
+use glam::{DVec2, DVec3};
+use std::f64::consts::TAU;
+
+/// A stick figure whose root follows `path(t)` (ground position, heading) with a gait
+/// phase driven by distance, sampled at 30 fps for `seconds`.
+fn clip(name: &str, seconds: f64, path: impl Fn(f64) -> (DVec2, f64)) -> Clip {
+    let names = ["Hips", LEFT_HIP, RIGHT_HIP, "LeftFoot", "RightFoot", "Head"];
+    let frames = (seconds * FPS) as usize;
+    let mut positions = Vec::new();
+    let mut travelled = 0.0;
+    let mut last = path(0.0).0;
+    for f in 0..frames {
+        let (root, heading) = path(f as f64 / FPS);
+        travelled += (root - last).length();
+        last = root;
+        let phase = travelled / 2.4 * TAU;
+        let fwd = DVec2::from_angle(heading);
+        let left = DVec2::new(-fwd.y, fwd.x);
+        let at = |forward: f64, side: f64, y: f64| {
+            let g = root + fwd * forward + left * side;
+            DVec3::new(g.x, y, g.y)
+        };
+        positions.extend([
+            at(0.0, 0.0, 0.95 + 0.03 * (2.0 * phase).cos()),
+            at(0.0, 0.1, 0.9),
+            at(0.0, -0.1, 0.9),
+            at(0.4 * phase.sin(), 0.1, 0.05),
+            at(-0.4 * phase.sin(), -0.1, 0.05),
+            at(0.0, 0.0, 1.7),
+        ]);
+    }
+    Clip::new(
+        name,
+        "run",
+        FPS,
+        names.iter().map(|s| s.to_string()).collect(),
+        positions,
+    )
+    .unwrap()
+}
+
+fn straight(speed: f64) -> impl Fn(f64) -> (DVec2, f64) {
+    move |t| (DVec2::new(speed * t, 0.0), 0.0)
+}
+
+fn circle(speed: f64, radius: f64) -> impl Fn(f64) -> (DVec2, f64) {
+    move |t| {
+        let a = speed * t / radius;
+        (DVec2::new(radius * a.sin(), radius * (1.0 - a.cos())), a)
+    }
+}
+
+#[test]
+fn a_moved_copy_of_a_clip_is_at_distance_zero() {
+    let a = clip("a", 3.0, straight(4.0));
+    // The same motion rotated 70° and shifted: every frame aligns exactly.
+    let turn = 70f64.to_radians();
+    let b = clip("b", 3.0, move |t| {
+        let (p, h) = straight(4.0)(t);
+        (
+            DVec2::new(5.0, -3.0) + p.rotate(DVec2::from_angle(turn)),
+            h + turn,
+        )
+    });
+    let found = transitions::find(&[&a, &b], 10, 1e-6);
+    let across: Vec<_> = found.iter().filter(|t| t.from_clip != t.to_clip).collect();
+    assert!(!across.is_empty());
+    for t in across {
+        assert!(t.rms_m < 1e-6, "{t:?}");
+        // Zero distance means the same moment of the gait (a stride of 2.4 m at 4 m/s
+        // is 18 frames): to = from + 1 + 18k.
+        assert_eq!((t.to + 18 * 10 - t.from - 1) % 18, 0, "{t:?}");
+    }
+}
+
+fn library() -> Vec<Clip> {
+    vec![
+        clip("jog", 4.0, straight(3.5)),
+        clip("left", 4.0, circle(3.5, 6.0)),
+        clip("right", 4.0, circle(3.5, -6.0)),
+        clip("stride", 4.0, straight(4.2)),
+    ]
+}
+
+fn graph() -> MotionGraph {
+    let clips = library();
+    let refs: Vec<&Clip> = clips.iter().collect();
+    MotionGraph::build("run", &refs, GraphParams::default()).unwrap()
+}
+
+/// Every node reaches every other, both ways: walk forward and backward from node 0.
+#[test]
+fn the_pruned_graph_is_strongly_connected() {
+    let g = graph();
+    assert!(g.stats.transitions_after_pruning > 0);
+    assert!(g.stats.largest_scc > g.stats.frames / 2, "{:?}", g.stats);
+    let n = g.node_count();
+    let reach = |forward: bool| {
+        let mut seen = vec![false; n];
+        let mut stack = vec![0u32];
+        seen[0] = true;
+        while let Some(v) = stack.pop() {
+            for e in g
+                .edges
+                .iter()
+                .filter(|e| if forward { e.from == v } else { e.to == v })
+            {
+                let w = if forward { e.to } else { e.from };
+                if !std::mem::replace(&mut seen[w as usize], true) {
+                    stack.push(w);
+                }
+            }
+        }
+        seen.iter().all(|s| *s)
+    };
+    assert!(reach(true) && reach(false));
+    for node in 0..n as u32 {
+        assert!(!g.out_edges(node).is_empty(), "dead end at {node}");
+        for i in g.out_edges(node) {
+            assert_eq!(g.edges[i].from, node);
+        }
+    }
+}
+
+#[test]
+fn root_steps_are_in_the_characters_frame() {
+    let g = graph();
+    for e in g.edges.iter().filter(|e| !e.transition) {
+        let r = g.nodes[e.from as usize];
+        let speed = e.step.length() * FPS;
+        match g.clip_names[r.clip].as_str() {
+            "jog" => assert!((e.step.dx * FPS - 3.5).abs() < 0.3 && e.step.dz.abs() < 0.01),
+            // Turning left: heading grows, at v/r rad/s.
+            "left" => assert!(
+                (e.step.dheading * FPS - 3.5 / 6.0).abs() < 0.05,
+                "{:?}",
+                e.step
+            ),
+            "right" => assert!((e.step.dheading * FPS + 3.5 / 6.0).abs() < 0.05),
+            _ => assert!((speed - 4.2).abs() < 0.3),
+        }
+    }
+    assert!(
+        (g.stats.top_speed_m_s - 4.2).abs() < 0.1,
+        "{}",
+        g.stats.top_speed_m_s
+    );
+}
+
+#[test]
+fn constraints_disable_fast_edges() {
+    let g = graph();
+    let enabled = g.enabled(&Constraints {
+        max_speed: Some(4.0),
+    });
+    for (e, on) in g.edges.iter().zip(&enabled) {
+        assert_eq!(*on, e.step.length() * FPS <= 4.0);
+    }
+    assert!(enabled.iter().any(|e| !e) && enabled.iter().any(|e| *e));
+}
+
+#[test]
+fn the_default_start_runs_forward_at_a_moderate_speed() {
+    let g = graph();
+    let n = g.default_start();
+    let name = &g.clip_names[g.nodes[n as usize].clip];
+    // Half of the 4.2 m/s top speed is closest to the straight 3.5 m/s jog; the circles
+    // turn too fast to count as running forward.
+    assert_eq!(name, "jog");
+    // The pose is in the character's frame: the left hip is on +z.
+    let pose = g.pose(n);
+    assert!(pose[1].z > 0.05 && pose[2].z < -0.05 && pose[0].x.abs() < 1e-9);
+}

@@ -1,0 +1,144 @@
+//! Where one clip can cut to another: the windowed, aligned frame distance D(f, t) of
+//! Kovar et al. 2002, and its local minima under a threshold.
+
+use super::alignment::Moments;
+use super::Clip;
+
+/// A candidate cut: after frame `from` of clip `from_clip`, play frame `to` of `to_clip`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Transition {
+    pub from_clip: usize,
+    pub from: usize,
+    pub to_clip: usize,
+    pub to: usize,
+    /// RMS joint distance over the window after alignment, in metres.
+    pub rms_m: f64,
+}
+
+/// Finds every transition between (and within) `clips` whose windowed distance is a
+/// local minimum below `threshold_m` (RMS joint distance in metres).
+///
+/// D compares the `window` frames that would follow the cut in the source (from + 1 …)
+/// with the `window` frames that start at the target, all joints weighted equally, after
+/// the ground alignment that best matches them. Clips should come from one subject (the
+/// caller compares a behaviour's clips only, and each behaviour is one CMU subject), so
+/// skeleton size never masquerades as a pose difference.
+///
+/// Cost: per pair of clips, the per-frame cross sums are computed once (frames² ×
+/// joints) and summed along diagonals into windows, not recomputed per window.
+pub fn find(clips: &[&Clip], window: usize, threshold_m: f64) -> Vec<Transition> {
+    let mut found = Vec::new();
+    for (ca, a) in clips.iter().enumerate() {
+        for (cb, b) in clips.iter().enumerate() {
+            find_between(a, b, window, threshold_m, |from, to, rms_m| {
+                // A cut to (nearly) the very next frames is the clip itself.
+                let trivial = ca == cb && to.abs_diff(from + 1) <= window;
+                if !trivial {
+                    found.push(Transition {
+                        from_clip: ca,
+                        from,
+                        to_clip: cb,
+                        to,
+                        rms_m,
+                    });
+                }
+            });
+        }
+    }
+    found
+}
+
+/// Per-frame sums over joints of one frame: Σx, Σz, Σ|p|².
+#[derive(Clone, Copy, Default)]
+struct FrameSums {
+    x: f64,
+    z: f64,
+    norm: f64,
+}
+
+fn window_sums(clip: &Clip, window: usize) -> Vec<FrameSums> {
+    let per_frame: Vec<FrameSums> = (0..clip.frame_count())
+        .map(|f| {
+            clip.frame(f)
+                .iter()
+                .fold(FrameSums::default(), |s, p| FrameSums {
+                    x: s.x + p.x,
+                    z: s.z + p.z,
+                    norm: s.norm + p.length_squared(),
+                })
+        })
+        .collect();
+    per_frame
+        .windows(window)
+        .map(|w| {
+            w.iter().fold(FrameSums::default(), |s, f| FrameSums {
+                x: s.x + f.x,
+                z: s.z + f.z,
+                norm: s.norm + f.norm,
+            })
+        })
+        .collect()
+}
+
+fn find_between(
+    a: &Clip,
+    b: &Clip,
+    window: usize,
+    threshold_m: f64,
+    mut emit: impl FnMut(usize, usize, f64),
+) {
+    let (la, lb, joints) = (a.frame_count(), b.frame_count(), a.joint_count());
+    // Windows start at s_a = from + 1 in a and s_b = to in b.
+    if la < window + 1 || lb < window || joints != b.joint_count() {
+        return;
+    }
+    let (wa, wb) = (window_sums(a, window), window_sums(b, window));
+    // Cross sums per frame pair: Σ(x x′ + z z′), Σ(x z′ − x′ z), Σ y y′.
+    let mut cross = vec![[0.0f64; 3]; la * lb];
+    for fa in 0..la {
+        let pa = a.frame(fa);
+        for fb in 0..lb {
+            let pb = b.frame(fb);
+            let mut c = [0.0; 3];
+            for (p, q) in pa.iter().zip(pb) {
+                c[0] += p.x * q.x + p.z * q.z;
+                c[1] += p.x * q.z - q.x * p.z;
+                c[2] += p.y * q.y;
+            }
+            cross[fa * lb + fb] = c;
+        }
+    }
+    let (na, nb) = (la - window + 1, lb - window + 1);
+    // D over every (s_a, s_b), s_a ≥ 1; NaN marks "no window here".
+    let mut d = vec![f64::NAN; na * nb];
+    let weight = (window * joints) as f64;
+    for sa in 1..na {
+        for sb in 0..nb {
+            let m = Moments::from_sums(
+                weight,
+                [wa[sa].x, wa[sa].z, wa[sa].norm],
+                [wb[sb].x, wb[sb].z, wb[sb].norm],
+                (0..window).fold([0.0; 3], |acc, k| {
+                    let c = cross[(sa + k) * lb + sb + k];
+                    [acc[0] + c[0], acc[1] + c[1], acc[2] + c[2]]
+                }),
+            );
+            d[sa * nb + sb] = (m.aligned_distance() / weight).sqrt();
+        }
+    }
+    let at = |sa: usize, sb: usize| d[sa * nb + sb];
+    for sa in 1..na {
+        for sb in 0..nb {
+            let v = at(sa, sb);
+            if v.is_nan() || v >= threshold_m {
+                continue;
+            }
+            let is_minimum = (sa.saturating_sub(1)..=(sa + 1).min(na - 1))
+                .flat_map(|i| (sb.saturating_sub(1)..=(sb + 1).min(nb - 1)).map(move |j| (i, j)))
+                .all(|(i, j)| (i, j) == (sa, sb) || at(i, j).is_nan() || v <= at(i, j));
+            if is_minimum {
+                emit(sa - 1, sb, v);
+            }
+        }
+    }
+}
