@@ -19,6 +19,7 @@
 //! The `fieldhouse` binary (`src/main.rs`, `src/cli/`) is a thin shell: it parses the
 //! command line, runs the core, prints text or JSON and draws SVG plots.
 
+pub mod costmap;
 pub mod fielding;
 pub mod motion;
 pub mod names;

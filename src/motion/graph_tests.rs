@@ -1,58 +1,9 @@
 //! Motion-graph properties on small clips made in the test: exact alignment, strong
 //! connectivity, constraints.
 
+use super::fixtures::{circle, clip, library, straight};
 use super::*;
-use glam::{DVec2, DVec3};
-use std::f64::consts::TAU;
-
-/// A stick figure whose root follows `path(t)` (ground position, heading) with a gait
-/// phase driven by distance, sampled at 30 fps for `seconds`.
-fn clip(name: &str, seconds: f64, path: impl Fn(f64) -> (DVec2, f64)) -> Clip {
-    let names = ["Hips", LEFT_HIP, RIGHT_HIP, "LeftFoot", "RightFoot", "Head"];
-    let frames = (seconds * FPS) as usize;
-    let mut positions = Vec::new();
-    let mut travelled = 0.0;
-    let mut last = path(0.0).0;
-    for f in 0..frames {
-        let (root, heading) = path(f as f64 / FPS);
-        travelled += (root - last).length();
-        last = root;
-        let phase = travelled / 2.4 * TAU;
-        let fwd = DVec2::from_angle(heading);
-        let left = DVec2::new(-fwd.y, fwd.x);
-        let at = |forward: f64, side: f64, y: f64| {
-            let g = root + fwd * forward + left * side;
-            DVec3::new(g.x, y, g.y)
-        };
-        positions.extend([
-            at(0.0, 0.0, 0.95 + 0.03 * (2.0 * phase).cos()),
-            at(0.0, 0.1, 0.9),
-            at(0.0, -0.1, 0.9),
-            at(0.4 * phase.sin(), 0.1, 0.05),
-            at(-0.4 * phase.sin(), -0.1, 0.05),
-            at(0.0, 0.0, 1.7),
-        ]);
-    }
-    Clip::new(
-        name,
-        "run",
-        FPS,
-        names.iter().map(|s| s.to_string()).collect(),
-        positions,
-    )
-    .unwrap()
-}
-
-fn straight(speed: f64) -> impl Fn(f64) -> (DVec2, f64) {
-    move |t| (DVec2::new(speed * t, 0.0), 0.0)
-}
-
-fn circle(speed: f64, radius: f64) -> impl Fn(f64) -> (DVec2, f64) {
-    move |t| {
-        let a = speed * t / radius;
-        (DVec2::new(radius * a.sin(), radius * (1.0 - a.cos())), a)
-    }
-}
+use glam::DVec2;
 
 #[test]
 fn a_moved_copy_of_a_clip_is_at_distance_zero() {
@@ -77,19 +28,8 @@ fn a_moved_copy_of_a_clip_is_at_distance_zero() {
     }
 }
 
-fn library() -> Vec<Clip> {
-    vec![
-        clip("jog", 4.0, straight(3.5)),
-        clip("left", 4.0, circle(3.5, 6.0)),
-        clip("right", 4.0, circle(3.5, -6.0)),
-        clip("stride", 4.0, straight(4.2)),
-    ]
-}
-
 fn graph() -> MotionGraph {
-    let clips = library();
-    let refs: Vec<&Clip> = clips.iter().collect();
-    MotionGraph::build("run", &refs, GraphParams::default()).unwrap()
+    super::fixtures::graph()
 }
 
 /// Every node reaches every other, both ways: walk forward and backward from node 0.
@@ -141,6 +81,8 @@ fn root_steps_are_in_the_characters_frame() {
                 e.step
             ),
             "right" => assert!((e.step.dheading * FPS + 3.5 / 6.0).abs() < 0.05),
+            "tight_left" => assert!((e.step.dheading * FPS - 3.5 / 2.5).abs() < 0.05),
+            "tight_right" => assert!((e.step.dheading * FPS + 3.5 / 2.5).abs() < 0.05),
             _ => assert!((speed - 4.2).abs() < 0.3),
         }
     }

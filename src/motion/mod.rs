@@ -16,4 +16,6 @@ pub use transitions::Transition;
 /// The frame rate everything downstream works at: the paper plays motion at 30 fps.
 pub const FPS: f64 = 30.0;
 #[cfg(test)]
+pub(crate) mod fixtures;
+#[cfg(test)]
 mod graph_tests;

@@ -1,0 +1,141 @@
+//! The square grid a cost map covers, centred on the agent in its own frame (the agent at
+//! (0, 0) facing +x, +z to its left), and the obstacles that block it.
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Grid {
+    pub size_m: f64,
+    pub cell_m: f64,
+    /// Cells along each side.
+    pub n: usize,
+}
+
+impl Grid {
+    /// A grid of side `size_m` (rounded up to whole cells) and cells of `cell_m`.
+    pub fn new(size_m: f64, cell_m: f64) -> Grid {
+        let n = (size_m / cell_m).ceil().max(1.0) as usize;
+        Grid {
+            size_m: n as f64 * cell_m,
+            cell_m,
+            n,
+        }
+    }
+
+    pub fn cells(&self) -> usize {
+        self.n * self.n
+    }
+
+    /// Corner of the grid with the smallest x and z.
+    pub fn origin(&self) -> DVec2 {
+        DVec2::splat(-0.5 * self.size_m)
+    }
+
+    /// Index `i * n + j` of the cell holding `p` (row i along z, column j along x).
+    pub fn cell_of(&self, p: DVec2) -> Option<usize> {
+        let rel = (p - self.origin()) / self.cell_m;
+        let (j, i) = (rel.x.floor(), rel.y.floor());
+        let n = self.n as f64;
+        (j >= 0.0 && i >= 0.0 && j < n && i < n).then(|| i as usize * self.n + j as usize)
+    }
+
+    /// Centre of cell `index`.
+    pub fn centre(&self, index: usize) -> DVec2 {
+        let (i, j) = (index / self.n, index % self.n);
+        self.origin()
+            + DVec2::new(
+                (j as f64 + 0.5) * self.cell_m,
+                (i as f64 + 0.5) * self.cell_m,
+            )
+    }
+
+    /// Distance from `p` to the nearest point of cell `index` (0 inside it).
+    pub fn distance_to_cell(&self, p: DVec2, index: usize) -> f64 {
+        let c = self.centre(index);
+        let half = DVec2::splat(0.5 * self.cell_m);
+        ((p - c).abs() - half).max(DVec2::ZERO).length()
+    }
+}
+
+/// An axis-aligned rectangle on the ground that no path may enter.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Obstacle {
+    pub min: DVec2,
+    pub max: DVec2,
+}
+
+impl Obstacle {
+    /// The rectangle with corners (x0, z0) and (x1, z1), in either order.
+    pub fn new(a: DVec2, b: DVec2) -> Obstacle {
+        Obstacle {
+            min: a.min(b),
+            max: a.max(b),
+        }
+    }
+
+    pub fn contains(&self, p: DVec2) -> bool {
+        p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+}
+
+/// Whether any obstacle holds `p`.
+pub fn blocked(obstacles: &[Obstacle], p: DVec2) -> bool {
+    obstacles.iter().any(|o| o.contains(p))
+}
+
+/// Where an agent stands in the world and which way it faces (radians from +x toward +z).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct AgentPose {
+    pub position: DVec2,
+    pub heading: f64,
+}
+
+impl AgentPose {
+    /// A world point in this agent's frame: the frame a cost map is built in. This is how
+    /// a map embeds anywhere: without obstacles it is the same for every pose.
+    pub fn to_local(&self, world: DVec2) -> DVec2 {
+        (world - self.position).rotate(DVec2::from_angle(-self.heading))
+    }
+
+    pub fn to_world(&self, local: DVec2) -> DVec2 {
+        self.position + local.rotate(DVec2::from_angle(self.heading))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_and_centres_agree() {
+        let g = Grid::new(20.0, 0.5);
+        assert_eq!(g.n, 40);
+        for index in [0, 39, 40, 820, 1599] {
+            assert_eq!(g.cell_of(g.centre(index)), Some(index));
+        }
+        assert_eq!(g.cell_of(DVec2::new(10.0, 0.0)), None);
+        // The agent stands on a cell corner at the very centre.
+        assert_eq!(
+            g.centre(g.cell_of(DVec2::new(0.1, 0.1)).unwrap()),
+            DVec2::new(0.25, 0.25)
+        );
+        assert_eq!(
+            g.distance_to_cell(DVec2::ZERO, g.cell_of(DVec2::new(3.2, 0.1)).unwrap()),
+            3.0
+        );
+    }
+
+    #[test]
+    fn poses_round_trip_and_face_their_heading() {
+        let pose = AgentPose {
+            position: DVec2::new(3.0, -2.0),
+            heading: 1.0,
+        };
+        let w = DVec2::new(-4.0, 7.5);
+        assert!((pose.to_world(pose.to_local(w)) - w).length() < 1e-12);
+        // One metre straight ahead of the agent is (1, 0) in its frame.
+        let ahead = pose.position + DVec2::from_angle(1.0);
+        assert!((pose.to_local(ahead) - DVec2::X).length() < 1e-12);
+    }
+}

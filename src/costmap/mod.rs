@@ -1,0 +1,242 @@
+//! Cost maps (Sukthankar, Mandel & Sycara 2008): for each square around an agent, how many
+//! frames a real human needs to get there with a behaviour, from a given pose. Three
+//! builders behind one interface: the paper's Monte Carlo (`mc`), a systematic search
+//! (`search`) and the grassfire distance baseline (`grassfire`).
+
+mod grassfire;
+mod grid;
+mod mc;
+mod prepared;
+mod search;
+mod walker;
+
+pub use grid::{AgentPose, Grid, Obstacle};
+pub use search::SearchParams;
+pub use walker::Walker;
+
+use crate::motion::{Constraints, MotionGraph};
+use crate::names::{lookup, UnknownName};
+use glam::DVec2;
+use prepared::Prepared;
+use serde::{Deserialize, Serialize, Serializer};
+use std::str::FromStr;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    Mc,
+    Search,
+    Grassfire,
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Mc => "mc",
+            Method::Search => "search",
+            Method::Grassfire => "grassfire",
+        }
+    }
+}
+
+impl Serialize for Method {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl FromStr for Method {
+    type Err = UnknownName;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        lookup(
+            "method",
+            s,
+            &["mc", "search", "grassfire"],
+            &[Method::Mc, Method::Search, Method::Grassfire],
+        )
+    }
+}
+
+/// Everything that decides a map, besides the motion graph.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BuildParams {
+    pub method: Method,
+    pub grid: Grid,
+    /// Monte Carlo walks.
+    pub iterations: u64,
+    /// Longest walk or search horizon, in frames.
+    pub depth: u32,
+    pub seed: u64,
+    #[serde(skip)]
+    pub search: SearchParams,
+    pub max_speed: Option<f64>,
+    /// The start pose: a node of the graph; `None` picks the graph's default (running
+    /// forward at a moderate speed).
+    pub start_node: Option<u32>,
+    pub obstacles: Vec<Obstacle>,
+}
+
+impl Default for BuildParams {
+    fn default() -> Self {
+        BuildParams {
+            method: Method::Search,
+            grid: Grid::new(20.0, 0.5),
+            iterations: 20_000,
+            depth: 150,
+            seed: 1,
+            search: SearchParams::default(),
+            max_speed: None,
+            start_node: None,
+            obstacles: Vec::new(),
+        }
+    }
+}
+
+/// The Monte Carlo costs of a few fixed cells after a number of walks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConvergencePoint {
+    pub iterations: u64,
+    pub costs: Vec<Option<u32>>,
+}
+
+/// Points (agent frame, metres) whose Monte Carlo cost is recorded against iterations.
+pub const WATCHED_POINTS: [(f64, f64); 5] =
+    [(3.0, 0.0), (6.0, 0.0), (0.0, 3.0), (-3.0, 0.0), (5.0, 5.0)];
+
+pub(crate) struct BuildInput {
+    pub grid: Grid,
+    pub obstacles: Vec<Obstacle>,
+    pub start: u32,
+}
+
+/// A cost map in the agent's frame: the agent at (0, 0) facing +x, +z to its left.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CostMap {
+    pub method: Method,
+    pub behaviour: String,
+    pub grid: Grid,
+    pub fps: f64,
+    pub top_speed_m_s: f64,
+    pub start_node: u32,
+    pub obstacles: Vec<Obstacle>,
+    /// Frames to reach each cell, row-major (row i along z, column j along x); `None`
+    /// where no path reaches it.
+    pub costs: Vec<Option<u32>>,
+    /// Per cell, the motion-graph edges of the cheapest path found (empty for grassfire),
+    /// so an agent can play it back.
+    pub paths: Vec<Vec<u32>>,
+    /// Monte Carlo only: the costs of [`WATCHED_POINTS`] against iterations.
+    pub convergence: Vec<ConvergencePoint>,
+}
+
+impl CostMap {
+    /// Builds a map of `graph` with `params`. `progress` is told how many walks are done
+    /// (Monte Carlo) now and then, so a caller can show a progress bar.
+    pub fn build(
+        graph: &MotionGraph,
+        params: &BuildParams,
+        progress: &mut dyn FnMut(u64),
+    ) -> CostMap {
+        let start = params.start_node.unwrap_or_else(|| graph.default_start());
+        let input = BuildInput {
+            grid: params.grid,
+            obstacles: params.obstacles.clone(),
+            start,
+        };
+        let enabled = graph.enabled(&Constraints {
+            max_speed: params.max_speed,
+        });
+        let prepared = Prepared::new(graph, &enabled);
+        let grid = &params.grid;
+        let (costs, paths, convergence) = match params.method {
+            Method::Mc => {
+                let watch: Vec<usize> = WATCHED_POINTS
+                    .iter()
+                    .filter_map(|&(x, z)| grid.cell_of(DVec2::new(x, z)))
+                    .collect();
+                let r = mc::build(
+                    &input,
+                    &prepared,
+                    params.iterations,
+                    params.depth,
+                    params.seed,
+                    &watch,
+                    progress,
+                );
+                (r.costs, r.paths, r.convergence)
+            }
+            Method::Search => {
+                let r = search::build(
+                    &input,
+                    &prepared,
+                    graph.node_count(),
+                    params.depth,
+                    params.search,
+                );
+                let paths = (0..grid.cells())
+                    .map(|c| {
+                        if r.costs[c].is_some() {
+                            r.path(c)
+                        } else {
+                            Vec::new()
+                        }
+                    })
+                    .collect();
+                (r.costs, paths, Vec::new())
+            }
+            Method::Grassfire => {
+                let costs = grassfire::build(
+                    grid,
+                    &params.obstacles,
+                    graph.stats.top_speed_m_s,
+                    graph.fps,
+                );
+                (costs, vec![Vec::new(); grid.cells()], Vec::new())
+            }
+        };
+        CostMap {
+            method: params.method,
+            behaviour: graph.behaviour.clone(),
+            grid: *grid,
+            fps: graph.fps,
+            top_speed_m_s: graph.stats.top_speed_m_s,
+            start_node: start,
+            obstacles: params.obstacles.clone(),
+            costs,
+            paths,
+            convergence,
+        }
+    }
+
+    /// Cost in frames of the cell holding `local` (agent frame).
+    pub fn cost(&self, local: DVec2) -> Option<u32> {
+        self.costs[self.grid.cell_of(local)?]
+    }
+
+    /// The cost for an agent standing at `pose` to reach the world point `world`: the
+    /// same map, rotated and translated onto the agent.
+    pub fn cost_for(&self, pose: &AgentPose, world: DVec2) -> Option<u32> {
+        self.cost(pose.to_local(world))
+    }
+
+    /// Costs as rows (row i along z), as `--json` prints them.
+    pub fn rows(&self) -> Vec<&[Option<u32>]> {
+        self.costs.chunks(self.grid.n).collect()
+    }
+
+    /// Bytes the map holds: costs plus stored paths.
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of_val(self.costs.as_slice())
+            + self
+                .paths
+                .iter()
+                .map(|p| std::mem::size_of_val(p.as_slice()) + std::mem::size_of::<Vec<u32>>())
+                .sum::<usize>()
+    }
+
+    pub fn reachable_cells(&self) -> usize {
+        self.costs.iter().filter(|c| c.is_some()).count()
+    }
+}
+#[cfg(test)]
+mod oracles;

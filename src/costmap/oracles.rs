@@ -1,0 +1,214 @@
+//! Cost-map properties checked against oracles that do not come from the builders: the
+//! physical speed bound, obstacles, replaying the stored paths, pose invariance.
+
+use super::*;
+use crate::motion::fixtures;
+use crate::motion::MotionGraph;
+
+fn params(method: Method) -> BuildParams {
+    BuildParams {
+        method,
+        grid: Grid::new(12.0, 0.5),
+        iterations: 20_000,
+        depth: 90,
+        ..BuildParams::default()
+    }
+}
+
+fn build(graph: &MotionGraph, p: &BuildParams) -> CostMap {
+    CostMap::build(graph, p, &mut |_| {})
+}
+
+/// The fastest a root ever moves in one frame of the graph, m/s: nothing can beat
+/// straight-line distance at this speed.
+fn fastest(graph: &MotionGraph) -> f64 {
+    graph
+        .edges
+        .iter()
+        .map(|e| e.step.length())
+        .fold(0.0, f64::max)
+        * graph.fps
+}
+
+/// Replays a stored path from the start pose: it must end in its cell after exactly the
+/// cell's cost, use only enabled edges, and never enter an obstacle.
+fn replay(graph: &MotionGraph, map: &CostMap, cell: usize, enabled: &[bool]) {
+    let mut at = Walker::START;
+    let mut node = map.start_node;
+    let mut frames = 0;
+    for &id in &map.paths[cell] {
+        let e = &graph.edges[id as usize];
+        assert_eq!(e.from, node, "the path is not a walk on the graph");
+        assert!(enabled[id as usize], "the path uses a disabled edge");
+        at = at.after(&e.step, glam::DVec2::from_angle(e.step.dheading));
+        assert!(
+            !map.obstacles.iter().any(|o| o.contains(at.position)),
+            "the path enters an obstacle"
+        );
+        frames += e.frames;
+        node = e.to;
+    }
+    assert_eq!(map.grid.cell_of(at.position), Some(cell));
+    assert_eq!(Some(frames), map.costs[cell]);
+}
+
+#[test]
+fn no_map_beats_the_straight_line_at_top_speed() {
+    let graph = fixtures::graph();
+    let top = fastest(&graph);
+    for method in [Method::Mc, Method::Search] {
+        let map = build(&graph, &params(method));
+        assert!(
+            map.reachable_cells() > 100,
+            "{method:?} reached {}",
+            map.reachable_cells()
+        );
+        for (c, cost) in map.costs.iter().enumerate() {
+            if let Some(frames) = cost {
+                let bound = map.grid.distance_to_cell(DVec2::ZERO, c) / top * graph.fps;
+                assert!(
+                    f64::from(*frames) + 1e-9 >= bound.floor(),
+                    "{method:?} cell {c}: {frames} < {bound}"
+                );
+            }
+        }
+        let enabled = vec![true; graph.edges.len()];
+        for c in (0..map.costs.len()).filter(|&c| map.costs[c].is_some_and(|f| f > 0)) {
+            replay(&graph, &map, c, &enabled);
+        }
+    }
+}
+
+#[test]
+fn search_is_at_least_as_good_as_many_monte_carlo_walks() {
+    let graph = fixtures::graph();
+    let mc = build(
+        &graph,
+        &BuildParams {
+            iterations: 60_000,
+            ..params(Method::Mc)
+        },
+    );
+    let search = build(&graph, &params(Method::Search));
+    let (mut both, mut worse) = (0, 0);
+    for (m, s) in mc.costs.iter().zip(&search.costs) {
+        match (m, s) {
+            (Some(m), Some(s)) => {
+                both += 1;
+                if s > m {
+                    worse += 1;
+                }
+            }
+            // A cell Monte Carlo reached and search did not counts against search.
+            (Some(_), None) => {
+                both += 1;
+                worse += 1;
+            }
+            _ => {}
+        }
+    }
+    assert!(both > 100);
+    assert!(
+        worse * 100 <= both,
+        "search worse than mc in {worse} of {both} cells"
+    );
+}
+
+#[test]
+fn grassfire_is_distance_at_top_speed() {
+    let graph = fixtures::graph();
+    let map = build(&graph, &params(Method::Grassfire));
+    let speed = graph.stats.top_speed_m_s;
+    // Straight ahead, 4 m from the start cell's centre: 4 m / v in frames.
+    let ahead = map.grid.cell_of(DVec2::new(4.1, 0.1)).unwrap();
+    assert_eq!(
+        map.costs[ahead],
+        Some((4.0 / speed * graph.fps).ceil() as u32)
+    );
+    // The grassfire map is symmetric: behind costs what ahead costs.
+    let behind = map.grid.cell_of(DVec2::new(-3.9, 0.1)).unwrap();
+    assert_eq!(map.costs[behind], map.costs[ahead]);
+}
+
+#[test]
+fn obstacles_are_unreachable_and_never_crossed() {
+    let graph = fixtures::graph();
+    let wall = Obstacle::new(DVec2::new(2.0, -3.0), DVec2::new(3.0, 3.0));
+    for method in [Method::Mc, Method::Search, Method::Grassfire] {
+        let map = build(
+            &graph,
+            &BuildParams {
+                obstacles: vec![wall],
+                ..params(method)
+            },
+        );
+        let inside = map.grid.cell_of(DVec2::new(2.6, 0.2)).unwrap();
+        assert_eq!(map.costs[inside], None, "{method:?}");
+        let enabled = vec![true; graph.edges.len()];
+        for c in (0..map.costs.len())
+            .filter(|&c| map.costs[c].is_some_and(|f| f > 0) && !map.paths[c].is_empty())
+        {
+            replay(&graph, &map, c, &enabled);
+        }
+        // Straight ahead behind the wall now costs more than without it.
+        let open = build(&graph, &params(method));
+        let beyond = map.grid.cell_of(DVec2::new(4.2, 0.2)).unwrap();
+        assert!(
+            map.costs[beyond].is_none_or(|c| Some(c) > open.costs[beyond]),
+            "{method:?}"
+        );
+    }
+}
+
+#[test]
+fn walks_respect_disabled_edges() {
+    let graph = fixtures::graph();
+    let limit = 3.8;
+    let enabled = graph.enabled(&crate::motion::Constraints {
+        max_speed: Some(limit),
+    });
+    for method in [Method::Mc, Method::Search] {
+        let map = build(
+            &graph,
+            &BuildParams {
+                max_speed: Some(limit),
+                ..params(method)
+            },
+        );
+        assert!(map.reachable_cells() > 50);
+        for c in (0..map.costs.len()).filter(|&c| map.costs[c].is_some_and(|f| f > 0)) {
+            replay(&graph, &map, c, &enabled);
+        }
+    }
+}
+
+#[test]
+fn a_map_embeds_at_any_pose() {
+    let graph = fixtures::graph();
+    let map = build(&graph, &params(Method::Search));
+    let pose = AgentPose {
+        position: DVec2::new(30.0, -12.0),
+        heading: 2.2,
+    };
+    for local in [
+        DVec2::new(3.0, 0.2),
+        DVec2::new(-2.0, 4.0),
+        DVec2::new(0.7, -5.1),
+    ] {
+        assert_eq!(map.cost_for(&pose, pose.to_world(local)), map.cost(local));
+    }
+}
+
+#[test]
+fn monte_carlo_records_convergence_and_only_improves() {
+    let graph = fixtures::graph();
+    let map = build(&graph, &params(Method::Mc));
+    assert!(map.convergence.len() > 10);
+    assert_eq!(map.convergence.last().unwrap().iterations, 20_000);
+    for pair in map.convergence.windows(2) {
+        for (a, b) in pair[0].costs.iter().zip(&pair[1].costs) {
+            // A cell's cost never rises, and a reached cell stays reached.
+            assert!(a.is_none() || (b.is_some() && b <= a), "{a:?} -> {b:?}");
+        }
+    }
+}

@@ -1,0 +1,36 @@
+//! The root of a body walking the motion graph, in the agent's frame: where it is, which
+//! way it faces, and how an edge's root step moves it.
+
+use crate::motion::RootStep;
+use glam::DVec2;
+
+/// Root position and facing (a unit vector, so a step costs no trigonometry).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Walker {
+    pub position: DVec2,
+    pub facing: DVec2,
+}
+
+impl Walker {
+    /// At the origin facing +x: the agent's own frame.
+    pub const START: Walker = Walker {
+        position: DVec2::ZERO,
+        facing: DVec2::X,
+    };
+
+    /// The walker after `step`: moved by (dx forward, dz left) in its current frame, then
+    /// turned by dheading. `turn` is (cos, sin) of the step's dheading, precomputed.
+    #[inline]
+    pub fn after(&self, step: &RootStep, turn: DVec2) -> Walker {
+        let left = self.facing.perp();
+        Walker {
+            position: self.position + self.facing * step.dx + left * step.dz,
+            facing: self.facing.rotate(turn).normalize(),
+        }
+    }
+
+    /// Heading in radians from +x toward +z.
+    pub fn heading(&self) -> f64 {
+        self.facing.y.atan2(self.facing.x)
+    }
+}
