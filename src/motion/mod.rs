@@ -1,9 +1,20 @@
 //! Human motion: clips of motion capture (BVH) or a synthetic stand-in, and the motion
 //! graphs built from them.
+//!
+//! BVH files go through `bvh` (parse), `skeleton` (forward kinematics to metres),
+//! `resample` (to [`FPS`]) and `loader` (a directory of behaviour folders) into a
+//! [`MotionLibrary`] of [`Clip`]s.
 
+mod bvh;
 mod clip;
+mod library;
+mod loader;
+mod resample;
+mod skeleton;
+mod synthetic;
 
 pub use clip::{Clip, ClipError, LEFT_HIP, RIGHT_HIP};
+pub use library::{LibraryError, LoadProblem, MotionLibrary, MotionSource};
 
 /// The frame rate everything downstream works at: the paper plays motion at 30 fps.
 pub const FPS: f64 = 30.0;
