@@ -71,12 +71,14 @@ impl Clip {
                 })
         };
         let (left, right) = (find(LEFT_HIP)?, find(RIGHT_HIP)?);
-        // Facing +x with y up, the left is +z, so forward = up × (left − right).
+        // Right-handed with y up, forward × up points to the right, so facing +x the
+        // left is −z and forward = (left − right) × up. (The CMU data confirm it: the
+        // heading follows the toes and the direction the runners travel.)
         let headings = positions
             .chunks_exact(joints)
             .map(|frame| {
                 let across = frame[left] - frame[right];
-                let forward = DVec3::Y.cross(across);
+                let forward = across.cross(DVec3::Y);
                 forward.z.atan2(forward.x)
             })
             .collect();
@@ -132,15 +134,15 @@ mod tests {
 
     #[test]
     fn heading_follows_the_hips() {
-        // Left hip at +z, right at −z: the body faces +x (heading 0). Turn the hips a
-        // quarter turn so the left is at −x: it faces +z (heading +π/2).
+        // Left hip at −z, right at +z: the body faces +x (heading 0). Turn the hips a
+        // quarter turn so the left is at +x: it faces +z (heading +π/2).
         let p = vec![
             DVec3::new(0.0, 1.0, 0.0),
-            DVec3::new(0.0, 1.0, 0.1),
             DVec3::new(0.0, 1.0, -0.1),
+            DVec3::new(0.0, 1.0, 0.1),
             DVec3::new(0.0, 1.0, 0.0),
-            DVec3::new(-0.1, 1.0, 0.0),
             DVec3::new(0.1, 1.0, 0.0),
+            DVec3::new(-0.1, 1.0, 0.0),
         ];
         let clip = Clip::new("t", "run", 30.0, names(), p).unwrap();
         assert_eq!(clip.frame_count(), 2);

@@ -1,7 +1,7 @@
 //! A behaviour-labelled collection of clips: loaded from a BVH directory (one folder per
 //! behaviour) or, without one, the built-in synthetic locomotion library.
 
-use super::{bvh, synthetic, Clip};
+use super::{loader, synthetic, Clip};
 use std::fmt;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -41,9 +41,15 @@ pub struct LoadProblem {
 #[derive(Debug, Error)]
 pub enum LibraryError {
     #[error("cannot read motion directory {dir}: {source}")]
-    Unreadable { dir: PathBuf, source: std::io::Error },
+    Unreadable {
+        dir: PathBuf,
+        source: std::io::Error,
+    },
     #[error("no BVH clip could be loaded from {dir} (looked for DIR/<behaviour>/*.bvh)")]
-    Empty { dir: PathBuf, problems: Vec<LoadProblem> },
+    Empty {
+        dir: PathBuf,
+        problems: Vec<LoadProblem>,
+    },
 }
 
 #[derive(Debug, Clone)]
@@ -61,12 +67,16 @@ impl MotionLibrary {
     /// parse is reported in `problems` and the rest still load; it is an error only if
     /// nothing loads.
     pub fn load(dir: &Path, fps: f64) -> Result<MotionLibrary, LibraryError> {
-        bvh::load_library(dir, fps)
+        loader::load_library(dir, fps)
     }
 
     /// The built-in synthetic locomotion library at `fps`.
     pub fn synthetic(fps: f64) -> MotionLibrary {
-        MotionLibrary { source: MotionSource::Synthetic, clips: synthetic::clips(fps), problems: vec![] }
+        MotionLibrary {
+            source: MotionSource::Synthetic,
+            clips: synthetic::clips(fps),
+            problems: vec![],
+        }
     }
 
     /// The behaviours present, sorted.

@@ -1,9 +1,21 @@
 //! Human motion: clips of motion capture (BVH) or a synthetic stand-in, and the motion
 //! graphs built from them.
+//!
+//! BVH files go through `bvh` (parse), `skeleton` (forward kinematics to metres),
+//! `resample` (to [`FPS`]) and `loader` (a directory of behaviour folders) into a
+//! [`MotionLibrary`] of [`Clip`]s; `synthetic` makes a stand-in library without data.
+//! `transitions` finds where clips can cut into each other (`alignment` is the ground
+//! alignment it uses) and `graph` turns clips and transitions into a [`MotionGraph`].
 
 mod alignment;
+mod bvh;
 mod clip;
 mod graph;
+mod library;
+mod loader;
+mod resample;
+mod skeleton;
+mod synthetic;
 mod transitions;
 
 pub use alignment::{GroundTransform, Moments};
@@ -11,10 +23,12 @@ pub use clip::{Clip, ClipError, LEFT_HIP, RIGHT_HIP};
 pub use graph::{
     wrap_angle, Constraints, Edge, GraphError, GraphParams, GraphStats, MotionGraph, Node, RootStep,
 };
+pub use library::{LibraryError, LoadProblem, MotionLibrary, MotionSource};
 pub use transitions::Transition;
 
 /// The frame rate everything downstream works at: the paper plays motion at 30 fps.
 pub const FPS: f64 = 30.0;
+
 #[cfg(test)]
 pub(crate) mod fixtures;
 #[cfg(test)]
