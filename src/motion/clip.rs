@@ -54,7 +54,7 @@ impl Clip {
         if joints == 0 || positions.is_empty() {
             return Err(ClipError::Empty { clip: name });
         }
-        if positions.len() % joints != 0 {
+        if !positions.len().is_multiple_of(joints) {
             return Err(ClipError::Ragged {
                 clip: name,
                 positions: positions.len(),

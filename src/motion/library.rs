@@ -41,9 +41,15 @@ pub struct LoadProblem {
 #[derive(Debug, Error)]
 pub enum LibraryError {
     #[error("cannot read motion directory {dir}: {source}")]
-    Unreadable { dir: PathBuf, source: std::io::Error },
+    Unreadable {
+        dir: PathBuf,
+        source: std::io::Error,
+    },
     #[error("no BVH clip could be loaded from {dir} (looked for DIR/<behaviour>/*.bvh)")]
-    Empty { dir: PathBuf, problems: Vec<LoadProblem> },
+    Empty {
+        dir: PathBuf,
+        problems: Vec<LoadProblem>,
+    },
 }
 
 #[derive(Debug, Clone)]
@@ -66,7 +72,11 @@ impl MotionLibrary {
 
     /// The built-in synthetic locomotion library at `fps`.
     pub fn synthetic(fps: f64) -> MotionLibrary {
-        MotionLibrary { source: MotionSource::Synthetic, clips: synthetic::clips(fps), problems: vec![] }
+        MotionLibrary {
+            source: MotionSource::Synthetic,
+            clips: synthetic::clips(fps),
+            problems: vec![],
+        }
     }
 
     /// The behaviours present, sorted.
