@@ -109,7 +109,8 @@ pub(crate) struct BuildInput {
     pub start: u32,
 }
 
-/// A cost map in the agent's frame: the agent at (0, 0) facing +x, +z to its left.
+/// A cost map in the agent's frame: the agent at (0, 0) facing +x, so +z is on its right
+/// (y up; see [`Grid`]).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct CostMap {
     pub method: Method,

@@ -18,13 +18,13 @@ impl Walker {
         facing: DVec2::X,
     };
 
-    /// The walker after `step`: moved by (dx forward, dz left) in its current frame, then
+    /// The walker after `step`: moved by (dx forward, dz toward its +z side) in its current frame, then
     /// turned by dheading. `turn` is (cos, sin) of the step's dheading, precomputed.
     #[inline]
     pub fn after(&self, step: &RootStep, turn: DVec2) -> Walker {
-        let left = self.facing.perp();
+        let side = self.facing.perp();
         Walker {
-            position: self.position + self.facing * step.dx + left * step.dz,
+            position: self.position + self.facing * step.dx + side * step.dz,
             facing: self.facing.rotate(turn).normalize(),
         }
     }

@@ -18,7 +18,8 @@ pub fn clip(name: &str, seconds: f64, path: impl Fn(f64) -> (DVec2, f64)) -> Cli
         last = root;
         let phase = travelled / 2.4 * TAU;
         let fwd = DVec2::from_angle(heading);
-        let left = DVec2::new(-fwd.y, fwd.x);
+        // With y up, a body facing +x has its left on −z.
+        let left = DVec2::new(fwd.y, -fwd.x);
         let at = |forward: f64, side: f64, y: f64| {
             let g = root + fwd * forward + left * side;
             DVec3::new(g.x, y, g.y)
@@ -46,6 +47,8 @@ pub fn straight(speed: f64) -> impl Fn(f64) -> (DVec2, f64) {
     move |t| (DVec2::new(speed * t, 0.0), 0.0)
 }
 
+/// Circles toward +z (a right turn, +z being on the right of a body facing +x) for a
+/// positive radius, toward −z for a negative one.
 pub fn circle(speed: f64, radius: f64) -> impl Fn(f64) -> (DVec2, f64) {
     move |t| {
         let a = speed * t / radius;
@@ -57,11 +60,11 @@ pub fn circle(speed: f64, radius: f64) -> impl Fn(f64) -> (DVec2, f64) {
 pub fn library() -> Vec<Clip> {
     vec![
         clip("jog", 4.0, straight(3.5)),
-        clip("left", 4.0, circle(3.5, 6.0)),
-        clip("right", 4.0, circle(3.5, -6.0)),
+        clip("right", 4.0, circle(3.5, 6.0)),
+        clip("left", 4.0, circle(3.5, -6.0)),
         clip("stride", 4.0, straight(4.2)),
-        clip("tight_left", 4.0, circle(3.5, 2.5)),
-        clip("tight_right", 4.0, circle(3.5, -2.5)),
+        clip("tight_right", 4.0, circle(3.5, 2.5)),
+        clip("tight_left", 4.0, circle(3.5, -2.5)),
     ]
 }
 

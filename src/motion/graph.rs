@@ -39,7 +39,9 @@ pub enum GraphError {
 }
 
 /// The root's motion over one edge, in the character's own frame at the edge's start:
-/// `dx` forward, `dz` to the left, `dheading` the turn (radians, toward +z positive).
+/// `dx` forward, `dz` sideways toward +z (the body's right: with y up and right-handed
+/// axes a body facing +x has +z on its right), `dheading` the turn in radians, positive
+/// toward +z (a right turn).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct RootStep {
     pub dx: f64,
@@ -84,7 +86,7 @@ pub struct Node {
     pub frame: usize,
     /// Root speed along the body's heading, m/s (negative when backing up).
     pub forward_speed: f64,
-    /// Root speed across the heading, to the left, m/s.
+    /// Root speed across the heading, toward +z in the body's frame (its right), m/s.
     pub lateral_speed: f64,
     /// Turn rate, rad/s, toward +z positive.
     pub turn_rate: f64,

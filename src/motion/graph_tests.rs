@@ -74,15 +74,15 @@ fn root_steps_are_in_the_characters_frame() {
         let speed = e.step.length() * FPS;
         match g.clip_names[r.clip].as_str() {
             "jog" => assert!((e.step.dx * FPS - 3.5).abs() < 0.3 && e.step.dz.abs() < 0.01),
-            // Turning left: heading grows, at v/r rad/s.
-            "left" => assert!(
+            // Turning right (toward +z): heading grows, at v/r rad/s.
+            "right" => assert!(
                 (e.step.dheading * FPS - 3.5 / 6.0).abs() < 0.05,
                 "{:?}",
                 e.step
             ),
-            "right" => assert!((e.step.dheading * FPS + 3.5 / 6.0).abs() < 0.05),
-            "tight_left" => assert!((e.step.dheading * FPS - 3.5 / 2.5).abs() < 0.05),
-            "tight_right" => assert!((e.step.dheading * FPS + 3.5 / 2.5).abs() < 0.05),
+            "left" => assert!((e.step.dheading * FPS + 3.5 / 6.0).abs() < 0.05),
+            "tight_right" => assert!((e.step.dheading * FPS - 3.5 / 2.5).abs() < 0.05),
+            "tight_left" => assert!((e.step.dheading * FPS + 3.5 / 2.5).abs() < 0.05),
             _ => assert!((speed - 4.2).abs() < 0.3),
         }
     }
@@ -113,7 +113,7 @@ fn the_default_start_runs_forward_at_a_moderate_speed() {
     // Half of the 4.2 m/s top speed is closest to the straight 3.5 m/s jog; the circles
     // turn too fast to count as running forward.
     assert_eq!(name, "jog");
-    // The pose is in the character's frame: the left hip is on +z.
+    // The pose is in the character's frame: facing +x, the left hip is on −z.
     let pose = g.pose(n);
-    assert!(pose[1].z > 0.05 && pose[2].z < -0.05 && pose[0].x.abs() < 1e-9);
+    assert!(pose[1].z < -0.05 && pose[2].z > 0.05 && pose[0].x.abs() < 1e-9);
 }

@@ -1,7 +1,7 @@
 //! Chapman's optical acceleration cancellation, generalised by Dienes & McLeod, with
 //! Tresilian's lateral term.
 
-use super::{left_of, Situation, CLEARLY_ABOVE_EYE_TAN_PSI};
+use super::{quarter_turn, Situation, CLEARLY_ABOVE_EYE_TAN_PSI};
 use glam::DVec2;
 
 /// Gain of the radial law, 1/s: the optical rate returns to its reference with a time
@@ -69,6 +69,6 @@ impl Chapman {
             0.0
         };
         let toward = p.sighting.toward_ball;
-        a1 * toward + a2 * left_of(toward)
+        a1 * toward + a2 * quarter_turn(toward)
     }
 }

@@ -1,6 +1,6 @@
 //! McBeath, Shaffer & Kaiser's Linear Optical Trajectory, as a law on the ball's image.
 
-use super::{left_of, Situation, CLEARLY_ABOVE_EYE_TAN_PSI};
+use super::{quarter_turn, Situation, CLEARLY_ABOVE_EYE_TAN_PSI};
 use glam::DVec2;
 
 /// Lateral loop: natural frequency (1/s) of the line-keeping law. Tuned on sweeps
@@ -14,7 +14,8 @@ const RISE_GAIN: f64 = 6.0;
 /// along a straight line.
 ///
 /// **The image.** Let ê_f point from the fielder to home plate and ê_l be a quarter turn
-/// to its left. With the ball at D along ê_f, L along ê_l and Y above the eye, its image
+/// from it toward increasing bearing. With the ball at D along ê_f, L along ê_l and Y
+/// above the eye, its image
 /// on a plane one metre in front of the eye is (u, v) = (L/D, Y/D): u and v are the
 /// tangents of McBeath's lateral and vertical optical angles.
 ///
@@ -62,7 +63,7 @@ impl LotOptical {
     pub fn command(&mut self, s: &Situation) -> DVec2 {
         let p = s.percept;
         let forward = (s.home - s.body.pos).normalize_or(DVec2::X);
-        let left = left_of(forward);
+        let side = quarter_turn(forward);
         let (rel, rel_vel) = (p.relative_position, p.relative_velocity);
         let (r, r_vel) = (DVec2::new(rel.x, rel.z), DVec2::new(rel_vel.x, rel_vel.z));
         let (depth, depth_rate) = (r.dot(forward), r_vel.dot(forward));
@@ -77,7 +78,7 @@ impl LotOptical {
                 (along_rate * depth - along * depth_rate) / (depth * depth),
             )
         };
-        let (u, u_rate) = image(r.dot(left), r_vel.dot(left));
+        let (u, u_rate) = image(r.dot(side), r_vel.dot(side));
         let (v, v_rate) = image(rel.y, rel_vel.y);
         let reference = *self.reference.get_or_insert(Reference {
             u,
@@ -90,6 +91,6 @@ impl LotOptical {
         let off_line_rate = depth * (u_rate * cos - v_rate * sin) / cos;
         let a_lateral = LINE_OMEGA * LINE_OMEGA * off_line + 2.0 * LINE_OMEGA * off_line_rate;
         let a_back = RISE_GAIN * (depth / v) * (v_rate - reference.rise_rate);
-        a_lateral * left - a_back * forward
+        a_lateral * side - a_back * forward
     }
 }

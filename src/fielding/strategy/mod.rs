@@ -121,9 +121,9 @@ impl Brain {
     }
 }
 
-/// The unit vector a quarter turn counter-clockwise in the x–z plane (toward increasing
-/// bearing α, which is measured from +x toward +z).
-pub(crate) fn left_of(u: DVec2) -> DVec2 {
+/// The unit vector a quarter turn from `u` toward increasing bearing α (α runs from +x
+/// toward +z; with y up that is a turn to the right).
+pub(crate) fn quarter_turn(u: DVec2) -> DVec2 {
     DVec2::new(-u.y, u.x)
 }
 
@@ -145,11 +145,11 @@ mod tests {
     }
 
     #[test]
-    fn left_of_turns_toward_increasing_bearing() {
+    fn a_quarter_turn_goes_toward_increasing_bearing() {
         let a: f64 = 0.3;
         let u = DVec2::new(a.cos(), a.sin());
         let b = a + 1e-6;
         let ahead = DVec2::new(b.cos(), b.sin());
-        assert!((ahead - u).dot(left_of(u)) > 0.0);
+        assert!((ahead - u).dot(quarter_turn(u)) > 0.0);
     }
 }
