@@ -3,6 +3,9 @@
 
 mod args;
 mod catch;
+mod costmap;
+mod heatmap;
+mod motion;
 mod plots;
 mod sweep;
 
@@ -31,6 +34,10 @@ enum Command {
     Catch(catch::CatchArgs),
     /// Many fly balls, every strategy on the same balls: catch rates, efforts, path shapes.
     CatchSweep(sweep::SweepArgs),
+    /// Build a behaviour's motion graph from motion capture and print its size.
+    MotionGraph(motion::MotionGraphArgs),
+    /// Build a behaviour's cost map: frames to reach each cell from a running start.
+    Costmap(costmap::CostmapArgs),
 }
 
 pub fn main() -> ExitCode {
@@ -46,6 +53,8 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Catch(args) => catch::run(args, &mut out),
         Command::CatchSweep(args) => sweep::run(args, &mut out),
+        Command::MotionGraph(args) => motion::run(args, &mut out),
+        Command::Costmap(args) => costmap::run(args, &mut out),
     }
     .and_then(|()| Ok(out.flush()?));
     match result {

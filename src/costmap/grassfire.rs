@@ -28,10 +28,10 @@ pub(crate) fn build(
     // Distances are kept as whole micrometres in the heap so they order exactly.
     let mut heap = BinaryHeap::from([Reverse((0u64, start))]);
     while let Some(Reverse((d_um, c))) = heap.pop() {
-        let d = d_um as f64 * 1e-6;
-        if d > dist[c] {
-            continue;
+        if d_um > (dist[c] * 1e6).round() as u64 {
+            continue; // a stale entry: the cell was reached more cheaply since
         }
+        let d = dist[c];
         let (i, j) = ((c / n) as i64, (c % n) as i64);
         for (di, dj) in [
             (-1, -1),

@@ -3,6 +3,7 @@
 //! builders behind one interface: the paper's Monte Carlo (`mc`), a systematic search
 //! (`search`) and the grassfire distance baseline (`grassfire`).
 
+pub mod cache;
 mod grassfire;
 mod grid;
 mod mc;
@@ -174,15 +175,7 @@ impl CostMap {
                     params.depth,
                     params.search,
                 );
-                let paths = (0..grid.cells())
-                    .map(|c| {
-                        if r.costs[c].is_some() {
-                            r.path(c)
-                        } else {
-                            Vec::new()
-                        }
-                    })
-                    .collect();
+                let paths = (0..grid.cells()).map(|c| r.path(c)).collect();
                 (r.costs, paths, Vec::new())
             }
             Method::Grassfire => {

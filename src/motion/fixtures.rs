@@ -74,3 +74,25 @@ pub fn graph() -> MotionGraph {
     let refs: Vec<&Clip> = clips.iter().collect();
     MotionGraph::build("run", &refs, GraphParams::default()).unwrap()
 }
+
+/// The CMU motion capture beside the project (or where `FIELDHOUSE_MOCAP_DIR` says).
+pub fn mocap_dir() -> std::path::PathBuf {
+    let beside = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/mocap");
+    if beside.is_dir() {
+        return beside;
+    }
+    std::env::var_os("FIELDHOUSE_MOCAP_DIR")
+        .map(std::path::PathBuf::from)
+        .expect("no mocap data: put it in ../shared/mocap or set FIELDHOUSE_MOCAP_DIR")
+}
+
+pub fn cmu_library() -> MotionLibrary {
+    MotionLibrary::load(&mocap_dir(), FPS).expect("the CMU data load")
+}
+
+/// The motion graph of a CMU behaviour, with the automatic threshold.
+pub fn cmu_graph(behaviour: &str) -> MotionGraph {
+    let library = cmu_library();
+    let clips: Vec<&Clip> = library.clips_of(behaviour).collect();
+    MotionGraph::build_auto(behaviour, &clips, GraphParams::default().window).unwrap()
+}

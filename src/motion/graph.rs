@@ -21,6 +21,9 @@ pub struct GraphParams {
     pub threshold_m: f64,
 }
 
+/// Thresholds (RMS metres) [`MotionGraph::build_auto`] tries, smoothest first.
+pub const AUTO_THRESHOLDS_M: [f64; 9] = [0.08, 0.10, 0.12, 0.15, 0.18, 0.22, 0.26, 0.32, 0.40];
+
 impl Default for GraphParams {
     fn default() -> Self {
         GraphParams {
@@ -164,6 +167,57 @@ pub struct MotionGraph {
 }
 
 impl MotionGraph {
+    /// Builds the graph with the lowest threshold of [`AUTO_THRESHOLDS_M`] whose largest
+    /// strongly connected component keeps at least half the frames (or the best-connected
+    /// one if none does). How similar two frames must be depends on the data (three short
+    /// defensive clips need a far looser threshold than seven jogs), so a fixed default
+    /// would leave some behaviours with a useless graph.
+    pub fn build_auto(
+        behaviour: &str,
+        clips: &[&Clip],
+        window: usize,
+    ) -> Result<MotionGraph, GraphError> {
+        if clips.is_empty() {
+            return Err(GraphError::NoClips {
+                behaviour: behaviour.to_string(),
+            });
+        }
+        let loosest = AUTO_THRESHOLDS_M[AUTO_THRESHOLDS_M.len() - 1];
+        let all = transitions::find(clips, window, loosest);
+        let mut best: Option<MotionGraph> = None;
+        for threshold_m in AUTO_THRESHOLDS_M {
+            let found: Vec<Transition> = all
+                .iter()
+                .copied()
+                .filter(|t| t.rms_m < threshold_m)
+                .collect();
+            let Ok(graph) = Self::from_transitions(
+                behaviour,
+                clips,
+                GraphParams {
+                    window,
+                    threshold_m,
+                },
+                &found,
+            ) else {
+                continue;
+            };
+            if 2 * graph.stats.largest_scc >= graph.stats.frames {
+                return Ok(graph);
+            }
+            if best
+                .as_ref()
+                .is_none_or(|b| graph.stats.largest_scc > b.stats.largest_scc)
+            {
+                best = Some(graph);
+            }
+        }
+        best.ok_or(GraphError::TooShort {
+            behaviour: behaviour.to_string(),
+            window,
+        })
+    }
+
     /// Builds the graph of `behaviour` from its clips (one subject's, so one skeleton).
     pub fn build(
         behaviour: &str,
@@ -283,14 +337,35 @@ impl MotionGraph {
     }
 
     /// Which edges the constraints leave enabled, indexed like [`MotionGraph::edges`].
+    ///
+    /// Disabling edges can leave nodes with no way on, and a walk that wanders into one is
+    /// stuck; so, as when the graph was built, only the largest strongly connected
+    /// component of what is left stays enabled.
     pub fn enabled(&self, constraints: &Constraints) -> Vec<bool> {
-        self.edges
+        let allowed: Vec<bool> = self
+            .edges
             .iter()
             .map(|e| {
                 constraints
                     .max_speed
                     .is_none_or(|v| e.step.length() * self.fps <= v)
             })
+            .collect();
+        if allowed.iter().all(|a| *a) {
+            return allowed;
+        }
+        let kept: Vec<Edge> = self
+            .edges
+            .iter()
+            .zip(&allowed)
+            .filter(|(_, a)| **a)
+            .map(|(e, _)| *e)
+            .collect();
+        let keep = largest_scc(self.nodes.len(), &kept);
+        self.edges
+            .iter()
+            .zip(allowed)
+            .map(|(e, a)| a && keep[e.from as usize].is_some() && keep[e.to as usize].is_some())
             .collect()
     }
 

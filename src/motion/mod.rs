@@ -21,7 +21,8 @@ mod transitions;
 pub use alignment::{GroundTransform, Moments};
 pub use clip::{Clip, ClipError, LEFT_HIP, RIGHT_HIP};
 pub use graph::{
-    wrap_angle, Constraints, Edge, GraphError, GraphParams, GraphStats, MotionGraph, Node, RootStep,
+    wrap_angle, Constraints, Edge, GraphError, GraphParams, GraphStats, MotionGraph, Node,
+    RootStep, AUTO_THRESHOLDS_M,
 };
 pub use library::{LibraryError, LoadProblem, MotionLibrary, MotionSource};
 pub use transitions::Transition;

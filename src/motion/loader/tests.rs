@@ -5,19 +5,7 @@ use crate::motion::FPS;
 use glam::DVec2;
 use std::f64::consts::{PI, TAU};
 
-fn mocap_dir() -> PathBuf {
-    let beside = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/mocap");
-    if beside.is_dir() {
-        return beside;
-    }
-    std::env::var_os("FIELDHOUSE_MOCAP_DIR")
-        .map(PathBuf::from)
-        .expect("no mocap data: put it in ../shared/mocap or set FIELDHOUSE_MOCAP_DIR")
-}
-
-fn library() -> MotionLibrary {
-    load_library(&mocap_dir(), FPS).expect("the CMU data load")
-}
+use crate::motion::fixtures::{cmu_library as library, mocap_dir};
 
 /// A scratch directory, removed when dropped.
 struct TempDir(PathBuf);

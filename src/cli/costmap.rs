@@ -1,0 +1,257 @@
+//! `fieldhouse costmap`: how many frames a human needs to reach each square around it.
+
+use super::args::positive;
+use super::heatmap;
+use super::motion::GraphArgs;
+use anyhow::Context;
+use clap::Args;
+use fieldhouse::costmap::{cache, BuildParams, CostMap, Grid, Method, Obstacle, WATCHED_POINTS};
+use fieldhouse::motion::{MotionGraph, MotionSource};
+use glam::DVec2;
+use indicatif::{ProgressBar, ProgressStyle};
+use serde_json::json;
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Args, Debug)]
+#[command(
+    about = "Build a behaviour's cost map: frames to reach each cell from a running start",
+    allow_negative_numbers = true,
+    args_override_self = true,
+    after_help = "The agent stands at (0, 0) facing +x; y is up, so +z is on its right.\n\
+        Example: fieldhouse costmap --mocap ../shared/mocap --behaviour run --method search --png run.png"
+)]
+pub struct CostmapArgs {
+    /// mc (the paper's Monte Carlo), search (systematic minimum time) or grassfire
+    /// (distance at top speed).
+    #[arg(long, default_value = "search", value_parser = super::args::parse_str::<Method>)]
+    method: Method,
+    /// Monte Carlo walks.
+    #[arg(long, default_value_t = BuildParams::default().iterations, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+    iterations: u64,
+    /// Longest walk (mc) or search horizon, in frames at 30 fps.
+    #[arg(long, value_name = "FRAMES", default_value_t = BuildParams::default().depth, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    depth: u32,
+    /// Side of the square map, metres.
+    #[arg(long, value_name = "M", default_value_t = 20.0, value_parser = positive)]
+    size: f64,
+    /// Side of a cell, metres.
+    #[arg(long, value_name = "M", default_value_t = 0.5, value_parser = positive)]
+    cell: f64,
+    /// A rectangle no path may enter, corners X0,Z0,X1,Z1 in metres (repeatable).
+    #[arg(long, value_name = "X0,Z0,X1,Z1", value_parser = rectangle, allow_hyphen_values = true)]
+    obstacle: Vec<Obstacle>,
+    /// Start pose: a node id of the pruned graph (see motion-graph --json) or CLIP:FRAME.
+    /// Default: a frame running forward at about half the behaviour's top speed.
+    #[arg(long, value_name = "NODE|CLIP:FRAME")]
+    start_frame: Option<String>,
+    /// Disable motion-graph edges faster than this, m/s.
+    #[arg(long, value_name = "M_PER_S", value_parser = positive)]
+    max_speed: Option<f64>,
+    /// Seed of the Monte Carlo walks.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Where built maps are cached (default: $XDG_CACHE_HOME/fieldhouse or ~/.cache/fieldhouse).
+    #[arg(long, value_name = "DIR", env = "FIELDHOUSE_CACHE_DIR")]
+    cache_dir: Option<PathBuf>,
+    /// Build even if a cached map exists (and do not store the result).
+    #[arg(long)]
+    no_cache: bool,
+    /// Draw the map as a PNG heat map (dark = cheap).
+    #[arg(long, value_name = "FILE")]
+    png: Option<PathBuf>,
+    /// Print one JSON document.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    graph: GraphArgs,
+}
+
+fn rectangle(s: &str) -> Result<Obstacle, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or_else(|| format!("\"{s}\" is not a rectangle; write X0,Z0,X1,Z1 in metres"))?;
+    match v.as_slice() {
+        [x0, z0, x1, z1] if x0 != x1 && z0 != z1 => {
+            Ok(Obstacle::new(DVec2::new(*x0, *z0), DVec2::new(*x1, *z1)))
+        }
+        [_, _, _, _] => Err(format!("rectangle \"{s}\" has no area")),
+        _ => Err(format!(
+            "\"{s}\" is not a rectangle; write X0,Z0,X1,Z1 in metres"
+        )),
+    }
+}
+
+/// The graph node a `--start-frame` names.
+fn start_node(graph: &MotionGraph, given: &str) -> anyhow::Result<u32> {
+    if let Ok(id) = given.parse::<u32>() {
+        anyhow::ensure!(
+            (id as usize) < graph.node_count(),
+            "start frame {id}: the graph has nodes 0 to {}",
+            graph.node_count() - 1
+        );
+        return Ok(id);
+    }
+    let (clip, frame) = given
+        .split_once(':')
+        .and_then(|(c, f)| Some((c, f.parse::<usize>().ok()?)))
+        .with_context(|| format!("start frame \"{given}\": write a node id or CLIP:FRAME"))?;
+    let c = graph
+        .clip_names
+        .iter()
+        .position(|n| n == clip)
+        .with_context(|| {
+            format!(
+                "start frame \"{given}\": no clip {clip}; clips: {}",
+                graph.clip_names.join(", ")
+            )
+        })?;
+    graph
+        .nodes
+        .iter()
+        .position(|n| n.clip == c && n.frame == frame)
+        .map(|i| i as u32)
+        .with_context(|| format!("start frame \"{given}\" was pruned from the graph (not in its largest strongly connected component)"))
+}
+
+fn default_cache_dir() -> Option<PathBuf> {
+    std::env::var_os("XDG_CACHE_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))
+        .map(|d| d.join("fieldhouse"))
+}
+
+pub fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
+    let (library, graph) = args.graph.build()?;
+    let start = args
+        .start_frame
+        .as_deref()
+        .map(|s| start_node(&graph, s))
+        .transpose()?;
+    let params = BuildParams {
+        method: args.method,
+        grid: Grid::new(args.size, args.cell),
+        iterations: args.iterations,
+        depth: args.depth,
+        seed: args.seed,
+        max_speed: args.max_speed,
+        start_node: Some(start.unwrap_or_else(|| graph.default_start())),
+        obstacles: args.obstacle.clone(),
+        ..BuildParams::default()
+    };
+    anyhow::ensure!(
+        params.grid.cells() <= 4_000_000,
+        "a {} m map of {} m cells has too many cells",
+        args.size,
+        args.cell
+    );
+    let fingerprint = match &library.source {
+        MotionSource::Mocap { fingerprint, .. } => fingerprint.clone(),
+        MotionSource::Synthetic => "synthetic".to_string(),
+    };
+    let cache_file = (!args.no_cache)
+        .then(|| args.cache_dir.clone().or_else(default_cache_dir))
+        .flatten()
+        .map(|dir| cache::path_for(&dir, &fingerprint, &graph.behaviour, &graph.params, &params));
+    let started = Instant::now();
+    let cached = cache_file.as_deref().and_then(cache::load);
+    let from_cache = cached.is_some();
+    let map = match cached {
+        Some(map) => map,
+        None => {
+            let bar = (args.method == Method::Mc && args.iterations >= 50_000).then(|| {
+                ProgressBar::new(args.iterations).with_style(
+                    ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} walks ({eta})")
+                        .expect("template is valid"),
+                )
+            });
+            if let Some(b) = &bar {
+                b.set_message(format!("{} cost map", graph.behaviour));
+            }
+            let map = CostMap::build(&graph, &params, &mut |done| {
+                if let Some(b) = &bar {
+                    b.set_position(done);
+                }
+            });
+            if let Some(b) = bar {
+                b.finish_and_clear();
+            }
+            if let Some(file) = &cache_file {
+                if let Err(e) = cache::store(file, &map) {
+                    tracing::warn!(file = %file.display(), error = %e, "could not cache the cost map");
+                }
+            }
+            map
+        }
+    };
+    let elapsed_s = started.elapsed().as_secs_f64();
+    tracing::info!(
+        from_cache,
+        elapsed_s,
+        reachable = map.reachable_cells(),
+        "cost map ready"
+    );
+    if let Some(file) = &args.png {
+        heatmap::write(&map, file)?;
+    }
+    let start_node = graph.nodes[map.start_node as usize];
+    if args.json {
+        let doc = json!({
+            "cell_m": map.grid.cell_m,
+            "size_m": map.grid.size_m,
+            "origin": map.grid.origin().to_array(),
+            "fps": map.fps,
+            "top_speed_m_s": map.top_speed_m_s,
+            "costs": map.rows(),
+            "method": map.method,
+            "elapsed_s": elapsed_s,
+            "from_cache": from_cache,
+            "behaviour": map.behaviour,
+            "motion_source": library.source.to_string(),
+            "start": {"node": map.start_node, "clip": graph.clip_names[start_node.clip], "frame": start_node.frame},
+            "obstacles": map.obstacles,
+            "memory_bytes": map.memory_bytes(),
+            "convergence": {"points": WATCHED_POINTS, "samples": map.convergence},
+        });
+        writeln!(out, "{doc}")?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "{} cost map of \"{}\" ({}), {:.0} m × {:.0} m in {} m cells, from {} frame {} ({:.1} m/s forward)",
+        map.method.name(),
+        map.behaviour,
+        library.source,
+        map.grid.size_m,
+        map.grid.size_m,
+        map.grid.cell_m,
+        graph.clip_names[start_node.clip],
+        start_node.frame,
+        start_node.forward_speed
+    )?;
+    writeln!(
+        out,
+        "  reachable cells: {} of {}; {} in {:.3} s; {:.1} KiB",
+        map.reachable_cells(),
+        map.grid.cells(),
+        if from_cache {
+            "read from cache"
+        } else {
+            "built"
+        },
+        elapsed_s,
+        map.memory_bytes() as f64 / 1024.0
+    )?;
+    for &(x, z) in &[(5.0, 0.0), (-5.0, 0.0), (0.0, -5.0), (0.0, 5.0)] {
+        let cost = map
+            .cost(DVec2::new(x, z))
+            .map_or("unreachable".to_string(), |f| {
+                format!("{f} frames ({:.2} s)", f as f64 / map.fps)
+            });
+        writeln!(out, "  to ({x:+}, {z:+}): {cost}")?;
+    }
+    Ok(())
+}

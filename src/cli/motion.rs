@@ -1,0 +1,145 @@
+//! Where motion comes from on the command line (`--mocap DIR` or `FIELDHOUSE_MOCAP_DIR`,
+//! else the synthetic library), and `fieldhouse motion-graph`.
+
+use anyhow::Context;
+use clap::Args;
+use fieldhouse::motion::{GraphParams, MotionGraph, MotionLibrary, FPS};
+use serde_json::json;
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(Args, Debug, Clone)]
+pub struct MotionSourceArgs {
+    /// Directory of BVH motion capture, one folder per behaviour (DIR/run/*.bvh, ...).
+    /// Without it (and without FIELDHOUSE_MOCAP_DIR) the built-in synthetic library is used.
+    #[arg(long, value_name = "DIR", env = "FIELDHOUSE_MOCAP_DIR")]
+    pub mocap: Option<PathBuf>,
+}
+
+impl MotionSourceArgs {
+    /// Loads the motion library, logging which source it is and every clip that failed.
+    pub fn load(&self) -> anyhow::Result<MotionLibrary> {
+        let library = match &self.mocap {
+            Some(dir) => MotionLibrary::load(dir, FPS)
+                .with_context(|| format!("loading motion capture from {}", dir.display()))?,
+            None => MotionLibrary::synthetic(FPS),
+        };
+        for problem in &library.problems {
+            tracing::warn!(%problem, "clip skipped");
+        }
+        tracing::info!(source = %library.source, clips = library.clips.len(), "motion loaded");
+        Ok(library)
+    }
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct GraphArgs {
+    /// Behaviour (a folder of the motion data): run, dribble, defense, ...
+    #[arg(long)]
+    pub behaviour: String,
+    /// Largest RMS joint distance (metres) a transition may have: lower is smoother,
+    /// higher is better connected. Default: the lowest of 0.08–0.40 m that keeps at least
+    /// half the frames in the largest strongly connected component.
+    #[arg(long, value_parser = super::args::positive)]
+    pub threshold: Option<f64>,
+    /// Frames compared on each side of a transition (and blended at playback).
+    #[arg(long, default_value_t = GraphParams::default().window as u32, value_parser = clap::value_parser!(u32).range(1..=120))]
+    pub window: u32,
+    #[command(flatten)]
+    pub source: MotionSourceArgs,
+}
+
+impl GraphArgs {
+    pub fn build(&self) -> anyhow::Result<(MotionLibrary, MotionGraph)> {
+        let library = self.source.load()?;
+        let clips: Vec<_> = library.clips_of(&self.behaviour).collect();
+        if clips.is_empty() {
+            anyhow::bail!(
+                "no clips of behaviour \"{}\" in {}; it has: {}",
+                self.behaviour,
+                library.source,
+                library.behaviours().join(", ")
+            );
+        }
+        let window = self.window as usize;
+        let graph = match self.threshold {
+            Some(threshold_m) => MotionGraph::build(
+                &self.behaviour,
+                &clips,
+                GraphParams {
+                    window,
+                    threshold_m,
+                },
+            )?,
+            None => MotionGraph::build_auto(&self.behaviour, &clips, window)?,
+        };
+        Ok((library, graph))
+    }
+}
+
+#[derive(Args, Debug)]
+#[command(
+    about = "Build a behaviour's motion graph and print its size",
+    after_help = "Example: fieldhouse motion-graph --mocap ../shared/mocap --behaviour run --json"
+)]
+pub struct MotionGraphArgs {
+    #[command(flatten)]
+    graph: GraphArgs,
+    /// Print one JSON document, with the pruned graph's edges as [from, to] node ids and
+    /// each node's [clip, frame].
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(args: MotionGraphArgs, out: &mut impl Write) -> anyhow::Result<()> {
+    let (library, graph) = args.graph.build()?;
+    let s = &graph.stats;
+    if args.json {
+        let doc = json!({
+            "behaviour": graph.behaviour,
+            "motion_source": library.source.to_string(),
+            "fps": graph.fps,
+            "params": graph.params,
+            "frames": s.frames,
+            "clips": graph.clip_names,
+            "transitions_before_pruning": s.transitions_before_pruning,
+            "transitions_after_pruning": s.transitions_after_pruning,
+            "largest_scc": s.largest_scc,
+            "top_speed_m_s": s.top_speed_m_s,
+            "nodes": graph.nodes.iter().map(|n| json!([graph.clip_names[n.clip], n.frame])).collect::<Vec<_>>(),
+            "edges": graph.edges.iter().map(|e| [e.from, e.to]).collect::<Vec<_>>(),
+        });
+        writeln!(out, "{doc}")?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "motion graph of \"{}\" from {} at {} fps",
+        graph.behaviour, library.source, graph.fps
+    )?;
+    writeln!(
+        out,
+        "  clips:        {} ({})",
+        s.clips,
+        graph.clip_names.join(", ")
+    )?;
+    writeln!(out, "  frames:       {}", s.frames)?;
+    writeln!(
+        out,
+        "  transitions:  {} found (RMS ≤ {} m over {} frames), {} kept after pruning",
+        s.transitions_before_pruning,
+        graph.params.threshold_m,
+        graph.params.window,
+        s.transitions_after_pruning
+    )?;
+    writeln!(
+        out,
+        "  largest SCC:  {} of {} frames ({:.0} %)",
+        s.largest_scc,
+        s.frames,
+        100.0 * s.largest_scc as f64 / s.frames as f64
+    )?;
+    writeln!(out, "  edges:        {}", graph.edges.len())?;
+    writeln!(out, "  top speed:    {:.2} m/s", s.top_speed_m_s)?;
+    Ok(())
+}

@@ -1,0 +1,120 @@
+//! Cost maps cached on disk, keyed by everything that decides them: the motion data's
+//! fingerprint, the behaviour, the graph and build parameters, and the code version.
+//!
+//! A map is written to a temporary file, synced, then renamed into place, so an
+//! interrupted build never leaves a half-written map behind; a file that does not parse
+//! (corrupt, or from an older format) is ignored and rebuilt.
+
+use super::{BuildParams, CostMap};
+use crate::motion::GraphParams;
+use serde::Serialize;
+use sha2::{Digest, Sha256};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Bump when the meaning of a cached map changes without the crate version changing.
+const CACHE_FORMAT: u32 = 1;
+
+#[derive(Serialize)]
+struct Key<'a> {
+    format: u32,
+    version: &'static str,
+    motion: &'a str,
+    behaviour: &'a str,
+    graph: &'a GraphParams,
+    build: &'a BuildParams,
+    search: (usize, usize),
+}
+
+/// The file a map with these inputs lives in under `dir`.
+pub fn path_for(
+    dir: &Path,
+    motion_fingerprint: &str,
+    behaviour: &str,
+    graph: &GraphParams,
+    build: &BuildParams,
+) -> PathBuf {
+    let key = Key {
+        format: CACHE_FORMAT,
+        version: env!("CARGO_PKG_VERSION"),
+        motion: motion_fingerprint,
+        behaviour,
+        graph,
+        build,
+        search: (build.search.heading_bins, build.search.sub_cells),
+    };
+    let digest = Sha256::digest(serde_json::to_vec(&key).expect("keys serialise"));
+    let hex: String = digest[..8].iter().map(|b| format!("{b:02x}")).collect();
+    let safe: String = behaviour
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    dir.join(format!("costmap-{safe}-{}-{hex}.json", build.method.name()))
+}
+
+/// The cached map at `path`, if there is a readable one.
+pub fn load(path: &Path) -> Option<CostMap> {
+    let bytes = std::fs::read(path).ok()?;
+    match serde_json::from_slice(&bytes) {
+        Ok(map) => Some(map),
+        Err(e) => {
+            tracing::warn!(path = %path.display(), error = %e, "ignoring an unreadable cached cost map");
+            None
+        }
+    }
+}
+
+/// Writes `map` to `path` atomically (temporary file, sync, rename).
+pub fn store(path: &Path, map: &CostMap) -> std::io::Result<()> {
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir)?;
+    }
+    let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
+    let result = (|| {
+        let mut file = std::fs::File::create(&tmp)?;
+        file.write_all(&serde_json::to_vec(map).map_err(std::io::Error::other)?)?;
+        file.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::costmap::Method;
+    use crate::motion::fixtures;
+
+    #[test]
+    fn a_map_round_trips_and_the_key_follows_every_input() {
+        let dir = std::env::temp_dir().join(format!("fieldhouse-cache-{}", std::process::id()));
+        let graph = fixtures::graph();
+        let params = BuildParams {
+            method: Method::Search,
+            grid: crate::costmap::Grid::new(6.0, 0.5),
+            depth: 30,
+            ..BuildParams::default()
+        };
+        let map = CostMap::build(&graph, &params, &mut |_| {});
+        let path = path_for(&dir, "abc", "run", &graph.params, &params);
+        assert!(load(&path).is_none());
+        store(&path, &map).unwrap();
+        let back = load(&path).unwrap();
+        assert_eq!(back.costs, map.costs);
+        assert_eq!(back.paths, map.paths);
+        // Any change of input gives another file.
+        let other = BuildParams {
+            depth: 31,
+            ..params.clone()
+        };
+        assert_ne!(path_for(&dir, "abc", "run", &graph.params, &other), path);
+        assert_ne!(path_for(&dir, "abd", "run", &graph.params, &params), path);
+        // A corrupt file is ignored, not trusted.
+        std::fs::write(&path, b"{\"method\": \"mc\", \"costs\": [1, 2").unwrap();
+        assert!(load(&path).is_none());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
