@@ -80,6 +80,8 @@ impl GraphArgs {
 #[derive(Args, Debug)]
 #[command(
     about = "Build a behaviour's motion graph and print its size",
+    allow_negative_numbers = true,
+    args_override_self = true,
     after_help = "Example: fieldhouse motion-graph --mocap ../shared/mocap --behaviour run --json"
 )]
 pub struct MotionGraphArgs {

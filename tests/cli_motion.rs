@@ -1,0 +1,270 @@
+//! `fieldhouse motion-graph` and `fieldhouse costmap` on the real CMU motion capture, as a
+//! user runs them, and their errors.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn mocap() -> PathBuf {
+    let beside = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/mocap");
+    if beside.is_dir() {
+        return beside;
+    }
+    std::env::var_os("FIELDHOUSE_MOCAP_DIR")
+        .map(PathBuf::from)
+        .expect("no mocap data: put it in ../shared/mocap or set FIELDHOUSE_MOCAP_DIR")
+}
+
+/// A scratch directory under the system temp dir, removed when dropped.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("fieldhouse-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Runs the binary with `args` (no argument has spaces), without ambient motion or cache
+/// settings so each test says what it uses.
+fn fieldhouse(args: &str) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args(args.split_whitespace())
+        .env_remove("FIELDHOUSE_MOCAP_DIR")
+        .env_remove("FIELDHOUSE_CACHE_DIR")
+        .env_remove("FIELDHOUSE_LOG")
+        .output()
+        .expect("the binary runs")
+}
+
+fn json(args: &str) -> Value {
+    let out = fieldhouse(args);
+    assert!(
+        out.status.success(),
+        "{args}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("stdout is one JSON document")
+}
+
+fn failure(args: &str) -> String {
+    let out = fieldhouse(args);
+    assert!(!out.status.success(), "{args} succeeded");
+    assert!(out.stdout.is_empty());
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn the_motion_graph_of_real_running_is_strongly_connected() {
+    let doc = json(&format!(
+        "motion-graph --mocap {} --behaviour run --json",
+        mocap().display()
+    ));
+    assert!(doc["motion_source"].as_str().unwrap().starts_with("mocap"));
+    let nodes = doc["nodes"].as_array().unwrap().len();
+    assert_eq!(nodes, doc["largest_scc"].as_u64().unwrap() as usize);
+    assert!(nodes * 2 >= doc["frames"].as_u64().unwrap() as usize);
+    let edges: Vec<(usize, usize)> = doc["edges"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| {
+            (
+                e[0].as_u64().unwrap() as usize,
+                e[1].as_u64().unwrap() as usize,
+            )
+        })
+        .collect();
+    assert!(edges.iter().all(|&(a, b)| a < nodes && b < nodes));
+    // Every node reaches every other and is reached by it: search both ways from node 0.
+    for forward in [true, false] {
+        let mut seen = vec![false; nodes];
+        let mut stack = vec![0];
+        seen[0] = true;
+        while let Some(v) = stack.pop() {
+            for &(a, b) in &edges {
+                let (from, to) = if forward { (a, b) } else { (b, a) };
+                if from == v && !seen[to] {
+                    seen[to] = true;
+                    stack.push(to);
+                }
+            }
+        }
+        assert!(seen.iter().all(|s| *s), "not strongly connected");
+    }
+    // The clips are CMU subject 16's.
+    assert!(doc["clips"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|c| c.as_str().unwrap().starts_with("16_")));
+}
+
+#[test]
+fn without_motion_capture_the_synthetic_library_is_used_and_labelled() {
+    let out = fieldhouse("motion-graph --behaviour dribble");
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("from synthetic"), "{text}");
+}
+
+#[test]
+fn motion_errors_name_what_is_wrong() {
+    let err = failure(&format!(
+        "motion-graph --mocap {} --behaviour swim",
+        mocap().display()
+    ));
+    assert!(
+        err.contains("\"swim\"") && err.contains("defense, dribble, run"),
+        "{err}"
+    );
+    let err = failure("motion-graph --mocap /nonexistent/mocap --behaviour run");
+    assert!(err.contains("/nonexistent/mocap"), "{err}");
+    let err = failure("motion-graph --behaviour run --threshold -1");
+    assert!(err.contains("greater than 0"), "{err}");
+}
+
+#[test]
+fn a_corrupt_clip_is_reported_and_the_rest_still_load() {
+    let dir = Scratch::new("corrupt-mocap");
+    let run = dir.0.join("run");
+    std::fs::create_dir_all(&run).unwrap();
+    for name in ["16_36.bvh", "16_45.bvh"] {
+        std::fs::copy(mocap().join("run").join(name), run.join(name)).unwrap();
+    }
+    let good = std::fs::read_to_string(mocap().join("run/16_41.bvh")).unwrap();
+    std::fs::write(run.join("16_41.bvh"), &good[..good.len() / 2]).unwrap();
+    let out = fieldhouse(&format!(
+        "motion-graph --mocap {} --behaviour run --json",
+        dir.0.display()
+    ));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("16_41.bvh:") && err.contains("clip skipped"),
+        "{err}"
+    );
+    let doc: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(doc["clips"], serde_json::json!(["16_36", "16_45"]));
+}
+
+fn costmap(extra: &str, cache: &Path) -> Value {
+    json(&format!(
+        "costmap --mocap {} --behaviour run --size 12 --depth 120 --cache-dir {} --json {extra}",
+        mocap().display(),
+        cache.display()
+    ))
+}
+
+#[test]
+fn a_cost_map_is_a_grid_of_frames_in_the_agents_frame() {
+    let cache = Scratch::new("costmap-grid");
+    let doc = costmap("--method search --obstacle 2,-1,3,1", &cache.0);
+    let (cell, size) = (
+        doc["cell_m"].as_f64().unwrap(),
+        doc["size_m"].as_f64().unwrap(),
+    );
+    let rows = doc["costs"].as_array().unwrap();
+    let n = (size / cell).round() as usize;
+    assert_eq!(rows.len(), n);
+    assert!(rows.iter().all(|r| r.as_array().unwrap().len() == n));
+    assert_eq!(doc["origin"], serde_json::json!([-size / 2.0, -size / 2.0]));
+    assert_eq!(doc["method"], "search");
+    let top = doc["top_speed_m_s"].as_f64().unwrap();
+    assert!(top > 2.0 && top < 9.0, "{top}");
+    // costs[i][j] is the cell whose centre is (origin.x + (j + ½)·cell, origin.z + (i + ½)·cell).
+    let at = |x: f64, z: f64| {
+        let (j, i) = (
+            ((x + size / 2.0) / cell) as usize,
+            ((z + size / 2.0) / cell) as usize,
+        );
+        rows[i][j].clone()
+    };
+    assert_eq!(at(0.1, 0.1), 0, "the agent's own cell costs nothing");
+    assert!(
+        at(2.6, 0.2).is_null(),
+        "a cell inside an obstacle is unreachable"
+    );
+    let ahead = at(1.6, 0.2)
+        .as_u64()
+        .expect("reachable ahead, before the obstacle");
+    // Nothing is faster than a straight line at the top speed.
+    assert!(ahead as f64 >= (1.5 / top * 30.0).floor(), "{ahead}");
+}
+
+#[test]
+fn cost_maps_are_cached_and_a_corrupt_cache_is_rebuilt() {
+    let cache = Scratch::new("costmap-cache");
+    let first = costmap("--method mc --iterations 3000", &cache.0);
+    assert_eq!(first["from_cache"], false);
+    let again = costmap("--method mc --iterations 3000", &cache.0);
+    assert_eq!(again["from_cache"], true);
+    assert_eq!(again["costs"], first["costs"]);
+    // Other parameters, another map.
+    assert_eq!(
+        costmap("--method mc --iterations 3001", &cache.0)["from_cache"],
+        false
+    );
+    for entry in std::fs::read_dir(&cache.0).unwrap() {
+        std::fs::write(entry.unwrap().path(), b"{\"costs\": [[1, 2").unwrap();
+    }
+    let rebuilt = costmap("--method mc --iterations 3000", &cache.0);
+    assert_eq!(rebuilt["from_cache"], false);
+    assert_eq!(rebuilt["costs"], first["costs"]);
+}
+
+#[test]
+fn the_heat_map_is_a_png_of_the_grid() {
+    let dir = Scratch::new("costmap-png");
+    let file = dir.0.join("run.png");
+    let out = fieldhouse(&format!(
+        "costmap --mocap {} --behaviour run --method grassfire --size 10 --cell 0.5 --no-cache --png {}",
+        mocap().display(),
+        file.display()
+    ));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&file).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    // IHDR: width and height, 20 cells of 12 px.
+    assert_eq!(u32::from_be_bytes(bytes[16..20].try_into().unwrap()), 240);
+    assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 240);
+}
+
+#[test]
+fn costmap_arguments_are_checked() {
+    let m = mocap();
+    let base = format!("costmap --mocap {} --behaviour run --no-cache", m.display());
+    let err = failure(&format!("{base} --obstacle 1,2,3"));
+    assert!(err.contains("X0,Z0,X1,Z1"), "{err}");
+    let err = failure(&format!("{base} --obstacle 1,2,1,5"));
+    assert!(err.contains("no area"), "{err}");
+    let err = failure(&format!("{base} --method astar"));
+    assert!(
+        err.contains("expected one of mc, search, grassfire"),
+        "{err}"
+    );
+    let err = failure(&format!("{base} --start-frame 99999"));
+    assert!(err.contains("the graph has nodes 0 to"), "{err}");
+    let err = failure(&format!("{base} --start-frame 16_36:x"));
+    assert!(err.contains("CLIP:FRAME"), "{err}");
+    let err = failure(&format!("{base} --start-frame 99_99:3"));
+    assert!(err.contains("no clip 99_99"), "{err}");
+    let err = failure(&format!("{base} --cell 0"));
+    assert!(err.contains("greater than 0"), "{err}");
+}
