@@ -1,0 +1,64 @@
+//! Motion-graph and cost-map benchmarks on the CMU motion capture beside the project
+//! (../shared/mocap, or FIELDHOUSE_MOCAP_DIR).
+//!
+//! Run with `cargo bench --bench motion`; results are written up in BENCHMARKS.md.
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use fieldhouse::costmap::{BuildParams, CostMap, Method};
+use fieldhouse::motion::{Clip, GraphParams, MotionGraph, MotionLibrary, FPS};
+use std::hint::black_box;
+use std::path::PathBuf;
+
+fn library() -> MotionLibrary {
+    let dir = std::env::var_os("FIELDHOUSE_MOCAP_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/mocap"));
+    MotionLibrary::load(&dir, FPS).expect("the CMU motion capture loads")
+}
+
+fn graph(library: &MotionLibrary, behaviour: &str) -> MotionGraph {
+    let clips: Vec<&Clip> = library.clips_of(behaviour).collect();
+    MotionGraph::build_auto(behaviour, &clips, GraphParams::default().window).unwrap()
+}
+
+/// Target: the motion graph over all frames in ../shared/mocap, at 30 fps, in under 10 s.
+fn motion_graphs(c: &mut Criterion) {
+    let library = library();
+    let mut group = c.benchmark_group("motion_graph");
+    group.sample_size(10);
+    group.bench_function("all_behaviours_auto_threshold", |b| {
+        b.iter(|| {
+            for behaviour in ["defense", "dribble", "run"] {
+                black_box(graph(&library, behaviour));
+            }
+        })
+    });
+    group.bench_function("load_bvh_all", |b| b.iter(|| black_box(library_again())));
+    group.finish();
+}
+
+fn library_again() -> MotionLibrary {
+    library()
+}
+
+/// Target: `search` faster than 7,000 `mc` walks; mc walks per second.
+fn cost_maps(c: &mut Criterion) {
+    let library = library();
+    let run = graph(&library, "run");
+    let mut group = c.benchmark_group("costmap_run_20m");
+    group.sample_size(10);
+    for walks in [7_000u64, 200_000] {
+        let params = BuildParams { method: Method::Mc, iterations: walks, ..BuildParams::default() };
+        group.throughput(Throughput::Elements(walks));
+        group.bench_function(format!("mc_{walks}"), |b| b.iter(|| black_box(CostMap::build(&run, &params, &mut |_| {}))));
+    }
+    group.throughput(Throughput::Elements(1));
+    for method in [Method::Search, Method::Grassfire] {
+        let params = BuildParams { method, ..BuildParams::default() };
+        group.bench_function(method.name(), |b| b.iter(|| black_box(CostMap::build(&run, &params, &mut |_| {}))));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, motion_graphs, cost_maps);
+criterion_main!(benches);
