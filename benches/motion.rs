@@ -48,14 +48,25 @@ fn cost_maps(c: &mut Criterion) {
     let mut group = c.benchmark_group("costmap_run_20m");
     group.sample_size(10);
     for walks in [7_000u64, 200_000] {
-        let params = BuildParams { method: Method::Mc, iterations: walks, ..BuildParams::default() };
+        let params = BuildParams {
+            method: Method::Mc,
+            iterations: walks,
+            ..BuildParams::default()
+        };
         group.throughput(Throughput::Elements(walks));
-        group.bench_function(format!("mc_{walks}"), |b| b.iter(|| black_box(CostMap::build(&run, &params, &mut |_| {}))));
+        group.bench_function(format!("mc_{walks}"), |b| {
+            b.iter(|| black_box(CostMap::build(&run, &params, &mut |_| {})))
+        });
     }
     group.throughput(Throughput::Elements(1));
     for method in [Method::Search, Method::Grassfire] {
-        let params = BuildParams { method, ..BuildParams::default() };
-        group.bench_function(method.name(), |b| b.iter(|| black_box(CostMap::build(&run, &params, &mut |_| {}))));
+        let params = BuildParams {
+            method,
+            ..BuildParams::default()
+        };
+        group.bench_function(method.name(), |b| {
+            b.iter(|| black_box(CostMap::build(&run, &params, &mut |_| {})))
+        });
     }
     group.finish();
 }

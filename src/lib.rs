@@ -2,8 +2,9 @@
 //!
 //! # Layout
 //!
-//! The library is the deterministic simulation core: no I/O, no clock, no threads of its
-//! own (a sweep may fan work out with rayon, but its results never depend on it). The
+//! The library is the deterministic simulation core: no clock, no threads of its own (a
+//! sweep may fan work out with rayon, but its results never depend on it), and no I/O
+//! except reading motion capture and the cost-map cache at start-up. The
 //! same inputs give the same bits on the same build, which keeps tests simple and
 //! results reproducible. Modules, in the order data flows:
 //!
@@ -14,6 +15,11 @@
 //! * [`fielding`]: fielders with human limits, the sub-tick catch test, the catching
 //!   strategies (Chapman/OAC with Tresilian's lateral term, Gillies & Dodgson's LOT,
 //!   McBeath's optical LOT, trajectory prediction), single trials and sweeps.
+//! * [`motion`]: human motion: BVH motion capture (or a synthetic stand-in) loaded into
+//!   clips, and the motion graph of a behaviour (Kovar et al. 2002): transitions between
+//!   similar frames, pruned to the largest strongly connected component.
+//! * [`costmap`]: Sukthankar et al.'s physical capability model: the frames a human needs
+//!   to reach each square around it, by Monte Carlo walks, search, or grassfire.
 //! * [`names`]: the names users type for presets, and the error a wrong one gets.
 //!
 //! The `fieldhouse` binary (`src/main.rs`, `src/cli/`) is a thin shell: it parses the
