@@ -1,8 +1,10 @@
 //! Cost maps (Sukthankar, Mandel & Sycara 2008): for each square around an agent, how many
 //! frames a real human needs to get there with a behaviour, from a given pose. Three
 //! builders behind one interface: the paper's Monte Carlo (`mc`), a systematic search
-//! (`search`) and the grassfire distance baseline (`grassfire`).
+//! (`search`: backward over per-node cost-to-go maps, or forward where obstacles break
+//! the pose invariance) and the grassfire distance baseline (`grassfire`).
 
+mod backward;
 pub mod cache;
 mod grassfire;
 mod grid;
@@ -166,6 +168,10 @@ impl CostMap {
                     progress,
                 );
                 (r.costs, r.paths, r.convergence)
+            }
+            Method::Search if params.obstacles.is_empty() => {
+                let r = backward::build(&input, &prepared, graph.node_count(), params.depth);
+                (r.costs, r.paths, Vec::new())
             }
             Method::Search => {
                 let r = search::build(

@@ -1,4 +1,6 @@
-//! Beyond the paper: the minimum-time map computed systematically instead of sampled.
+//! Forward search, for maps with obstacles: the minimum-time map computed systematically
+//! instead of sampled. (Without obstacles `search` uses the backward method in
+//! `backward.rs`, which has no heading to discretise and does much better.)
 
 use super::grid::blocked;
 use super::prepared::{Prepared, Segments};

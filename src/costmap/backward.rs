@@ -1,0 +1,272 @@
+//! `search` without obstacles: cost-to-go maps per branch node of the compressed graph,
+//! composed backward with each segment's rigid motion.
+//!
+//! Root motion is relative: what a body can reach from a node depends on where it stands
+//! and faces only through a rotation and a translation. So for every branch node n we
+//! compute V_n(x), the frames needed to reach the point x *in n's own frame*, by the
+//! Bellman equation over the segments s leaving n (to m, taking f_s frames, ending at
+//! pose T_s in n's frame):
+//!
+//! ```text
+//!     V_n(x) = min( frames at which s itself passes x,   f_s + V_m(T_s⁻¹ x) )
+//! ```
+//!
+//! solved once for all nodes with a bucket queue in order of frames (a uniform-cost
+//! search run backward: settling V_m(y) offers f_s + V_m(y) to V_n at T_s(y)). The map
+//! is then V at the start pose. Unlike a forward search there is no heading to
+//! discretise, which is what made forward states merge badly. Each state keeps the exact
+//! point whose walk set its value, so every cost is that of a real walk (its path replays
+//! exactly); the one approximation is that a local cell (half a map cell) keeps only its
+//! cheapest walk, so a later walk through another point of the same cell is not followed.
+
+use super::prepared::{Prepared, Segments};
+use super::walker::Walker;
+use super::BuildInput;
+use glam::DVec2;
+
+/// One segment of the compressed graph, walked once from the origin.
+struct Segment {
+    from: u32,
+    to: u32,
+    frames: u32,
+    /// The pose at its end, in its start's frame.
+    end: Walker,
+    /// Where the root is after each frame, with the frames taken so far.
+    stops: Vec<(DVec2, u32)>,
+    /// Its steps, as [`Segments::step`] numbers.
+    first_step: usize,
+}
+
+/// The square grid V lives on, centred on the node.
+struct LocalGrid {
+    cell: f64,
+    half: f64,
+    n: usize,
+}
+
+impl LocalGrid {
+    fn index(&self, p: DVec2) -> Option<usize> {
+        let rel = (p + DVec2::splat(self.half)) / self.cell;
+        let (j, i) = (rel.x.floor(), rel.y.floor());
+        let n = self.n as f64;
+        (j >= 0.0 && i >= 0.0 && j < n && i < n).then(|| i as usize * self.n + j as usize)
+    }
+}
+
+/// How a state got its value: along `segment`, then on from state `next`; or, with the
+/// top bit of `next` set, the segment's own first `next & !BASE` steps passed the point.
+#[derive(Clone, Copy)]
+struct Via {
+    segment: u32,
+    next: u32,
+}
+
+const BASE: u32 = 1 << 31;
+/// Local cells per map cell side: finer is closer to exhaustive and slower (2: 0.09 s,
+/// 3: 0.3 s, 4: 0.75 s for `run` at 20 m; see BENCHMARKS.md).
+const LOCAL_CELLS_PER_MAP_CELL: f64 = 3.0;
+
+pub(crate) struct BackwardResult {
+    pub costs: Vec<Option<u32>>,
+    pub paths: Vec<Vec<u32>>,
+}
+
+pub(crate) fn build(
+    input: &BuildInput,
+    graph: &Prepared,
+    nodes: usize,
+    depth: u32,
+) -> BackwardResult {
+    let grid = &input.grid;
+    let segs = graph.segments(nodes);
+    let segments = walk_segments(graph, &segs, nodes);
+    let max_step = (0..graph.edge_count())
+        .map(|i| graph.edge(i).step.length())
+        .fold(0.0, f64::max);
+    let local = {
+        let cell = grid.cell_m / LOCAL_CELLS_PER_MAP_CELL;
+        // Far enough for anything reachable in `depth` frames, but no further than a
+        // point of the map can be from a body that is still on it.
+        let half = (depth as f64 * max_step).min(grid.size_m) + grid.cell_m;
+        LocalGrid {
+            cell,
+            half,
+            n: (2.0 * half / cell).ceil() as usize,
+        }
+    };
+    let per_node = local.n * local.n;
+    let branch_ids: Vec<Option<u32>> = {
+        let mut next = 0;
+        (0..nodes)
+            .map(|n| {
+                segs.branch[n].then(|| {
+                    next += 1;
+                    next - 1
+                })
+            })
+            .collect()
+    };
+    let node_of_branch: Vec<u32> = (0..nodes as u32)
+        .filter(|&n| segs.branch[n as usize])
+        .collect();
+    let branches = node_of_branch.len();
+    // Frames fit in 16 bits (depth is at most 10,000), points in two f32s: millions of
+    // states, so their size matters.
+    let depth = depth.min(u32::from(u16::MAX) - 1);
+    let mut value = vec![u16::MAX; branches * per_node];
+    // The exact point (in the node's frame) whose walk set the state's value.
+    let mut point = vec![[0f32; 2]; branches * per_node];
+    let mut via = vec![
+        Via {
+            segment: u32::MAX,
+            next: u32::MAX
+        };
+        branches * per_node
+    ];
+    let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); depth as usize + 1];
+    let mut into: Vec<Vec<u32>> = vec![Vec::new(); nodes];
+    for (s, seg) in segments.iter().enumerate() {
+        let base = branch_ids[seg.from as usize].expect("segments start at branch nodes") as usize
+            * per_node;
+        for (k, &(p, frames)) in seg.stops.iter().enumerate() {
+            let Some(cell) = local.index(p) else { break };
+            let state = base + cell;
+            if frames <= depth && frames < u32::from(value[state]) {
+                value[state] = frames as u16;
+                point[state] = p.as_vec2().to_array();
+                via[state] = Via {
+                    segment: s as u32,
+                    next: BASE | (k as u32 + 1),
+                };
+                buckets[frames as usize].push(state as u32);
+            }
+        }
+        into[seg.to as usize].push(s as u32);
+    }
+    for t in 0..=depth as usize {
+        for state in std::mem::take(&mut buckets[t]) {
+            let state = state as usize;
+            if value[state] as usize != t {
+                continue; // settled earlier at a lower value
+            }
+            let (m_branch, y) = (
+                state / per_node,
+                DVec2::new(f64::from(point[state][0]), f64::from(point[state][1])),
+            );
+            let m = node_of_branch[m_branch];
+            for &s in &into[m as usize] {
+                let seg = &segments[s as usize];
+                let offered = t as u32 + seg.frames;
+                if offered > depth {
+                    continue;
+                }
+                let x = seg.end.position + y.rotate(seg.end.facing);
+                let Some(cell) = local.index(x) else { continue };
+                let target =
+                    branch_ids[seg.from as usize].expect("branch") as usize * per_node + cell;
+                if offered < u32::from(value[target]) {
+                    value[target] = offered as u16;
+                    point[target] = x.as_vec2().to_array();
+                    via[target] = Via {
+                        segment: s,
+                        next: state as u32,
+                    };
+                    buckets[offered as usize].push(target as u32);
+                }
+            }
+        }
+    }
+
+    // The start: run from the start node to the first branch node (no choices before).
+    let mut costs = vec![None; grid.cells()];
+    let mut lead = Vec::new();
+    let (mut node, mut at, mut frames) = (input.start, Walker::START, 0u32);
+    let mut lead_paths: Vec<(usize, Vec<u32>)> = Vec::new();
+    if let Some(c) = grid.cell_of(at.position) {
+        costs[c] = Some(0);
+        lead_paths.push((c, Vec::new()));
+    }
+    while !segs.branch[node as usize] && frames < depth {
+        let Some(e) = graph.out(node).first() else {
+            break;
+        };
+        at = at.after(&e.step, e.turn);
+        frames += e.frames;
+        node = e.to;
+        lead.push(e.id);
+        if let Some(c) = grid.cell_of(at.position) {
+            if costs[c].is_none_or(|v| frames < v) {
+                costs[c] = Some(frames);
+                lead_paths.push((c, lead.clone()));
+            }
+        }
+    }
+    let mut paths = vec![Vec::new(); grid.cells()];
+    for (c, p) in lead_paths {
+        paths[c] = p;
+    }
+    let Some(b0) = branch_ids[node as usize] else {
+        return BackwardResult { costs, paths };
+    };
+    // Every state of the first branch node is an exact walk to its point: place the
+    // point in the map and keep the cheapest walk into each cell.
+    let base = b0 as usize * per_node;
+    for state in base..base + per_node {
+        if value[state] == u16::MAX {
+            continue;
+        }
+        let local_point = DVec2::new(f64::from(point[state][0]), f64::from(point[state][1]));
+        let world = at.position + local_point.rotate(at.facing);
+        let Some(c) = grid.cell_of(world) else {
+            continue;
+        };
+        let total = frames + u32::from(value[state]);
+        if total <= depth && costs[c].is_none_or(|v| total < v) {
+            costs[c] = Some(total);
+            let mut path = lead.clone();
+            let mut s = state as u32;
+            loop {
+                let v = via[s as usize];
+                let seg = &segments[v.segment as usize];
+                let len = if v.next & BASE != 0 {
+                    (v.next & !BASE) as usize
+                } else {
+                    seg.stops.len()
+                };
+                path.extend((0..len).map(|k| graph.edge(segs.step(seg.first_step + k)).id));
+                if v.next & BASE != 0 {
+                    break;
+                }
+                s = v.next;
+            }
+            paths[c] = path;
+        }
+    }
+    BackwardResult { costs, paths }
+}
+
+fn walk_segments(graph: &Prepared, segs: &Segments, nodes: usize) -> Vec<Segment> {
+    let mut out = Vec::new();
+    for n in 0..nodes as u32 {
+        for (first, len, to) in segs.out(n) {
+            let mut at = Walker::START;
+            let mut frames = 0;
+            let mut stops = Vec::with_capacity(len);
+            for k in 0..len {
+                let e = graph.edge(segs.step(first + k));
+                at = at.after(&e.step, e.turn);
+                frames += e.frames;
+                stops.push((at.position, frames));
+            }
+            out.push(Segment {
+                from: n,
+                to,
+                frames,
+                end: at,
+                stops,
+                first_step: first,
+            });
+        }
+    }
+    out
+}
