@@ -1,33 +1,20 @@
 //! The `fieldhouse` binary as a user runs it: `catch` and `catch-sweep`, their JSON, their
 //! plots and their errors.
 
+mod common;
+
+use common::{fieldhouse, json};
 use serde_json::Value;
-use std::process::{Command, Output};
+use std::process::Command;
 
-/// Runs the binary with a command line written as one string (no argument has spaces).
-fn fieldhouse(command_line: &str) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
-        .args(command_line.split_whitespace())
-        .env_remove("FIELDHOUSE_LOG")
-        .output()
-        .expect("the binary runs")
-}
-
-fn json(command_line: &str) -> Value {
-    let out = fieldhouse(command_line);
-    assert!(
-        out.status.success(),
-        "{command_line} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("stdout is exactly one JSON document")
-}
-
+/// A usage error: exit code 2, nothing on stdout; returns stderr.
 fn stderr_of(command_line: &str) -> String {
-    let out = fieldhouse(command_line);
-    assert_eq!(out.status.code(), Some(2), "{command_line}");
-    assert!(out.stdout.is_empty(), "{command_line} printed to stdout");
-    String::from_utf8_lossy(&out.stderr).into_owned()
+    assert_eq!(
+        fieldhouse(command_line).status.code(),
+        Some(2),
+        "{command_line}"
+    );
+    common::failure(command_line)
 }
 
 fn num(v: &Value) -> f64 {

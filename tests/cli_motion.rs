@@ -1,19 +1,11 @@
 //! `fieldhouse motion-graph` and `fieldhouse costmap` on the real CMU motion capture, as a
 //! user runs them, and their errors.
 
+mod common;
+
+use common::{failure, fieldhouse, json, mocap};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn mocap() -> PathBuf {
-    let beside = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/mocap");
-    if beside.is_dir() {
-        return beside;
-    }
-    std::env::var_os("FIELDHOUSE_MOCAP_DIR")
-        .map(PathBuf::from)
-        .expect("no mocap data: put it in ../shared/mocap or set FIELDHOUSE_MOCAP_DIR")
-}
 
 /// A scratch directory under the system temp dir, removed when dropped.
 struct Scratch(PathBuf);
@@ -31,35 +23,6 @@ impl Drop for Scratch {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.0);
     }
-}
-
-/// Runs the binary with `args` (no argument has spaces), without ambient motion or cache
-/// settings so each test says what it uses.
-fn fieldhouse(args: &str) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
-        .args(args.split_whitespace())
-        .env_remove("FIELDHOUSE_MOCAP_DIR")
-        .env_remove("FIELDHOUSE_CACHE_DIR")
-        .env_remove("FIELDHOUSE_LOG")
-        .output()
-        .expect("the binary runs")
-}
-
-fn json(args: &str) -> Value {
-    let out = fieldhouse(args);
-    assert!(
-        out.status.success(),
-        "{args}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("stdout is one JSON document")
-}
-
-fn failure(args: &str) -> String {
-    let out = fieldhouse(args);
-    assert!(!out.status.success(), "{args} succeeded");
-    assert!(out.stdout.is_empty());
-    String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
 #[test]

@@ -1,0 +1,48 @@
+//! Running the real `fieldhouse` binary from integration tests.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs the binary with a command line written as one string (no argument has spaces),
+/// without ambient motion, cache or log settings, so each test says what it uses.
+pub fn fieldhouse(command_line: &str) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args(command_line.split_whitespace())
+        .env_remove("FIELDHOUSE_MOCAP_DIR")
+        .env_remove("FIELDHOUSE_CACHE_DIR")
+        .env_remove("FIELDHOUSE_LOG")
+        .output()
+        .expect("the binary runs")
+}
+
+/// Runs a command that must succeed and print exactly one JSON document.
+pub fn json(command_line: &str) -> Value {
+    let out = fieldhouse(command_line);
+    assert!(
+        out.status.success(),
+        "{command_line} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("stdout is exactly one JSON document")
+}
+
+/// Runs a command that must fail without printing to stdout; returns its stderr.
+pub fn failure(command_line: &str) -> String {
+    let out = fieldhouse(command_line);
+    assert!(!out.status.success(), "{command_line} succeeded");
+    assert!(out.stdout.is_empty(), "{command_line} printed to stdout");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// The CMU motion capture beside the project (or where `FIELDHOUSE_MOCAP_DIR` says).
+#[allow(dead_code)] // not every test binary needs motion capture
+pub fn mocap() -> PathBuf {
+    let beside = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/mocap");
+    if beside.is_dir() {
+        return beside;
+    }
+    std::env::var_os("FIELDHOUSE_MOCAP_DIR")
+        .map(PathBuf::from)
+        .expect("no mocap data: put it in ../shared/mocap or set FIELDHOUSE_MOCAP_DIR")
+}
