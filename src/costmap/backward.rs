@@ -19,6 +19,7 @@
 //! exactly); the one approximation is that a local cell (half a map cell) keeps only its
 //! cheapest walk, so a later walk through another point of the same cell is not followed.
 
+use super::grid::cell_index;
 use super::prepared::{Prepared, Segments};
 use super::walker::Walker;
 use super::BuildInput;
@@ -46,10 +47,7 @@ struct LocalGrid {
 
 impl LocalGrid {
     fn index(&self, p: DVec2) -> Option<usize> {
-        let rel = (p + DVec2::splat(self.half)) / self.cell;
-        let (j, i) = (rel.x.floor(), rel.y.floor());
-        let n = self.n as f64;
-        (j >= 0.0 && i >= 0.0 && j < n && i < n).then(|| i as usize * self.n + j as usize)
+        cell_index((p + DVec2::splat(self.half)) / self.cell, self.n)
     }
 }
 

@@ -39,10 +39,7 @@ impl Grid {
 
     /// Index `i * n + j` of the cell holding `p` (row i along z, column j along x).
     pub fn cell_of(&self, p: DVec2) -> Option<usize> {
-        let rel = (p - self.origin()) / self.cell_m;
-        let (j, i) = (rel.x.floor(), rel.y.floor());
-        let n = self.n as f64;
-        (j >= 0.0 && i >= 0.0 && j < n && i < n).then(|| i as usize * self.n + j as usize)
+        cell_index((p - self.origin()) / self.cell_m, self.n)
     }
 
     /// Centre of cell `index`.
@@ -61,6 +58,16 @@ impl Grid {
         let half = DVec2::splat(0.5 * self.cell_m);
         ((p - c).abs() - half).max(DVec2::ZERO).length()
     }
+}
+
+/// The index `i * n + j` of the unit cell holding `rel` (in cell units from the grid's
+/// corner), or `None` outside the n × n grid. Truncation is the floor for the
+/// non-negative values that can be inside, and unlike `f64::floor` it needs no call into
+/// libm on baseline x86-64: this runs for every frame of every walk.
+#[inline]
+pub(crate) fn cell_index(rel: DVec2, n: usize) -> Option<usize> {
+    let inside = rel.x >= 0.0 && rel.y >= 0.0 && rel.x < n as f64 && rel.y < n as f64;
+    inside.then(|| rel.y as usize * n + rel.x as usize)
 }
 
 /// An axis-aligned rectangle on the ground that no path may enter.
