@@ -63,6 +63,9 @@ const BASE: u32 = 1 << 31;
 /// Local cells per map cell side: finer is closer to exhaustive and slower (2: 0.09 s,
 /// 3: 0.3 s, 4: 0.75 s for `run` at 20 m; see BENCHMARKS.md).
 const LOCAL_CELLS_PER_MAP_CELL: f64 = 3.0;
+/// Most (branch node, local cell) states search may hold: 18 bytes each, so about
+/// 150 MB.
+const STATE_BUDGET: usize = 8_000_000;
 
 pub(crate) struct BackwardResult {
     pub costs: Vec<Option<u32>>,
@@ -81,11 +84,16 @@ pub(crate) fn build(
     let max_step = (0..graph.edge_count())
         .map(|i| graph.edge(i).step.length())
         .fold(0.0, f64::max);
+    let branch_count = (0..nodes).filter(|&n| segs.branch[n]).count().max(1);
     let local = {
-        let cell = grid.cell_m / LOCAL_CELLS_PER_MAP_CELL;
         // Far enough for anything reachable in `depth` frames, but no further than a
         // point of the map can be from a body that is still on it.
         let half = (depth as f64 * max_step).min(grid.size_m) + grid.cell_m;
+        // A densely connected graph (the synthetic library's has thousands of branch
+        // nodes) would need gigabytes at full resolution: coarsen the local cells to
+        // keep within the state budget rather than exhaust memory.
+        let budget_cell = 2.0 * half * (branch_count as f64 / STATE_BUDGET as f64).sqrt();
+        let cell = (grid.cell_m / LOCAL_CELLS_PER_MAP_CELL).max(budget_cell);
         LocalGrid {
             cell,
             half,
