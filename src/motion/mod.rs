@@ -5,7 +5,8 @@
 //! `resample` (to [`FPS`]) and `loader` (a directory of behaviour folders) into a
 //! [`MotionLibrary`] of [`Clip`]s; `synthetic` makes a stand-in library without data.
 //! `transitions` finds where clips can cut into each other (`alignment` is the ground
-//! alignment it uses) and `graph` turns clips and transitions into a [`MotionGraph`].
+//! alignment it uses), `graph` turns clips and transitions into a [`MotionGraph`], and
+//! `playback` plays a walk on it as a body, blending across transitions.
 
 mod alignment;
 mod bvh;
@@ -13,6 +14,7 @@ mod clip;
 mod graph;
 mod library;
 mod loader;
+mod playback;
 mod resample;
 mod skeleton;
 mod synthetic;
@@ -25,6 +27,7 @@ pub use graph::{
     RootStep, AUTO_THRESHOLDS_M,
 };
 pub use library::{LibraryError, LoadProblem, MotionLibrary, MotionSource};
+pub use playback::PlaybackFrame;
 pub use transitions::Transition;
 
 /// The frame rate everything downstream works at: the paper plays motion at 30 fps.
