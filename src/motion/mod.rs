@@ -17,17 +17,18 @@ mod loader;
 mod playback;
 mod resample;
 mod skeleton;
+mod step;
 mod synthetic;
 mod transitions;
 
 pub use alignment::{GroundTransform, Moments};
 pub use clip::{Clip, ClipError, LEFT_HIP, RIGHT_HIP};
 pub use graph::{
-    wrap_angle, Constraints, Edge, GraphError, GraphParams, GraphStats, MotionGraph, Node,
-    RootStep, AUTO_THRESHOLDS_M,
+    Constraints, Edge, GraphError, GraphParams, GraphStats, MotionGraph, AUTO_THRESHOLDS_M,
 };
 pub use library::{LibraryError, LoadProblem, MotionLibrary, MotionSource};
 pub use playback::PlaybackFrame;
+pub use step::{wrap_angle, Node, RootStep};
 pub use transitions::Transition;
 
 /// The frame rate everything downstream works at: the paper plays motion at 30 fps.
