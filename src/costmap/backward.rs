@@ -60,8 +60,8 @@ struct Via {
 }
 
 const BASE: u32 = 1 << 31;
-/// Local cells per map cell side: finer is closer to exhaustive and slower (2: 0.09 s,
-/// 3: 0.3 s, 4: 0.75 s for `run` at 20 m; see BENCHMARKS.md).
+/// Local cells per map cell side: finer is closer to exhaustive and slower (time grows
+/// about with the square; BENCHMARKS.md has the trade-off measured on `run`).
 const LOCAL_CELLS_PER_MAP_CELL: f64 = 3.0;
 /// Most (branch node, local cell) states search may hold: 18 bytes each, so about
 /// 150 MB.
