@@ -231,3 +231,39 @@ fn costmap_arguments_are_checked() {
     let err = failure(&format!("{base} --cell 0"));
     assert!(err.contains("greater than 0"), "{err}");
 }
+
+#[test]
+fn an_interrupted_build_leaves_no_cache_file() {
+    let cache = Scratch::new("costmap-interrupt");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args(
+            format!(
+                "costmap --mocap {} --behaviour run --method mc --iterations 50000000 --cache-dir {}",
+                mocap().display(),
+                cache.0.display()
+            )
+            .split_whitespace(),
+        )
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the build finished before it could be interrupted"
+    );
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let left: Vec<_> = std::fs::read_dir(&cache.0)
+        .map(|d| d.flatten().map(|e| e.path()).collect())
+        .unwrap_or_default();
+    assert!(left.is_empty(), "an interrupted build left {left:?}");
+    // The next run builds from scratch and caches a complete map.
+    let doc = costmap("--method mc --iterations 2000", &cache.0);
+    assert_eq!(doc["from_cache"], false);
+    assert_eq!(
+        costmap("--method mc --iterations 2000", &cache.0)["from_cache"],
+        true
+    );
+}
