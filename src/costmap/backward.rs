@@ -21,8 +21,8 @@
 
 use super::grid::cell_index;
 use super::prepared::{Prepared, Segments};
-use super::walker::Walker;
 use super::BuildInput;
+use crate::motion::Walker;
 use glam::DVec2;
 
 /// One segment of the compressed graph, walked once from the origin.

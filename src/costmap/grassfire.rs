@@ -2,7 +2,7 @@
 //! argues against.
 
 use super::grid::{blocked, Grid, Obstacle};
-use super::walker::Walker;
+use crate::motion::Walker;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 

@@ -3,8 +3,8 @@
 
 use super::grid::blocked;
 use super::prepared::Prepared;
-use super::walker::Walker;
 use super::{BuildInput, ConvergencePoint};
+use crate::motion::Walker;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -11,11 +11,10 @@ mod grid;
 mod mc;
 mod prepared;
 mod search;
-mod walker;
 
+pub use crate::motion::Walker;
 pub use grid::{AgentPose, Grid, Obstacle};
 pub use search::SearchParams;
-pub use walker::Walker;
 
 use crate::motion::{Constraints, MotionGraph};
 use crate::names::{lookup, UnknownName};

@@ -42,7 +42,7 @@ fn replay(graph: &MotionGraph, map: &CostMap, cell: usize, enabled: &[bool]) {
         let e = &graph.edges[id as usize];
         assert_eq!(e.from, node, "the path is not a walk on the graph");
         assert!(enabled[id as usize], "the path uses a disabled edge");
-        at = at.after(&e.step, glam::DVec2::from_angle(e.step.dheading));
+        at = at.step(&e.step);
         assert!(
             !map.obstacles.iter().any(|o| o.contains(at.position)),
             "the path enters an obstacle"

@@ -4,8 +4,8 @@
 
 use super::grid::blocked;
 use super::prepared::{Prepared, Segments};
-use super::walker::Walker;
 use super::BuildInput;
+use crate::motion::Walker;
 
 /// How finely search tells states apart at branch nodes.
 #[derive(Debug, Clone, Copy, PartialEq)]

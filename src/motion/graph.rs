@@ -104,11 +104,7 @@ impl MotionGraph {
         clips: &[&Clip],
         window: usize,
     ) -> Result<MotionGraph, GraphError> {
-        if clips.is_empty() {
-            return Err(GraphError::NoClips {
-                behaviour: behaviour.to_string(),
-            });
-        }
+        require_clips(behaviour, clips)?;
         let loosest = AUTO_THRESHOLDS_M[AUTO_THRESHOLDS_M.len() - 1];
         let all = transitions::find(clips, window, loosest);
         let mut best: Option<MotionGraph> = None;
@@ -151,11 +147,7 @@ impl MotionGraph {
         clips: &[&Clip],
         params: GraphParams,
     ) -> Result<MotionGraph, GraphError> {
-        if clips.is_empty() {
-            return Err(GraphError::NoClips {
-                behaviour: behaviour.to_string(),
-            });
-        }
+        require_clips(behaviour, clips)?;
         let found = transitions::find(clips, params.window, params.threshold_m);
         Self::from_transitions(behaviour, clips, params, &found)
     }
@@ -316,6 +308,15 @@ impl MotionGraph {
         let j = self.joints;
         &self.poses[node as usize * j..(node as usize + 1) * j]
     }
+}
+
+fn require_clips(behaviour: &str, clips: &[&Clip]) -> Result<(), GraphError> {
+    if clips.is_empty() {
+        return Err(GraphError::NoClips {
+            behaviour: behaviour.to_string(),
+        });
+    }
+    Ok(())
 }
 
 /// Marks the nodes of the largest strongly connected component with their new, compact

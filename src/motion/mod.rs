@@ -20,6 +20,7 @@ mod skeleton;
 mod step;
 mod synthetic;
 mod transitions;
+mod walker;
 
 pub use alignment::{GroundTransform, Moments};
 pub use clip::{Clip, ClipError, LEFT_HIP, RIGHT_HIP};
@@ -30,6 +31,7 @@ pub use library::{LibraryError, LoadProblem, MotionLibrary, MotionSource};
 pub use playback::PlaybackFrame;
 pub use step::{wrap_angle, Node, RootStep};
 pub use transitions::Transition;
+pub use walker::Walker;
 
 /// The frame rate everything downstream works at: the paper plays motion at 30 fps.
 pub const FPS: f64 = 30.0;

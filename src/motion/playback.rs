@@ -2,7 +2,7 @@
 //! transition blends the clip being left into the clip being entered over the window,
 //! with an ease-in/ease-out weight, so a cut never pops.
 
-use super::MotionGraph;
+use super::{MotionGraph, Walker};
 use glam::{DVec2, DVec3};
 
 /// One frame of playback.
@@ -44,34 +44,36 @@ impl MotionGraph {
         edges: &[u32],
     ) -> Vec<PlaybackFrame> {
         let window = self.params.window;
-        let place = |node: u32, pose: &[DVec3], root: DVec2, heading: f64| {
-            let (sin, cos) = heading.sin_cos();
+        let place = |node: u32, pose: &[DVec3], at: &Walker| {
+            let (cos, sin) = (at.facing.x, at.facing.y);
             PlaybackFrame {
                 node,
-                root,
-                heading,
+                root: at.position,
+                heading: at.heading(),
                 joints: pose
                     .iter()
                     .map(|p| {
                         DVec3::new(
-                            root.x + p.x * cos - p.z * sin,
+                            at.position.x + p.x * cos - p.z * sin,
                             p.y,
-                            root.y + p.x * sin + p.z * cos,
+                            at.position.y + p.x * sin + p.z * cos,
                         )
                     })
                     .collect(),
             }
         };
-        let mut frames = vec![place(start, self.pose(start), root, heading)];
-        let (mut node, mut root, mut heading) = (start, root, heading);
+        let mut at = Walker {
+            position: root,
+            facing: DVec2::from_angle(heading),
+        };
+        let mut frames = vec![place(start, self.pose(start), &at)];
+        let mut node = start;
         // The clip being left and how far into the blend we are.
         let mut leaving: Option<(u32, usize)> = None;
         for &id in edges {
             let e = &self.edges[id as usize];
             assert_eq!(e.from, node, "edge {id} does not leave node {node}");
-            let forward = DVec2::from_angle(heading);
-            root += forward * e.step.dx + forward.perp() * e.step.dz;
-            heading += e.step.dheading;
+            at = at.step(&e.step);
             if e.transition {
                 // Where the clip being left was going; if the graph pruned that frame,
                 // hold the last one.
@@ -91,7 +93,7 @@ impl MotionGraph {
                 }
                 None => self.pose(node).to_vec(),
             };
-            frames.push(place(node, &pose, root, heading));
+            frames.push(place(node, &pose, &at));
         }
         frames
     }

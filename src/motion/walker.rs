@@ -1,7 +1,7 @@
-//! The root of a body walking the motion graph, in the agent's frame: where it is, which
-//! way it faces, and how an edge's root step moves it.
+//! The root of a body walking the motion graph: where it is on the ground, which way it
+//! faces, and how an edge's root step moves it. Cost maps and playback both walk with it.
 
-use crate::motion::RootStep;
+use super::RootStep;
 use glam::DVec2;
 
 /// Root position and facing (a unit vector, so a step costs no trigonometry).
@@ -27,6 +27,11 @@ impl Walker {
             position: self.position + self.facing * step.dx + side * step.dz,
             facing: self.facing.rotate(turn).normalize(),
         }
+    }
+
+    /// The walker after `step`, computing the turn from the step's `dheading`.
+    pub fn step(&self, step: &RootStep) -> Walker {
+        self.after(step, DVec2::from_angle(step.dheading))
     }
 
     /// Heading in radians from +x toward +z.
