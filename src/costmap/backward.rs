@@ -129,6 +129,12 @@ pub(crate) fn build(
         };
         branches * per_node
     ];
+    // A value at node n only matters if the start reaches n with that many frames to
+    // spare: an exact bound that skips most of the plane of nodes far from the start.
+    let spare: Vec<u32> = frames_from(graph, input.start, nodes)
+        .into_iter()
+        .map(|f| depth.saturating_sub(f.unwrap_or(u32::MAX)))
+        .collect();
     let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); depth as usize + 1];
     let mut into: Vec<Vec<u32>> = vec![Vec::new(); nodes];
     for (s, seg) in segments.iter().enumerate() {
@@ -137,7 +143,7 @@ pub(crate) fn build(
         for (k, &(p, frames)) in seg.stops.iter().enumerate() {
             let Some(cell) = local.index(p) else { break };
             let state = base + cell;
-            if frames <= depth && frames < u32::from(value[state]) {
+            if frames <= spare[seg.from as usize] && frames < u32::from(value[state]) {
                 value[state] = frames as u16;
                 point[state] = p.as_vec2().to_array();
                 via[state] = Via {
@@ -163,7 +169,7 @@ pub(crate) fn build(
             for &s in &into[m as usize] {
                 let seg = &segments[s as usize];
                 let offered = t as u32 + seg.frames;
-                if offered > depth {
+                if offered > spare[seg.from as usize] {
                     continue;
                 }
                 let x = seg.end.position + y.rotate(seg.end.facing);
@@ -249,6 +255,27 @@ pub(crate) fn build(
         }
     }
     BackwardResult { costs, paths }
+}
+
+/// The fewest frames from `start` to each node (Dijkstra over the enabled edges).
+fn frames_from(graph: &Prepared, start: u32, nodes: usize) -> Vec<Option<u32>> {
+    let mut best = vec![None; nodes];
+    let mut queue = std::collections::BinaryHeap::new();
+    best[start as usize] = Some(0);
+    queue.push(std::cmp::Reverse((0u32, start)));
+    while let Some(std::cmp::Reverse((f, n))) = queue.pop() {
+        if best[n as usize] != Some(f) {
+            continue;
+        }
+        for e in graph.out(n) {
+            let g = f + e.frames;
+            if best[e.to as usize].is_none_or(|b| g < b) {
+                best[e.to as usize] = Some(g);
+                queue.push(std::cmp::Reverse((g, e.to)));
+            }
+        }
+    }
+    best
 }
 
 fn walk_segments(graph: &Prepared, segs: &Segments, nodes: usize) -> Vec<Segment> {
