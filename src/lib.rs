@@ -20,11 +20,15 @@
 //!   similar frames, pruned to the largest strongly connected component.
 //! * [`costmap`]: Sukthankar et al.'s physical capability model: the frames a human needs
 //!   to reach each square around it, by Monte Carlo walks, search, or grassfire.
+//! * [`basketball`]: the paper's basketball domain: a half court, agents that move with
+//!   motion capture along cost-map paths, opponent modelling (`C_o > C_d + T_s + ε`),
+//!   the `simple` and `costmap` offenses, and the possession experiment.
 //! * [`names`]: the names users type for presets, and the error a wrong one gets.
 //!
 //! The `fieldhouse` binary (`src/main.rs`, `src/cli/`) is a thin shell: it parses the
 //! command line, runs the core, prints text or JSON and draws SVG plots.
 
+pub mod basketball;
 pub mod costmap;
 pub mod fielding;
 pub mod motion;

@@ -1,6 +1,7 @@
 //! Arguments shared by the catching subcommands, and their parsers.
 
 use clap::Args;
+use fieldhouse::costmap::AgentPose;
 use fieldhouse::fielding::{CatchZone, FielderConfig, Limits, TrialConfig};
 use fieldhouse::names::UnknownName;
 use fieldhouse::perception::PerceptionConfig;
@@ -113,6 +114,20 @@ pub fn ground_point(s: &str) -> Result<DVec2, String> {
         [x, z] => Ok(DVec2::new(finite(x)?, finite(z)?)),
         _ => Err(format!(
             "\"{s}\" is not a position; write it as X,Z in metres, e.g. -12.5,40"
+        )),
+    }
+}
+
+/// A pose on the ground written `X,Z,HEADING_DEG`: metres, and degrees from +x toward +z.
+pub fn ground_pose(s: &str) -> Result<AgentPose, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    match parts.as_slice() {
+        [x, z, h] => Ok(AgentPose {
+            position: DVec2::new(finite(x)?, finite(z)?),
+            heading: finite(h)?.to_radians(),
+        }),
+        _ => Err(format!(
+            "\"{s}\" is not a pose; write it as X,Z,HEADING_DEG, e.g. 9,2.5,180"
         )),
     }
 }

@@ -5,8 +5,8 @@ use super::heatmap;
 use super::motion::GraphArgs;
 use anyhow::Context;
 use clap::Args;
-use fieldhouse::costmap::{cache, BuildParams, CostMap, Grid, Method, Obstacle, WATCHED_POINTS};
-use fieldhouse::motion::{MotionGraph, MotionSource};
+use fieldhouse::costmap::{cache, BuildParams, Grid, Method, Obstacle, WATCHED_POINTS};
+use fieldhouse::motion::MotionGraph;
 use glam::DVec2;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
@@ -52,12 +52,8 @@ pub struct CostmapArgs {
     /// Seed of the Monte Carlo walks.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Where built maps are cached (default: $XDG_CACHE_HOME/fieldhouse or ~/.cache/fieldhouse).
-    #[arg(long, value_name = "DIR", env = "FIELDHOUSE_CACHE_DIR")]
-    cache_dir: Option<PathBuf>,
-    /// Build even if a cached map exists (and do not store the result).
-    #[arg(long)]
-    no_cache: bool,
+    #[command(flatten)]
+    cache: CacheArgs,
     /// Draw the map as a PNG heat map (dark = cheap).
     #[arg(long, value_name = "FILE")]
     png: Option<PathBuf>,
@@ -66,6 +62,26 @@ pub struct CostmapArgs {
     json: bool,
     #[command(flatten)]
     graph: GraphArgs,
+}
+
+/// Where cost maps are cached.
+#[derive(Args, Debug, Clone)]
+pub struct CacheArgs {
+    /// Where built maps are cached (default: $XDG_CACHE_HOME/fieldhouse or ~/.cache/fieldhouse).
+    #[arg(long, value_name = "DIR", env = "FIELDHOUSE_CACHE_DIR")]
+    cache_dir: Option<PathBuf>,
+    /// Build even if a cached map exists (and do not store the result).
+    #[arg(long)]
+    no_cache: bool,
+}
+
+impl CacheArgs {
+    /// The cache directory to use, if any.
+    pub fn dir(&self) -> Option<PathBuf> {
+        (!self.no_cache)
+            .then(|| self.cache_dir.clone().or_else(cache::default_dir))
+            .flatten()
+    }
 }
 
 fn rectangle(s: &str) -> Result<Obstacle, String> {
@@ -117,13 +133,6 @@ fn start_node(graph: &MotionGraph, given: &str) -> anyhow::Result<u32> {
         .with_context(|| format!("start frame \"{given}\" was pruned from the graph (not in its largest strongly connected component)"))
 }
 
-fn default_cache_dir() -> Option<PathBuf> {
-    std::env::var_os("XDG_CACHE_HOME")
-        .map(PathBuf::from)
-        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))
-        .map(|d| d.join("fieldhouse"))
-}
-
 pub fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let (library, graph) = args.graph.build()?;
     let start = args
@@ -148,45 +157,31 @@ pub fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
         args.size,
         args.cell
     );
-    let fingerprint = match &library.source {
-        MotionSource::Mocap { fingerprint, .. } => fingerprint.clone(),
-        MotionSource::Synthetic => "synthetic".to_string(),
-    };
-    let cache_file = (!args.no_cache)
-        .then(|| args.cache_dir.clone().or_else(default_cache_dir))
-        .flatten()
-        .map(|dir| cache::path_for(&dir, &fingerprint, &graph.behaviour, &graph.params, &params));
+    let cache_dir = args.cache.dir();
     let started = Instant::now();
-    let cached = cache_file.as_deref().and_then(cache::load);
-    let from_cache = cached.is_some();
-    let map = match cached {
-        Some(map) => map,
-        None => {
-            let bar = (args.method == Method::Mc && args.iterations >= 50_000).then(|| {
-                ProgressBar::new(args.iterations).with_style(
-                    ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} walks ({eta})")
-                        .expect("template is valid"),
-                )
-            });
+    let bar = (args.method == Method::Mc && args.iterations >= 50_000).then(|| {
+        ProgressBar::new(args.iterations).with_style(
+            ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} walks ({eta})")
+                .expect("template is valid"),
+        )
+    });
+    if let Some(b) = &bar {
+        b.set_message(format!("{} cost map", graph.behaviour));
+    }
+    let (map, from_cache) = cache::build_or_load(
+        cache_dir.as_deref(),
+        library.source.fingerprint(),
+        &graph,
+        &params,
+        &mut |done| {
             if let Some(b) = &bar {
-                b.set_message(format!("{} cost map", graph.behaviour));
+                b.set_position(done);
             }
-            let map = CostMap::build(&graph, &params, &mut |done| {
-                if let Some(b) = &bar {
-                    b.set_position(done);
-                }
-            });
-            if let Some(b) = bar {
-                b.finish_and_clear();
-            }
-            if let Some(file) = &cache_file {
-                if let Err(e) = cache::store(file, &map) {
-                    tracing::warn!(file = %file.display(), error = %e, "could not cache the cost map");
-                }
-            }
-            map
-        }
-    };
+        },
+    );
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
     let elapsed_s = started.elapsed().as_secs_f64();
     tracing::info!(
         from_cache,

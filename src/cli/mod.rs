@@ -2,6 +2,8 @@
 //! stdout, logs and progress on stderr.
 
 mod args;
+mod basketball;
+mod canvas;
 mod catch;
 mod costmap;
 mod heatmap;
@@ -38,6 +40,10 @@ enum Command {
     MotionGraph(motion::MotionGraphArgs),
     /// Build a behaviour's cost map: frames to reach each cell from a running start.
     Costmap(costmap::CostmapArgs),
+    /// Where would a shooter shoot from? Opponent modelling on every square: C_o > C_d + T_s + ε.
+    BasketballDecide(basketball::DecideArgs),
+    /// The paper's experiment: points per possession of the simple and cost-map offenses.
+    BasketballEval(basketball::EvalArgs),
 }
 
 pub fn main() -> ExitCode {
@@ -55,6 +61,8 @@ pub fn main() -> ExitCode {
         Command::CatchSweep(args) => sweep::run(args, &mut out),
         Command::MotionGraph(args) => motion::run(args, &mut out),
         Command::Costmap(args) => costmap::run(args, &mut out),
+        Command::BasketballDecide(args) => basketball::decide(args, &mut out),
+        Command::BasketballEval(args) => basketball::eval(args, &mut out),
     }
     .and_then(|()| Ok(out.flush()?));
     match result {

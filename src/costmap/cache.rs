@@ -6,14 +6,14 @@
 //! (corrupt, or from an older format) is ignored and rebuilt.
 
 use super::{BuildParams, CostMap};
-use crate::motion::GraphParams;
+use crate::motion::{GraphParams, MotionGraph};
 use serde::Serialize;
 use sha2::{Digest, Sha256};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Bump when the meaning of a cached map changes without the crate version changing.
-const CACHE_FORMAT: u32 = 1;
+const CACHE_FORMAT: u32 = 2;
 
 #[derive(Serialize)]
 struct Key<'a> {
@@ -50,6 +50,46 @@ pub fn path_for(
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
         .collect();
     dir.join(format!("costmap-{safe}-{}-{hex}.json", build.method.name()))
+}
+
+/// The default cache directory: `$XDG_CACHE_HOME/fieldhouse`, else `~/.cache/fieldhouse`.
+pub fn default_dir() -> Option<PathBuf> {
+    std::env::var_os("XDG_CACHE_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))
+        .map(|d| d.join("fieldhouse"))
+}
+
+/// The map of `graph` with `params`: read from the cache under `dir` if it holds one,
+/// else built (telling `progress` as [`CostMap::build`] does) and stored there. A cache
+/// that cannot be written is logged and otherwise ignored: the map is still good.
+/// Returns the map and whether it came from the cache.
+pub fn build_or_load(
+    dir: Option<&Path>,
+    motion_fingerprint: &str,
+    graph: &MotionGraph,
+    params: &BuildParams,
+    progress: &mut dyn FnMut(u64),
+) -> (CostMap, bool) {
+    let file = dir.map(|d| {
+        path_for(
+            d,
+            motion_fingerprint,
+            &graph.behaviour,
+            &graph.params,
+            params,
+        )
+    });
+    if let Some(map) = file.as_deref().and_then(load) {
+        return (map, true);
+    }
+    let map = CostMap::build(graph, params, progress);
+    if let Some(file) = &file {
+        if let Err(e) = store(file, &map) {
+            tracing::warn!(file = %file.display(), error = %e, "could not cache the cost map");
+        }
+    }
+    (map, false)
 }
 
 /// The cached map at `path`, if there is a readable one.

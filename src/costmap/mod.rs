@@ -121,6 +121,9 @@ pub struct CostMap {
     pub fps: f64,
     pub top_speed_m_s: f64,
     pub start_node: u32,
+    /// The horizon: no path longer than this many frames was followed, so an
+    /// unreachable cell costs at least this much.
+    pub depth: u32,
     pub obstacles: Vec<Obstacle>,
     /// Frames to reach each cell, row-major (row i along z, column j along x); `None`
     /// where no path reaches it.
@@ -200,6 +203,7 @@ impl CostMap {
             fps: graph.fps,
             top_speed_m_s: graph.stats.top_speed_m_s,
             start_node: start,
+            depth: params.depth,
             obstacles: params.obstacles.clone(),
             costs,
             paths,

@@ -96,3 +96,19 @@ pub fn cmu_graph(behaviour: &str) -> MotionGraph {
     let clips: Vec<&Clip> = library.clips_of(behaviour).collect();
     MotionGraph::build_auto(behaviour, &clips, GraphParams::default().window).unwrap()
 }
+
+/// The basketball behaviours of the CMU data, built once per test binary; their maps
+/// are cached under `target/test-cache`, keyed by their inputs like any cost-map cache,
+/// so later runs read them back.
+pub fn cmu_capabilities() -> std::sync::Arc<crate::basketball::Capabilities> {
+    static CAPS: std::sync::OnceLock<std::sync::Arc<crate::basketball::Capabilities>> =
+        std::sync::OnceLock::new();
+    CAPS.get_or_init(|| {
+        let cache = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-cache");
+        std::sync::Arc::new(
+            crate::basketball::Capabilities::build(&cmu_library(), Some(&cache))
+                .expect("the CMU behaviours build"),
+        )
+    })
+    .clone()
+}

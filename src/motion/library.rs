@@ -17,6 +17,16 @@ pub enum MotionSource {
     Synthetic,
 }
 
+impl MotionSource {
+    /// What cached artefacts built from this motion are keyed by.
+    pub fn fingerprint(&self) -> &str {
+        match self {
+            MotionSource::Mocap { fingerprint, .. } => fingerprint,
+            MotionSource::Synthetic => "synthetic",
+        }
+    }
+}
+
 impl fmt::Display for MotionSource {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

@@ -1,0 +1,135 @@
+//! An agent on the court: where it is, what it is doing, and the move it is playing.
+
+use super::capability::Stride;
+use crate::costmap::AgentPose;
+use crate::motion::Walker;
+use glam::DVec2;
+use serde::Serialize;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Team {
+    Offense,
+    Defense,
+}
+
+/// What an agent is doing: the paper's offensive actions, and the defender's one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Action {
+    /// Between possessions, or a move that has run out.
+    Standing,
+    /// With the ball, toward the goal.
+    Maneuver,
+    /// With the ball, to the square opponent modelling chose.
+    DribbleToShot,
+    /// Without the ball: toward the goal, staying open for a pass.
+    ReadyForPass,
+    Shoot,
+    Pass,
+    /// The defender: toward the ball.
+    Defend,
+}
+
+/// A move being played: the strides of a cost-map path, one per data frame, sampled at
+/// the tick rate by interpolating between frames.
+#[derive(Debug, Clone)]
+pub struct Movement {
+    strides: Vec<Stride>,
+    /// Data frames played so far (fractional: ticks need not fall on frames).
+    played: f64,
+    /// What the move was planned for: the goal on the court and the behaviour.
+    pub goal: DVec2,
+    pub behaviour: String,
+}
+
+impl Movement {
+    pub fn new(strides: Vec<Stride>, goal: DVec2, behaviour: String) -> Movement {
+        debug_assert!(!strides.is_empty());
+        Movement {
+            strides,
+            played: 0.0,
+            goal,
+            behaviour,
+        }
+    }
+
+    /// Plays `frames` more data frames; returns where the body is and the node playing.
+    pub fn advance(&mut self, frames: f64) -> (Walker, u32) {
+        let last = self.strides.len() - 1;
+        self.played = (self.played + frames).min(last as f64);
+        let k = (self.played as usize).min(last);
+        let f = self.played - k as f64;
+        let a = self.strides[k];
+        let Some(b) = self.strides.get(k + 1) else {
+            return (a.at, a.node);
+        };
+        let facing = a.at.facing.lerp(b.at.facing, f);
+        let at = Walker {
+            position: a.at.position.lerp(b.at.position, f),
+            facing: if facing.length_squared() > 1e-12 {
+                facing.normalize()
+            } else {
+                b.at.facing
+            },
+        };
+        (at, if f < 0.5 { a.node } else { b.node })
+    }
+
+    pub fn finished(&self) -> bool {
+        self.played >= (self.strides.len() - 1) as f64
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Agent {
+    pub id: String,
+    pub team: Team,
+    pub pose: AgentPose,
+    /// The motion-graph node playing, for drawing the body; `None` before it first moves.
+    pub node: Option<u32>,
+    pub action: Action,
+    pub(super) movement: Option<Movement>,
+    /// When it next decides (the agents re-plan a few times a second).
+    pub(super) next_plan_s: f64,
+    /// A defender's next steal attempt; an offensive player's first moment it may pass
+    /// (so a catch is not passed straight back).
+    pub(super) not_before_s: f64,
+    /// Seconds left of a shot being taken.
+    pub(super) shooting_s: Option<f64>,
+}
+
+impl Agent {
+    pub fn new(id: String, team: Team, position: DVec2, heading: f64) -> Agent {
+        Agent {
+            id,
+            team,
+            pose: AgentPose { position, heading },
+            node: None,
+            action: Action::Standing,
+            movement: None,
+            next_plan_s: 0.0,
+            not_before_s: 0.0,
+            shooting_s: None,
+        }
+    }
+
+    /// Plays the current move on by `frames` data frames.
+    pub(super) fn advance(&mut self, frames: f64) {
+        if let Some(m) = &mut self.movement {
+            let (at, node) = m.advance(frames);
+            self.pose = AgentPose {
+                position: at.position,
+                heading: at.heading(),
+            };
+            self.node = Some(node);
+            if m.finished() {
+                self.movement = None;
+            }
+        }
+    }
+
+    pub(super) fn stop(&mut self) {
+        self.movement = None;
+    }
+}

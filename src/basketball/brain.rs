@@ -1,0 +1,319 @@
+//! How agents decide, a few times a second: the offense follows the paper's conditional
+//! plan (its Figure 9: maneuver toward the goal, pass to the teammate when pressed,
+//! shoot when the plan says so) with a `simple` or a `costmap` brain; the defender
+//! "simply tries to move toward the ball".
+
+use super::agent::{Action, Movement, Team};
+use super::capability::Mover;
+use super::decision::{Chosen, Situation};
+use super::event::Event;
+use super::game::Game;
+use super::params::Brain;
+use crate::costmap::AgentPose;
+use glam::DVec2;
+
+/// What the ball handler does next, and why (in words a spectator reads).
+enum Play {
+    Shoot {
+        reason: String,
+        chosen: Option<Chosen>,
+    },
+    Pass {
+        to: usize,
+        reason: String,
+    },
+    Move {
+        action: Action,
+        goal: DVec2,
+        reason: String,
+        chosen: Option<Chosen>,
+    },
+}
+
+/// How far a goal may move before an agent gives up the move it is playing for a new
+/// one, m.
+const RETARGET_M: f64 = 1.0;
+/// How far ahead the `simple` offense aims on its straight line to the goal, m.
+const SIMPLE_STEP_M: f64 = 3.0;
+/// Where an offensive player without the ball waits for a pass: this far from the
+/// basket, at one of [`OPEN_ANGLES_DEG`] from the basket's axis.
+const OPEN_DISTANCE_M: f64 = 4.5;
+const OPEN_ANGLES_DEG: [f64; 5] = [-60.0, -30.0, 0.0, 30.0, 60.0];
+
+impl Game {
+    /// Every agent whose time has come decides, in a fixed order.
+    pub(super) fn plan(&mut self, now: f64, events: &mut Vec<Event>) {
+        for k in 0..self.agents.len() {
+            let a = &self.agents[k];
+            if a.shooting_s.is_some() || now + 1e-9 < a.next_plan_s {
+                continue;
+            }
+            self.agents[k].next_plan_s = now + self.params.replan_s;
+            match (self.agents[k].team, self.holder() == Some(k)) {
+                (Team::Defense, _) => self.defend(k),
+                (Team::Offense, true) => {
+                    let play = match self.params.offense {
+                        Brain::Simple => self.simple_play(k, now),
+                        Brain::Costmap => self.costmap_play(k, now),
+                    };
+                    self.carry_out(k, play, events);
+                }
+                (Team::Offense, false) => self.get_open(k),
+            }
+        }
+    }
+
+    fn carry_out(&mut self, k: usize, play: Play, events: &mut Vec<Event>) {
+        let (action, reason, chosen) = match play {
+            Play::Shoot { reason, chosen } => {
+                self.start_shot(k);
+                (Action::Shoot, reason, chosen)
+            }
+            Play::Pass { to, reason } => {
+                self.start_pass(k, to);
+                events.push(Event::Pass {
+                    from: self.agents[k].id.clone(),
+                    to: self.agents[to].id.clone(),
+                });
+                (Action::Pass, reason, None)
+            }
+            Play::Move {
+                action,
+                goal,
+                reason,
+                chosen,
+            } => {
+                self.head_for(k, &self.caps.clone().dribble, goal);
+                (action, reason, chosen)
+            }
+        };
+        self.agents[k].action = action;
+        let key = Some((action, chosen.map(|c| c.cell)));
+        if self.last_decision[k] != key {
+            self.last_decision[k] = key;
+            let params = self.params.decision;
+            events.push(Event::Decision {
+                agent: self.agents[k].id.clone(),
+                action,
+                reason,
+                chosen,
+                candidates: self
+                    .candidates
+                    .iter()
+                    .filter(|c| chosen.is_some() && c.qualifies(&params))
+                    .copied()
+                    .collect(),
+            });
+        }
+        if action == Action::Pass {
+            self.agents[k].action = Action::ReadyForPass;
+        }
+    }
+
+    /// Heads agent `k` for `goal` with `mover`: plays the map's stored path to the goal's
+    /// cell if the map reaches it, else to the cell that is the cheapest way toward it on
+    /// the court (or stands if there is none).
+    ///
+    /// A move in progress toward (nearly) the same goal with the same behaviour is kept:
+    /// every stored path starts from the map's start pose, so restarting one a few times
+    /// a second would replay its first steps for ever and never make a turn that takes
+    /// longer than that.
+    fn head_for(&mut self, k: usize, mover: &Mover, goal: DVec2) {
+        if let Some(m) = &self.agents[k].movement {
+            if m.behaviour == mover.map.behaviour && m.goal.distance(goal) <= RETARGET_M {
+                return;
+            }
+        }
+        let pose = self.agents[k].pose;
+        let court = &self.params.court;
+        let cell = mover
+            .reachable_cell(&pose, goal)
+            .or_else(|| mover.cell_toward(&pose, goal, |p| court.contains(p)));
+        self.agents[k].movement = cell.map(|c| {
+            Movement::new(
+                mover.strides_to(&pose, c),
+                goal,
+                mover.map.behaviour.clone(),
+            )
+        });
+    }
+
+    fn shot_clock_play(&self) -> Option<Play> {
+        (self.shot_clock_s <= self.params.decision.shot_time_s + self.params.replan_s).then(|| {
+            Play::Shoot {
+                reason: format!(
+                    "shot clock: {:.1} s left, shooting before it runs out",
+                    self.shot_clock_s.max(0.0)
+                ),
+                chosen: None,
+            }
+        })
+    }
+
+    /// The teammate to pass to: the one farthest from its nearest defender.
+    fn open_teammate(&self, k: usize, now: f64) -> Option<usize> {
+        if now < self.agents[k].not_before_s {
+            return None;
+        }
+        (0..self.agents.len())
+            .filter(|&t| t != k && self.agents[t].team == Team::Offense)
+            .max_by(|&a, &b| self.openness(a).total_cmp(&self.openness(b)))
+    }
+
+    fn openness(&self, k: usize) -> f64 {
+        let at = self.agents[k].pose.position;
+        self.defenders()
+            .map(|d| self.agents[d].pose.position.distance(at))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    fn simple_play(&self, k: usize, now: f64) -> Play {
+        if let Some(play) = self.shot_clock_play() {
+            return play;
+        }
+        let p = &self.params;
+        let at = self.agents[k].pose.position;
+        let to_basket = p.court.distance_to_basket(at);
+        if to_basket <= p.simple.shoot_range_m {
+            return Play::Shoot {
+                reason: format!(
+                    "{to_basket:.1} m from the basket, within the fixed {:.1} m range",
+                    p.simple.shoot_range_m
+                ),
+                chosen: None,
+            };
+        }
+        let nearest = self.openness(k);
+        if nearest <= p.simple.pass_radius_m {
+            if let Some(to) = self.open_teammate(k, now) {
+                return Play::Pass {
+                    to,
+                    reason: format!(
+                        "defender {nearest:.1} m away, inside the fixed {:.1} m radius",
+                        p.simple.pass_radius_m
+                    ),
+                };
+            }
+        }
+        let goal = at + (p.court.basket - at).normalize_or_zero() * SIMPLE_STEP_M.min(to_basket);
+        Play::Move {
+            action: Action::Maneuver,
+            goal,
+            reason: "straight toward the basket".to_string(),
+            chosen: None,
+        }
+    }
+
+    fn costmap_play(&mut self, k: usize, now: f64) -> Play {
+        if let Some(play) = self.shot_clock_play() {
+            return play;
+        }
+        let caps = self.caps.clone();
+        let shooter = self.agents[k].pose;
+        // Without prior knowledge of the defender, the shooter models it with its own
+        // non-dribbling map (the paper).
+        let defenders: Vec<(AgentPose, &Mover)> = self
+            .defenders()
+            .map(|d| (self.agents[d].pose, &caps.run))
+            .collect();
+        let mut candidates = std::mem::take(&mut self.candidates);
+        let chosen = Situation {
+            court: &self.params.court,
+            shot: &self.params.shot,
+            params: &self.params.decision,
+            shooter,
+            dribble: &caps.dribble,
+            defenders: &defenders,
+        }
+        .decide_into(&mut candidates);
+        self.candidates = candidates;
+        let why = |c: &Chosen| {
+            format!(
+                "defender needs {:.1} s > {:.1} s dribble + {:.1} s shot + {:.1} s margin",
+                c.c_o, c.c_d, c.t_s, c.epsilon
+            )
+        };
+        if let Some(c) = chosen.filter(|c| c.here) {
+            return Play::Shoot {
+                reason: format!(
+                    "shoots from ({:.1}, {:.1}): {}",
+                    c.cell[0],
+                    c.cell[1],
+                    why(&c)
+                ),
+                chosen,
+            };
+        }
+        // Pressed: the defender is within its passing radius, read off the modelled
+        // defender's map (as far as it gets in the pressure time) rather than fixed.
+        let radius = caps.run.radius_within(self.params.pass_pressure_s);
+        let nearest = self.openness(k);
+        if nearest <= radius {
+            if let Some(to) = self.open_teammate(k, now) {
+                return Play::Pass {
+                    to,
+                    reason: format!(
+                        "pressed: the defender is {nearest:.1} m away, within the {radius:.1} m it covers in {:.1} s",
+                        self.params.pass_pressure_s
+                    ),
+                };
+            }
+        }
+        if let Some(c) = chosen {
+            return Play::Move {
+                action: Action::DribbleToShot,
+                goal: DVec2::from_array(c.cell),
+                reason: format!(
+                    "dribbles to shoot from ({:.1}, {:.1}): {}",
+                    c.cell[0],
+                    c.cell[1],
+                    why(&c)
+                ),
+                chosen,
+            };
+        }
+        Play::Move {
+            action: Action::Maneuver,
+            goal: self.params.court.basket,
+            reason: "no safe square: cheapest way toward the basket".to_string(),
+            chosen: None,
+        }
+    }
+
+    /// Ready for a pass: toward the goal, to the spot by the basket farthest from the
+    /// defenders and not crowding the ball.
+    fn get_open(&mut self, k: usize) {
+        let basket = self.params.court.basket;
+        let ball = self.ball_position();
+        let spot = OPEN_ANGLES_DEG
+            .iter()
+            .map(|deg| basket + DVec2::from_angle(deg.to_radians()) * OPEN_DISTANCE_M)
+            .max_by(|a, b| {
+                self.spot_score(*a, ball)
+                    .total_cmp(&self.spot_score(*b, ball))
+            })
+            .expect("there are spots");
+        self.head_for(k, &self.caps.clone().run, spot);
+        self.agents[k].action = Action::ReadyForPass;
+    }
+
+    fn spot_score(&self, spot: DVec2, ball: DVec2) -> f64 {
+        let defended = self
+            .defenders()
+            .map(|d| self.agents[d].pose.position.distance(spot))
+            .fold(f64::INFINITY, f64::min)
+            .min(10.0);
+        defended + spot.distance(ball).min(3.0)
+    }
+
+    /// The defender: toward the ball.
+    fn defend(&mut self, k: usize) {
+        let caps = self.caps.clone();
+        self.head_for(
+            k,
+            caps.defender(self.params.defender.motion),
+            self.ball_position(),
+        );
+        self.agents[k].action = Action::Defend;
+    }
+}

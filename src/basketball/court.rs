@@ -1,0 +1,116 @@
+//! The half court: FIBA dimensions, in the ground plane of the simulation (y up).
+//!
+//! x runs from the baseline (x = 0) to the half-court line (x = 14 m); z runs across the
+//! court, from −7.5 m to 7.5 m, with the basket on z = 0. The offense attacks toward −x.
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Court {
+    /// Baseline to half-court line, m (FIBA: 14).
+    pub length_m: f64,
+    /// Sideline to sideline, m (FIBA: 15).
+    pub width_m: f64,
+    /// The centre of the ring above the floor, projected onto it.
+    pub basket: DVec2,
+    /// Distance of the three-point line from the basket, m (FIBA: 6.75).
+    pub three_point_m: f64,
+    /// Side of a square the shooter considers, m.
+    pub square_m: f64,
+}
+
+impl Default for Court {
+    fn default() -> Self {
+        Court {
+            length_m: 14.0,
+            width_m: 15.0,
+            basket: DVec2::new(1.575, 0.0),
+            three_point_m: 6.75,
+            square_m: 0.5,
+        }
+    }
+}
+
+impl Court {
+    pub fn contains(&self, p: DVec2) -> bool {
+        (0.0..=self.length_m).contains(&p.x) && p.y.abs() <= 0.5 * self.width_m
+    }
+
+    /// The nearest point on the court.
+    pub fn clamp(&self, p: DVec2) -> DVec2 {
+        let half = 0.5 * self.width_m;
+        DVec2::new(p.x.clamp(0.0, self.length_m), p.y.clamp(-half, half))
+    }
+
+    pub fn distance_to_basket(&self, p: DVec2) -> f64 {
+        p.distance(self.basket)
+    }
+
+    /// Points a made shot from `p` scores.
+    pub fn points(&self, p: DVec2) -> u32 {
+        if self.distance_to_basket(p) > self.three_point_m {
+            3
+        } else {
+            2
+        }
+    }
+
+    /// Squares along x and along z.
+    pub fn squares_xz(&self) -> (usize, usize) {
+        (
+            (self.length_m / self.square_m).floor() as usize,
+            (self.width_m / self.square_m).floor() as usize,
+        )
+    }
+
+    /// The centres of every square of the court, row by row (z outer, x inner).
+    pub fn square_centres(&self) -> Vec<DVec2> {
+        let (nx, nz) = self.squares_xz();
+        let z0 = -0.5 * nz as f64 * self.square_m;
+        (0..nz)
+            .flat_map(|i| {
+                (0..nx).map(move |j| {
+                    DVec2::new(
+                        (j as f64 + 0.5) * self.square_m,
+                        z0 + (i as f64 + 0.5) * self.square_m,
+                    )
+                })
+            })
+            .collect()
+    }
+
+    /// The index (into [`Court::square_centres`]) of the square holding `p`.
+    pub fn square_of(&self, p: DVec2) -> Option<usize> {
+        let (nx, nz) = self.squares_xz();
+        let j = p.x / self.square_m;
+        let i = (p.y + 0.5 * nz as f64 * self.square_m) / self.square_m;
+        (j >= 0.0 && i >= 0.0 && (j as usize) < nx && (i as usize) < nz)
+            .then(|| i as usize * nx + j as usize)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn squares_tile_the_court_and_find_their_centres() {
+        let court = Court::default();
+        let centres = court.square_centres();
+        assert_eq!(centres.len(), 28 * 30);
+        for (k, c) in centres.iter().enumerate() {
+            assert!(court.contains(*c));
+            assert_eq!(court.square_of(*c), Some(k));
+        }
+        assert_eq!(court.square_of(DVec2::new(-0.1, 0.0)), None);
+        assert_eq!(court.square_of(DVec2::new(1.0, 7.6)), None);
+    }
+
+    #[test]
+    fn three_pointers_start_at_the_arc() {
+        let court = Court::default();
+        assert_eq!(court.points(court.basket + DVec2::new(6.7, 0.0)), 2);
+        assert_eq!(court.points(court.basket + DVec2::new(6.8, 0.0)), 3);
+    }
+}

@@ -1,0 +1,162 @@
+//! Opponent modelling (Sukthankar et al. 2008): shoot from a square the defender cannot
+//! reach before the shot is away.
+//!
+//! For every square of the court the shooter compares C_o, the defender's time to reach
+//! it (the defender's non-dribbling cost map embedded at the defender's pose), with C_d,
+//! its own dribbling time (its dribbling map at its pose), plus T_s, the time a shot
+//! takes, and a margin ε. The squares where `C_o > C_d + T_s + ε` are safe; of those it
+//! picks the one with the best shot. The maps are precomputed, so a decision is two
+//! table look-ups per square: O(n) in the squares.
+
+use super::capability::Mover;
+use super::court::Court;
+use super::shot::ShotModel;
+use crate::costmap::AgentPose;
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+/// The parameters of the rule.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DecisionParams {
+    /// T_s: from the decision to shoot until the ball leaves the hands, s.
+    pub shot_time_s: f64,
+    /// ε: the margin the defender must be late by, s.
+    pub epsilon_s: f64,
+}
+
+impl Default for DecisionParams {
+    fn default() -> Self {
+        DecisionParams {
+            shot_time_s: 0.4,
+            epsilon_s: 0.2,
+        }
+    }
+}
+
+/// A square the shooter considered.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Candidate {
+    /// The square's centre on the court, m.
+    pub cell: [f64; 2],
+    /// C_o, s. Where the defender's map does not reach, its horizon (the defender needs
+    /// at least that long).
+    pub c_o: f64,
+    /// C_d, s (0 for the square the shooter stands on, and for the map's start cell
+    /// beside it: the shooter need not move to shoot from either).
+    pub c_d: f64,
+    /// The chance a shot from the square goes in.
+    pub success: f64,
+}
+
+impl Candidate {
+    /// The paper's inequality: the defender arrives after the shot is away, by ε.
+    pub fn qualifies(&self, params: &DecisionParams) -> bool {
+        self.c_o > self.c_d + params.shot_time_s + params.epsilon_s
+    }
+}
+
+/// The square chosen, with everything needed to check the rule by hand.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Chosen {
+    pub cell: [f64; 2],
+    pub success: f64,
+    pub c_o: f64,
+    pub c_d: f64,
+    pub t_s: f64,
+    pub epsilon: f64,
+    /// True when the shooter already stands on the square: shoot now.
+    pub here: bool,
+}
+
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Decision {
+    pub chosen: Option<Chosen>,
+    /// Every square the shooter can reach within its map's horizon.
+    pub candidates: Vec<Candidate>,
+}
+
+/// The shooter's side of the rule: who it is, what it models the defenders with.
+pub struct Situation<'a> {
+    pub court: &'a Court,
+    pub shot: &'a ShotModel,
+    pub params: &'a DecisionParams,
+    pub shooter: AgentPose,
+    pub dribble: &'a Mover,
+    /// Defender poses, each with the map the shooter models it by.
+    pub defenders: &'a [(AgentPose, &'a Mover)],
+}
+
+impl Situation<'_> {
+    /// Applies the rule to every square of the court. `candidates` is reused so a match
+    /// deciding several times a second does not allocate.
+    pub fn decide_into(&self, candidates: &mut Vec<Candidate>) -> Option<Chosen> {
+        candidates.clear();
+        let court = self.court;
+        let here = court.square_of(self.shooter.position);
+        let (nx, nz) = court.squares_xz();
+        let z0 = -0.5 * nz as f64 * court.square_m;
+        let mut best: Option<(usize, bool)> = None;
+        for i in 0..nz {
+            for j in 0..nx {
+                let square = i * nx + j;
+                let centre = DVec2::new(
+                    (j as f64 + 0.5) * court.square_m,
+                    z0 + (i as f64 + 0.5) * court.square_m,
+                );
+                let c_d = if here == Some(square) {
+                    0.0
+                } else {
+                    match self.dribble.seconds_to(&self.shooter, centre) {
+                        Some(s) => s,
+                        None => continue,
+                    }
+                };
+                // The map's own start cell costs nothing too: no need to move.
+                let is_here = c_d == 0.0;
+                let c_o = self
+                    .defenders
+                    .iter()
+                    .map(|(pose, mover)| {
+                        mover
+                            .seconds_to(pose, centre)
+                            .unwrap_or_else(|| mover.horizon_s())
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                let c = Candidate {
+                    cell: centre.to_array(),
+                    c_o,
+                    c_d,
+                    success: self.shot.success(court.distance_to_basket(centre)),
+                };
+                if c.qualifies(self.params) {
+                    let better = best.is_none_or(|(b, _)| {
+                        let b = &candidates[b];
+                        c.success > b.success || (c.success == b.success && c.c_d < b.c_d)
+                    });
+                    if better {
+                        best = Some((candidates.len(), is_here));
+                    }
+                }
+                candidates.push(c);
+            }
+        }
+        best.map(|(k, here)| {
+            let c = candidates[k];
+            Chosen {
+                cell: c.cell,
+                success: c.success,
+                c_o: c.c_o,
+                c_d: c.c_d,
+                t_s: self.params.shot_time_s,
+                epsilon: self.params.epsilon_s,
+                here,
+            }
+        })
+    }
+
+    pub fn decide(&self) -> Decision {
+        let mut candidates = Vec::new();
+        let chosen = self.decide_into(&mut candidates);
+        Decision { chosen, candidates }
+    }
+}

@@ -1,0 +1,92 @@
+//! What a game reports: events as they happen, and snapshots of the whole court.
+
+use super::agent::{Action, Team};
+use super::decision::{Candidate, Chosen};
+use serde::Serialize;
+
+/// How a possession ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    Made,
+    Missed,
+    Blocked,
+    Stolen,
+    Intercepted,
+    ShotClock,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Event {
+    PossessionStarted {
+        possession: u64,
+    },
+    /// An agent chose a new action (or, with the ball, a new shooting square). `chosen`
+    /// and `candidates` are those of `basketball-decide`; `candidates` here holds only
+    /// the squares that satisfied the rule, so a spectator can outline them.
+    Decision {
+        agent: String,
+        action: Action,
+        reason: String,
+        chosen: Option<Chosen>,
+        candidates: Vec<Candidate>,
+    },
+    Pass {
+        from: String,
+        to: String,
+    },
+    PassCaught {
+        by: String,
+    },
+    /// The ball is away (or was blocked on the way up).
+    Shot {
+        by: String,
+        from: [f64; 2],
+        distance_m: f64,
+        success: f64,
+        made: bool,
+        blocked: bool,
+        points: u32,
+    },
+    PossessionEnded {
+        possession: u64,
+        outcome: Outcome,
+        points: u32,
+        /// From the start of the possession to the moment its outcome was settled.
+        duration_s: f64,
+        passes: u32,
+    },
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AgentView {
+    pub id: String,
+    pub team: Team,
+    pub behaviour: &'static str,
+    pub position: [f64; 2],
+    /// Radians from +x toward +z.
+    pub heading: f64,
+    pub node: Option<u32>,
+    pub action: Action,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BallView {
+    /// `held`, `pass` or `shot`.
+    pub state: &'static str,
+    /// x, y (height), z, m.
+    pub position: [f64; 3],
+    pub holder: Option<String>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Snapshot {
+    pub tick: u64,
+    pub time_s: f64,
+    pub possession: u64,
+    pub shot_clock_s: f64,
+    pub score: u32,
+    pub ball: BallView,
+    pub agents: Vec<AgentView>,
+}

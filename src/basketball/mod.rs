@@ -1,0 +1,35 @@
+//! Basketball as in Sukthankar, Mandel & Sycara (2008): TEAMBOTS-like agents on a half
+//! court who move with motion capture, plan with cost maps, and model their opponent.
+//!
+//! * [`court`]: the FIBA half court and its squares.
+//! * [`shot`]: shot success against distance.
+//! * [`capability`]: each behaviour's motion graph and cost map (the physical
+//!   capability model), embedded at an agent's pose; moves play a map's stored path.
+//! * [`decision`]: opponent modelling, `C_o > C_d + T_s + ε`.
+//! * [`agent`], [`brain`], [`game`]: the game as a deterministic state machine; the
+//!   offense's `simple` and `costmap` brains; the defender.
+//! * [`event`]: what a game reports.
+//! * [`eval`]: the paper's experiment, possessions and points per possession.
+
+pub mod agent;
+mod brain;
+pub mod capability;
+pub mod court;
+pub mod decision;
+pub mod eval;
+pub mod event;
+pub mod game;
+pub mod params;
+pub mod shot;
+
+pub use agent::{Action, Agent, Team};
+pub use capability::{Capabilities, DefenderMotion, Mover, Stride};
+pub use court::Court;
+pub use decision::{Candidate, Chosen, Decision, DecisionParams, Situation};
+pub use eval::{compare, evaluate, Comparison, EvalReport};
+pub use event::{Event, Outcome, Snapshot};
+pub use game::Game;
+pub use params::{Brain, DefenderParams, GameParams, SimpleParams};
+pub use shot::ShotModel;
+#[cfg(test)]
+mod tests;

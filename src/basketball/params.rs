@@ -1,0 +1,133 @@
+//! Everything that decides a basketball game besides the motion data, with the defaults
+//! of the paper's setting (two offensive agents against one defender).
+
+use super::capability::DefenderMotion;
+use super::court::Court;
+use super::decision::DecisionParams;
+use super::shot::ShotModel;
+use crate::names::{lookup, UnknownName};
+use serde::{Deserialize, Serialize};
+use std::str::FromStr;
+
+/// How the offense decides.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Brain {
+    /// Straight toward the goal; pass when the defender comes within a fixed radius;
+    /// shoot from a fixed range.
+    Simple,
+    /// The cheapest heading from the cost map; pass when the defender's cost map says it
+    /// is about to arrive; shoot from the square opponent modelling picks.
+    Costmap,
+}
+
+impl Brain {
+    pub fn name(self) -> &'static str {
+        match self {
+            Brain::Simple => "simple",
+            Brain::Costmap => "costmap",
+        }
+    }
+}
+
+impl FromStr for Brain {
+    type Err = UnknownName;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        lookup(
+            "offense",
+            s,
+            &["simple", "costmap"],
+            &[Brain::Simple, Brain::Costmap],
+        )
+    }
+}
+
+/// The defender's reach and how often it wins the ball.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DefenderParams {
+    /// How close (m, root to root or root to ball) it must be to steal or block.
+    pub reach_m: f64,
+    /// Chance one steal attempt on a dribbler or a pass in flight succeeds.
+    pub steal_success: f64,
+    /// Chance it blocks a shot it reaches before the ball is away.
+    pub block_success: f64,
+    /// Seconds between its steal attempts on the same dribbler.
+    pub attempt_every_s: f64,
+    pub motion: DefenderMotion,
+}
+
+impl Default for DefenderParams {
+    fn default() -> Self {
+        DefenderParams {
+            reach_m: 1.0,
+            steal_success: 0.3,
+            block_success: 0.6,
+            attempt_every_s: 1.0,
+            motion: DefenderMotion::Defense,
+        }
+    }
+}
+
+/// The `simple` offense's fixed thresholds.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SimpleParams {
+    /// Pass when a defender is this close, m.
+    pub pass_radius_m: f64,
+    /// Shoot from this close to the basket, m.
+    pub shoot_range_m: f64,
+}
+
+impl Default for SimpleParams {
+    fn default() -> Self {
+        SimpleParams {
+            pass_radius_m: 2.0,
+            shoot_range_m: 5.0,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GameParams {
+    pub tick_hz: f64,
+    pub offense: Brain,
+    pub offense_players: usize,
+    pub defenders: usize,
+    pub court: Court,
+    pub shot: ShotModel,
+    pub decision: DecisionParams,
+    pub defender: DefenderParams,
+    pub simple: SimpleParams,
+    /// The `costmap` offense passes when a defender can reach it within this, s (its
+    /// passing radius, measured in the defender's time rather than metres).
+    pub pass_pressure_s: f64,
+    pub shot_clock_s: f64,
+    /// How often agents decide, s.
+    pub replan_s: f64,
+    pub pass_speed_m_s: f64,
+    /// Speed of a shot toward the ring, m/s (only how long spectators see it fly: the
+    /// outcome is settled at release).
+    pub shot_speed_m_s: f64,
+    pub seed: u64,
+}
+
+impl Default for GameParams {
+    fn default() -> Self {
+        GameParams {
+            tick_hz: 60.0,
+            offense: Brain::Costmap,
+            offense_players: 2,
+            defenders: 1,
+            court: Court::default(),
+            shot: ShotModel::default(),
+            decision: DecisionParams::default(),
+            defender: DefenderParams::default(),
+            simple: SimpleParams::default(),
+            pass_pressure_s: 1.0,
+            shot_clock_s: 24.0,
+            replan_s: 0.25,
+            pass_speed_m_s: 8.0,
+            shot_speed_m_s: 7.0,
+            seed: 1,
+        }
+    }
+}

@@ -1,0 +1,382 @@
+//! `fieldhouse basketball-decide` (one opponent-modelling decision, every square shown)
+//! and `fieldhouse basketball-eval` (the paper's possession experiment).
+
+use super::args::{ground_pose, non_negative, parse_str, positive};
+use super::canvas::{hot, Canvas, Rgb};
+use super::costmap::CacheArgs;
+use super::heatmap::UNREACHABLE;
+use super::motion::MotionSourceArgs;
+use anyhow::Context;
+use clap::Args;
+use fieldhouse::basketball::{
+    compare, evaluate, Brain, Capabilities, Court, Decision, DecisionParams, DefenderMotion,
+    GameParams, Mover, ShotModel, Situation,
+};
+use fieldhouse::costmap::AgentPose;
+use glam::DVec2;
+use serde_json::json;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Where motion and cached maps come from.
+#[derive(Args, Debug, Clone)]
+pub struct CapabilityArgs {
+    #[command(flatten)]
+    source: MotionSourceArgs,
+    #[command(flatten)]
+    cache: CacheArgs,
+}
+
+impl CapabilityArgs {
+    fn load(&self) -> anyhow::Result<Arc<Capabilities>> {
+        let library = self.source.load()?;
+        let started = Instant::now();
+        let caps = Capabilities::build(&library, self.cache.dir().as_deref())
+            .context("building the basketball behaviours (run, dribble, defense)")?;
+        tracing::info!(
+            elapsed_s = started.elapsed().as_secs_f64(),
+            "cost maps of run, dribble and defense ready"
+        );
+        Ok(Arc::new(caps))
+    }
+}
+
+#[derive(Args, Debug)]
+#[command(
+    allow_negative_numbers = true,
+    after_help = "The court is FIBA's half court: x from the baseline (0) to the half-court line (14 m), \
+        z across it (−7.5 to 7.5 m), the basket at (1.575, 0). Headings are degrees from +x toward +z \
+        (180 faces the basket from midcourt).\n\
+        Example: fieldhouse basketball-decide --mocap ../shared/mocap --shooter 9,2,180 --defender 4,0,0 --json"
+)]
+pub struct DecideArgs {
+    /// The shooter's pose, X,Z,HEADING_DEG.
+    #[arg(long, value_name = "X,Z,HEADING_DEG", value_parser = ground_pose, allow_hyphen_values = true)]
+    shooter: AgentPose,
+    /// A defender's pose, X,Z,HEADING_DEG (repeatable).
+    #[arg(long, value_name = "X,Z,HEADING_DEG", value_parser = ground_pose, allow_hyphen_values = true, required = true)]
+    defender: Vec<AgentPose>,
+    /// ε, the margin the defender must be late by, s.
+    #[arg(long, value_name = "S", default_value_t = DecisionParams::default().epsilon_s, value_parser = non_negative)]
+    epsilon: f64,
+    /// T_s, the time a shot takes, s.
+    #[arg(long, value_name = "S", default_value_t = DecisionParams::default().shot_time_s, value_parser = non_negative)]
+    shot_time: f64,
+    /// The map the shooter models the defender with: run (its own non-dribbling map, the
+    /// paper's choice without prior knowledge) or defense (the defender's footwork).
+    #[arg(long, default_value = "run", value_parser = parse_str::<DefenderMotion>)]
+    defender_model: DefenderMotion,
+    /// Draw the decision: the shooter's dribbling times, the defender's times, and the
+    /// squares that satisfy the rule with the chosen one outlined.
+    #[arg(long, value_name = "FILE")]
+    png: Option<PathBuf>,
+    /// Print one JSON document.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    capability: CapabilityArgs,
+}
+
+fn on_court(court: &Court, who: &str, pose: &AgentPose) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        court.contains(pose.position),
+        "the {who} at ({}, {}) is off the court (x 0 to {} m, z −{} to {} m)",
+        pose.position.x,
+        pose.position.y,
+        court.length_m,
+        court.width_m / 2.0,
+        court.width_m / 2.0
+    );
+    Ok(())
+}
+
+pub fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<()> {
+    let court = Court::default();
+    on_court(&court, "shooter", &args.shooter)?;
+    for d in &args.defender {
+        on_court(&court, "defender", d)?;
+    }
+    let caps = args.capability.load()?;
+    let params = DecisionParams {
+        shot_time_s: args.shot_time,
+        epsilon_s: args.epsilon,
+    };
+    let model = caps.defender(args.defender_model);
+    let defenders: Vec<(AgentPose, &Mover)> = args.defender.iter().map(|&d| (d, model)).collect();
+    let shot = ShotModel::default();
+    let decision = Situation {
+        court: &court,
+        shot: &shot,
+        params: &params,
+        shooter: args.shooter,
+        dribble: &caps.dribble,
+        defenders: &defenders,
+    }
+    .decide();
+    if let Some(file) = &args.png {
+        picture(&court, &decision, &params, &args, file)?;
+    }
+    if args.json {
+        let doc = json!({
+            "chosen": decision.chosen,
+            "candidates": decision.candidates,
+            "qualifying": decision.candidates.iter().filter(|c| c.qualifies(&params)).count(),
+            "horizon_s": model.horizon_s(),
+            "defender_model": args.defender_model.name(),
+            "motion_source": caps.source.to_string(),
+            "court": court,
+            "shot": shot,
+        });
+        writeln!(out, "{doc}")?;
+        return Ok(());
+    }
+    let qualifying = decision
+        .candidates
+        .iter()
+        .filter(|c| c.qualifies(&params))
+        .count();
+    writeln!(
+        out,
+        "{} of {} reachable squares satisfy C_o > C_d + T_s + ε (T_s {} s, ε {} s; motion: {})",
+        qualifying,
+        decision.candidates.len(),
+        params.shot_time_s,
+        params.epsilon_s,
+        caps.source
+    )?;
+    match decision.chosen {
+        Some(c) => writeln!(
+            out,
+            "shoot from ({:.2}, {:.2}){}: success {:.2}; defender needs {:.2} s > {:.2} s dribble + {} s shot + {} s margin",
+            c.cell[0],
+            c.cell[1],
+            if c.here { " (here)" } else { "" },
+            c.success,
+            c.c_o,
+            c.c_d,
+            c.t_s,
+            c.epsilon
+        )?,
+        None => writeln!(out, "no square qualifies: fall back to the plan (maneuver, pass when pressed)")?,
+    }
+    Ok(())
+}
+
+/// Pixels per court square.
+const SCALE: f64 = 16.0;
+const SHOOTER: Rgb = [40, 200, 60];
+const DEFENDER: Rgb = [230, 40, 40];
+const BASKET: Rgb = [255, 140, 0];
+const FAILS: Rgb = [120, 120, 120];
+const GAP: usize = 12;
+
+/// Three court panels from above (x right, z down): the shooter's dribbling time C_d,
+/// the defender's time C_o, and the rule (qualifying squares by success, dark = better;
+/// the rest grey; the chosen square outlined in green).
+fn picture(
+    court: &Court,
+    decision: &Decision,
+    params: &DecisionParams,
+    args: &DecideArgs,
+    file: &Path,
+) -> anyhow::Result<()> {
+    let (nx, nz) = court.squares_xz();
+    let (w, h) = (nx as f64 * SCALE, nz as f64 * SCALE);
+    let mut canvas = Canvas::new(3 * w as usize + 2 * GAP, h as usize, [255, 255, 255]);
+    let horizon = decision
+        .candidates
+        .iter()
+        .map(|c| c.c_o.max(c.c_d))
+        .fold(0.1, f64::max);
+    let best = decision
+        .candidates
+        .iter()
+        .map(|c| c.success)
+        .fold(1e-9, f64::max);
+    let half_z = 0.5 * nz as f64 * court.square_m;
+    let px = |panel: usize, p: DVec2| {
+        DVec2::new(
+            panel as f64 * (w + GAP as f64) + p.x / court.square_m * SCALE,
+            (p.y + half_z) / court.square_m * SCALE,
+        )
+    };
+    for panel in 0..3 {
+        canvas.fill(
+            px(panel, DVec2::new(0.0, -half_z)),
+            px(panel, DVec2::new(court.length_m, half_z)),
+            UNREACHABLE,
+        );
+    }
+    let half = DVec2::splat(0.5 * court.square_m);
+    for c in &decision.candidates {
+        let centre = DVec2::from_array(c.cell);
+        let colours = [
+            hot(c.c_d / horizon),
+            hot(c.c_o / horizon),
+            if c.qualifies(params) {
+                hot(1.0 - c.success / best)
+            } else {
+                FAILS
+            },
+        ];
+        for (panel, colour) in colours.into_iter().enumerate() {
+            canvas.fill(px(panel, centre - half), px(panel, centre + half), colour);
+        }
+    }
+    for panel in 0..3 {
+        canvas.disc(px(panel, court.basket), 0.45 * SCALE, BASKET);
+        let pose = |p: &AgentPose, colour: Rgb, canvas: &mut Canvas| {
+            canvas.disc(px(panel, p.position), 0.3 * SCALE, colour);
+            canvas.arrow(
+                px(panel, p.position),
+                DVec2::from_angle(p.heading),
+                2.0 * SCALE,
+                colour,
+            );
+        };
+        pose(&args.shooter, SHOOTER, &mut canvas);
+        for d in &args.defender {
+            pose(d, DEFENDER, &mut canvas);
+        }
+    }
+    if let Some(c) = decision.chosen {
+        let centre = DVec2::from_array(c.cell);
+        canvas.outline(
+            px(2, centre - half * 3.0),
+            px(2, centre + half * 3.0),
+            3,
+            SHOOTER,
+        );
+    }
+    canvas.save(file)
+}
+
+#[derive(Args, Debug)]
+#[command(
+    after_help = "Possession k starts from the same random positions whatever the offense (seeded by --seed and k): \
+        the ball handler at x 8–12 m, z ±5 m; the teammate 5–10 m out on the other side; the defender 3 m \
+        from the ball handler toward the basket.\n\
+        Example: fieldhouse basketball-eval --mocap ../shared/mocap --offense both --possessions 2000 --seed 1"
+)]
+pub struct EvalArgs {
+    /// simple, costmap, or both (the same possessions for each, compared by Welch's test).
+    #[arg(long, default_value = "both")]
+    offense: String,
+    /// How the defender moves: defense (footwork) or run.
+    #[arg(long, default_value = "defense", value_parser = parse_str::<DefenderMotion>)]
+    defense: DefenderMotion,
+    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+    possessions: u64,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// The defender's reach, m.
+    #[arg(long, value_name = "M", default_value_t = GameParams::default().defender.reach_m, value_parser = positive)]
+    reach: f64,
+    /// Print one JSON document.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    capability: CapabilityArgs,
+}
+
+pub fn eval(args: EvalArgs, out: &mut impl Write) -> anyhow::Result<()> {
+    let brains: Vec<Brain> = match args.offense.as_str() {
+        "both" => vec![Brain::Simple, Brain::Costmap],
+        one => vec![parse_str::<Brain>(one).map_err(|e| anyhow::anyhow!("{e}; or both"))?],
+    };
+    let caps = args.capability.load()?;
+    let started = Instant::now();
+    let reports: Vec<_> = std::thread::scope(|scope| {
+        let runs: Vec<_> = brains
+            .iter()
+            .map(|&offense| {
+                let caps = caps.clone();
+                let mut params = GameParams {
+                    offense,
+                    seed: args.seed,
+                    ..GameParams::default()
+                };
+                params.defender.motion = args.defense;
+                params.defender.reach_m = args.reach;
+                scope.spawn(move || evaluate(caps, params, args.possessions))
+            })
+            .collect();
+        runs.into_iter()
+            .map(|r| r.join().expect("an evaluation panicked"))
+            .collect()
+    });
+    let elapsed_s = started.elapsed().as_secs_f64();
+    let comparison = (reports.len() == 2).then(|| compare(&reports[1], &reports[0]));
+    if args.json {
+        let doc = match (&reports[..], comparison) {
+            ([one], _) => {
+                let mut v = serde_json::to_value(one)?;
+                v["elapsed_s"] = json!(elapsed_s);
+                v["seed"] = json!(args.seed);
+                v["motion_source"] = json!(caps.source.to_string());
+                v
+            }
+            (all, c) => json!({
+                "reports": all,
+                "comparison": c,
+                "seed": args.seed,
+                "elapsed_s": elapsed_s,
+                "motion_source": caps.source.to_string(),
+            }),
+        };
+        writeln!(out, "{doc}")?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "{} possessions, seed {}, defender moving with {} (motion: {})",
+        args.possessions,
+        args.seed,
+        args.defense.name(),
+        caps.source
+    )?;
+    writeln!(
+        out,
+        "{:<8} {:>8} {:>7} {:>6} {:>6} {:>8} {:>8} {:>9} {:>7} {:>8} {:>9}",
+        "offense",
+        "pts/poss",
+        "± se",
+        "shots",
+        "made",
+        "blocked",
+        "stolen",
+        "shotclock",
+        "passes",
+        "shot m",
+        "poss s"
+    )?;
+    for r in &reports {
+        let n = r.possessions as f64;
+        writeln!(
+            out,
+            "{:<8} {:>8.3} {:>7.3} {:>5.0}% {:>5.0}% {:>7.1}% {:>7.1}% {:>8.1}% {:>7.2} {:>8.2} {:>9.2}",
+            r.offense,
+            r.points_per_possession,
+            r.standard_error,
+            100.0 * r.shots as f64 / n,
+            100.0 * r.made as f64 / r.shots.max(1) as f64,
+            100.0 * r.blocked as f64 / n,
+            100.0 * r.stolen as f64 / n,
+            100.0 * r.shot_clock_violations as f64 / n,
+            r.passes as f64 / n,
+            r.mean_shot_distance_m,
+            r.mean_possession_s
+        )?;
+    }
+    if let Some(c) = comparison {
+        writeln!(
+            out,
+            "costmap − simple: {:+.3} points per possession, Welch z = {:.2}, one-sided p = {:.2e}",
+            c.difference, c.z, c.p_one_sided
+        )?;
+    }
+    writeln!(out, "({elapsed_s:.2} s)")?;
+    Ok(())
+}
