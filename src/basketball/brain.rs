@@ -5,7 +5,7 @@
 
 use super::agent::{Action, Movement, Team};
 use super::capability::Mover;
-use super::decision::{Chosen, Situation};
+use super::decision::{Chosen, Keep, Situation};
 use super::event::Event;
 use super::game::Game;
 use super::params::Brain;
@@ -91,18 +91,16 @@ impl Game {
         let key = Some((action, chosen.map(|c| c.cell)));
         if self.last_decision[k] != key {
             self.last_decision[k] = key;
-            let params = self.params.decision;
             events.push(Event::Decision {
                 agent: self.agents[k].id.clone(),
                 action,
                 reason,
                 chosen,
-                candidates: self
-                    .candidates
-                    .iter()
-                    .filter(|c| chosen.is_some() && c.qualifies(&params))
-                    .copied()
-                    .collect(),
+                candidates: if chosen.is_some() {
+                    self.candidates.clone()
+                } else {
+                    Vec::new()
+                },
             });
         }
         if action == Action::Pass {
@@ -225,7 +223,7 @@ impl Game {
             dribble: &caps.dribble,
             defenders: &defenders,
         }
-        .decide_into(&mut candidates);
+        .decide_into(&mut candidates, Keep::Qualifying);
         self.candidates = candidates;
         let why = |c: &Chosen| {
             format!(
@@ -246,7 +244,7 @@ impl Game {
         }
         // Pressed: the defender is within its passing radius, read off the modelled
         // defender's map (as far as it gets in the pressure time) rather than fixed.
-        let radius = caps.run.radius_within(self.params.pass_pressure_s);
+        let radius = self.pass_radius_m;
         let nearest = self.openness(k);
         if nearest <= radius {
             if let Some(to) = self.open_teammate(k, now) {

@@ -1,7 +1,7 @@
 //! What each agent can do, as the paper's physical capability model: per behaviour, the
 //! motion graph and the cost map built from it, embedded at any agent's pose.
 
-use crate::costmap::{cache, AgentPose, BuildParams, CostMap};
+use crate::costmap::{cache, AgentPose, BuildParams, CostMap, LocalFrame};
 use crate::motion::{
     GraphError, GraphParams, MotionGraph, MotionLibrary, MotionSource, RootStep, Walker,
 };
@@ -30,6 +30,14 @@ impl Mover {
     pub fn seconds_to(&self, pose: &AgentPose, world: DVec2) -> Option<f64> {
         self.map
             .cost_for(pose, world)
+            .map(|frames| f64::from(frames) / self.map.fps)
+    }
+
+    /// [`Mover::seconds_to`] in a frame prepared once ([`AgentPose::frame`]).
+    #[inline]
+    pub fn seconds_in(&self, frame: &LocalFrame, world: DVec2) -> Option<f64> {
+        self.map
+            .cost_in(frame, world)
             .map(|frames| f64::from(frames) / self.map.fps)
     }
 

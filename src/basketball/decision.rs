@@ -11,7 +11,7 @@
 use super::capability::Mover;
 use super::court::Court;
 use super::shot::ShotModel;
-use crate::costmap::AgentPose;
+use crate::costmap::{AgentPose, LocalFrame};
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
@@ -86,16 +86,32 @@ pub struct Situation<'a> {
     pub defenders: &'a [(AgentPose, &'a Mover)],
 }
 
+/// Which candidates a decision lists.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Keep {
+    /// Every square the shooter reaches (for `basketball-decide`, to check the rule by).
+    All,
+    /// Only the squares that satisfy the rule (what a match reports, and cheaper).
+    Qualifying,
+}
+
 impl Situation<'_> {
-    /// Applies the rule to every square of the court. `candidates` is reused so a match
-    /// deciding several times a second does not allocate.
-    pub fn decide_into(&self, candidates: &mut Vec<Candidate>) -> Option<Chosen> {
+    /// Applies the rule to every square of the court, listing the squares `keep` says
+    /// in `candidates` (reused, so a match deciding several times a second does not
+    /// allocate).
+    pub fn decide_into(&self, candidates: &mut Vec<Candidate>, keep: Keep) -> Option<Chosen> {
         candidates.clear();
         let court = self.court;
         let here = court.square_of(self.shooter.position);
         let (nx, nz) = court.squares_xz();
         let z0 = -0.5 * nz as f64 * court.square_m;
         let mut best: Option<(usize, bool)> = None;
+        let shooter = self.shooter.frame();
+        let defenders: Vec<(LocalFrame, &Mover, f64)> = self
+            .defenders
+            .iter()
+            .map(|(pose, mover)| (pose.frame(), *mover, mover.horizon_s()))
+            .collect();
         for i in 0..nz {
             for j in 0..nx {
                 let square = i * nx + j;
@@ -106,29 +122,30 @@ impl Situation<'_> {
                 let c_d = if here == Some(square) {
                     0.0
                 } else {
-                    match self.dribble.seconds_to(&self.shooter, centre) {
+                    match self.dribble.seconds_in(&shooter, centre) {
                         Some(s) => s,
                         None => continue,
                     }
                 };
                 // The map's own start cell costs nothing too: no need to move.
                 let is_here = c_d == 0.0;
-                let c_o = self
-                    .defenders
+                let c_o = defenders
                     .iter()
-                    .map(|(pose, mover)| {
-                        mover
-                            .seconds_to(pose, centre)
-                            .unwrap_or_else(|| mover.horizon_s())
+                    .map(|(frame, mover, horizon)| {
+                        mover.seconds_in(frame, centre).unwrap_or(*horizon)
                     })
                     .fold(f64::INFINITY, f64::min);
+                let qualifies = c_o > c_d + self.params.shot_time_s + self.params.epsilon_s;
+                if !qualifies && keep == Keep::Qualifying {
+                    continue;
+                }
                 let c = Candidate {
                     cell: centre.to_array(),
                     c_o,
                     c_d,
                     success: self.shot.success(court.distance_to_basket(centre)),
                 };
-                if c.qualifies(self.params) {
+                if qualifies {
                     let better = best.is_none_or(|(b, _)| {
                         let b = &candidates[b];
                         c.success > b.success || (c.success == b.success && c.c_d < b.c_d)
@@ -156,7 +173,7 @@ impl Situation<'_> {
 
     pub fn decide(&self) -> Decision {
         let mut candidates = Vec::new();
-        let chosen = self.decide_into(&mut candidates);
+        let chosen = self.decide_into(&mut candidates, Keep::All);
         Decision { chosen, candidates }
     }
 }

@@ -65,6 +65,9 @@ pub struct Game {
     /// Defenders that have tried to block the shot being taken.
     blocks_tried: u64,
     rng: ChaCha8Rng,
+    /// The `costmap` offense's passing radius: as far as the modelled defender (its own
+    /// `run` map) gets in the pressure time, m. Read off the map once.
+    pub(super) pass_radius_m: f64,
     /// Reused by every decision, so deciding does not allocate.
     pub(super) candidates: Vec<Candidate>,
     /// Each agent's last decision (action, square), to report only changes.
@@ -75,7 +78,9 @@ impl Game {
     pub fn new(caps: Arc<Capabilities>, params: GameParams) -> Game {
         let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
         rng.set_stream(1);
+        let pass_radius_m = caps.run.radius_within(params.pass_pressure_s);
         let mut game = Game {
+            pass_radius_m,
             caps,
             params,
             agents: Vec::new(),

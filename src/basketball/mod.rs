@@ -25,7 +25,7 @@ pub mod shot;
 pub use agent::{Action, Agent, Team};
 pub use capability::{Capabilities, DefenderMotion, Mover, Stride};
 pub use court::Court;
-pub use decision::{Candidate, Chosen, Decision, DecisionParams, Situation};
+pub use decision::{Candidate, Chosen, Decision, DecisionParams, Keep, Situation};
 pub use eval::{compare, evaluate, Comparison, EvalReport};
 pub use event::{Event, Outcome, Snapshot};
 pub use game::Game;

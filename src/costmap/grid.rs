@@ -113,6 +113,29 @@ impl AgentPose {
     pub fn to_world(&self, local: DVec2) -> DVec2 {
         self.position + local.rotate(DVec2::from_angle(self.heading))
     }
+
+    /// [`AgentPose::to_local`] with the rotation worked out once, for the many look-ups
+    /// of one decision.
+    pub fn frame(&self) -> LocalFrame {
+        LocalFrame {
+            position: self.position,
+            unrotate: DVec2::from_angle(-self.heading),
+        }
+    }
+}
+
+/// An agent's frame, ready to take many world points into it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LocalFrame {
+    position: DVec2,
+    unrotate: DVec2,
+}
+
+impl LocalFrame {
+    #[inline]
+    pub fn to_local(&self, world: DVec2) -> DVec2 {
+        (world - self.position).rotate(self.unrotate)
+    }
 }
 
 #[cfg(test)]
@@ -146,6 +169,7 @@ mod tests {
         };
         let w = DVec2::new(-4.0, 7.5);
         assert!((pose.to_world(pose.to_local(w)) - w).length() < 1e-12);
+        assert!((pose.frame().to_local(w) - pose.to_local(w)).length() < 1e-12);
         // One metre straight ahead of the agent is (1, 0) in its frame.
         let ahead = pose.position + DVec2::from_angle(1.0);
         assert!((pose.to_local(ahead) - DVec2::X).length() < 1e-12);

@@ -13,7 +13,7 @@ mod prepared;
 mod search;
 
 pub use crate::motion::Walker;
-pub use grid::{AgentPose, Grid, Obstacle};
+pub use grid::{AgentPose, Grid, LocalFrame, Obstacle};
 pub use search::SearchParams;
 
 use crate::motion::{Constraints, MotionGraph};
@@ -220,6 +220,12 @@ impl CostMap {
     /// same map, rotated and translated onto the agent.
     pub fn cost_for(&self, pose: &AgentPose, world: DVec2) -> Option<u32> {
         self.cost(pose.to_local(world))
+    }
+
+    /// [`CostMap::cost_for`] in a frame prepared once with [`AgentPose::frame`].
+    #[inline]
+    pub fn cost_in(&self, frame: &LocalFrame, world: DVec2) -> Option<u32> {
+        self.cost(frame.to_local(world))
     }
 
     /// Costs as rows (row i along z), as `--json` prints them.

@@ -1,0 +1,85 @@
+//! Basketball benchmarks on the CMU motion capture beside the project (../shared/mocap,
+//! or FIELDHOUSE_MOCAP_DIR): one opponent-modelling decision, and a 10-minute 2-v-1
+//! match at 60 Hz once the maps are built.
+//!
+//! Run with `cargo bench --bench basketball`; results are written up in BENCHMARKS.md.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use fieldhouse::basketball::{
+    Brain, Capabilities, Court, DecisionParams, Game, GameParams, Keep, Mover, ShotModel, Situation,
+};
+use fieldhouse::costmap::AgentPose;
+use fieldhouse::motion::{MotionLibrary, FPS};
+use glam::DVec2;
+use std::hint::black_box;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+fn capabilities() -> Arc<Capabilities> {
+    let dir = std::env::var_os("FIELDHOUSE_MOCAP_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/mocap"));
+    let library = MotionLibrary::load(&dir, FPS).expect("the CMU motion capture loads");
+    let cache = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/bench-cache");
+    Arc::new(Capabilities::build(&library, Some(&cache)).expect("the behaviours build"))
+}
+
+/// Target: a decision over a 20 m × 20 m map of 0.5 m cells in under 50 µs.
+fn decision(c: &mut Criterion) {
+    let caps = capabilities();
+    let court = Court::default();
+    let shot = ShotModel::default();
+    let params = DecisionParams::default();
+    let defender = AgentPose {
+        position: DVec2::new(4.0, 0.0),
+        heading: 0.0,
+    };
+    let defenders: [(AgentPose, &Mover); 1] = [(defender, &caps.run)];
+    let situation = Situation {
+        court: &court,
+        shot: &shot,
+        params: &params,
+        shooter: AgentPose {
+            position: DVec2::new(9.0, 2.0),
+            heading: std::f64::consts::PI,
+        },
+        dribble: &caps.dribble,
+        defenders: &defenders,
+    };
+    let mut candidates = Vec::new();
+    for (name, keep) in [("all", Keep::All), ("qualifying", Keep::Qualifying)] {
+        c.bench_function(&format!("basketball/decision/{name}"), |b| {
+            b.iter(|| black_box(situation.decide_into(&mut candidates, keep)))
+        });
+    }
+}
+
+/// Target: a 10-minute 2-v-1 match at 60 Hz (36,000 ticks) in under 0.1 s.
+fn match_10_minutes(c: &mut Criterion) {
+    let caps = capabilities();
+    let mut group = c.benchmark_group("basketball/match_10_min_60hz");
+    group.sample_size(10);
+    for offense in [Brain::Simple, Brain::Costmap] {
+        group.bench_function(offense.name(), |b| {
+            b.iter(|| {
+                let mut game = Game::new(
+                    caps.clone(),
+                    GameParams {
+                        offense,
+                        ..GameParams::default()
+                    },
+                );
+                let mut events = Vec::new();
+                for _ in 0..36_000 {
+                    events.clear();
+                    game.step(&mut events);
+                }
+                black_box(game.score())
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, decision, match_10_minutes);
+criterion_main!(benches);
