@@ -1,0 +1,134 @@
+//! `fieldhouse basketball-decide` and `basketball-eval` as a user runs them, on the CMU
+//! motion capture. Maps are cached in the test target directory, keyed by their inputs.
+
+mod common;
+
+use common::{failure, fieldhouse, json, mocap};
+use serde_json::Value;
+
+fn source() -> String {
+    format!(
+        "--mocap {} --cache-dir {}",
+        mocap().display(),
+        std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+            .join("basketball-cache")
+            .display()
+    )
+}
+
+fn decide(shooter: &str, defender: &str) -> Value {
+    json(&format!(
+        "basketball-decide --shooter {shooter} --defender {defender} --json {}",
+        source()
+    ))
+}
+
+fn num(v: &Value) -> f64 {
+    v.as_f64().expect("a number")
+}
+
+#[test]
+fn every_chosen_square_satisfies_the_rule_and_none_better_does() {
+    let doc = decide("9,2,180", "4,0,0");
+    let chosen = &doc["chosen"];
+    let (t_s, epsilon) = (num(&chosen["t_s"]), num(&chosen["epsilon"]));
+    assert!(num(&chosen["c_o"]) > num(&chosen["c_d"]) + t_s + epsilon);
+    let candidates = doc["candidates"].as_array().unwrap();
+    assert!(
+        candidates.len() > 100,
+        "the shooter reaches much of the court"
+    );
+    let mut qualifying = 0;
+    for c in candidates {
+        let (c_o, c_d) = (num(&c["c_o"]), num(&c["c_d"]));
+        assert!(c_o >= 0.0 && c_d >= 0.0);
+        if c_o > c_d + t_s + epsilon {
+            qualifying += 1;
+            assert!(
+                num(&c["success"]) <= num(&chosen["success"]),
+                "{c} beats {chosen}"
+            );
+        }
+    }
+    assert_eq!(qualifying, doc["qualifying"].as_u64().unwrap());
+    // The chosen square is one of the candidates, with the same times.
+    assert!(candidates
+        .iter()
+        .any(|c| c["cell"] == chosen["cell"] && c["c_o"] == chosen["c_o"]));
+}
+
+#[test]
+fn a_defender_on_the_chosen_square_sends_the_shooter_elsewhere_or_to_the_plan() {
+    let first = decide("9,2,180", "12,-6,90");
+    let cell = first["chosen"]["cell"].as_array().unwrap().clone();
+    let (x, z) = (num(&cell[0]), num(&cell[1]));
+    let second = decide("9,2,180", &format!("{x},{z},0"));
+    assert_ne!(second["chosen"]["cell"], first["chosen"]["cell"]);
+}
+
+#[test]
+fn bad_decisions_are_refused_with_the_reason() {
+    let err = failure("basketball-decide --shooter 9,2 --defender 4,0,0");
+    assert!(err.contains("X,Z,HEADING_DEG"), "{err}");
+    let err = failure(&format!(
+        "basketball-decide --shooter 20,0,0 --defender 4,0,0 {}",
+        source()
+    ));
+    assert!(err.contains("off the court"), "{err}");
+    let err = failure("basketball-decide --shooter 9,2,180 --defender 4,0,0 --epsilon -1");
+    assert!(err.contains("must not be negative"), "{err}");
+    let err = failure("basketball-decide --shooter 9,2,180");
+    assert!(err.contains("--defender"), "{err}");
+    let err = failure("basketball-eval --offense lot --possessions 5");
+    assert!(err.contains("simple") && err.contains("costmap"), "{err}");
+}
+
+fn eval(extra: &str) -> Value {
+    let mut doc = json(&format!("basketball-eval --json {extra} {}", source()));
+    doc.as_object_mut().unwrap().remove("elapsed_s");
+    doc
+}
+
+#[test]
+fn an_evaluation_accounts_for_every_possession_and_repeats_exactly() {
+    let doc = eval("--offense costmap --possessions 40 --seed 3");
+    for key in [
+        "points_per_possession",
+        "possessions",
+        "shots",
+        "blocked",
+        "stolen",
+        "passes",
+    ] {
+        assert!(doc.get(key).is_some(), "missing {key}: {doc}");
+    }
+    let count = |k: &str| doc[k].as_u64().unwrap();
+    assert_eq!(count("possessions"), 40);
+    // Each possession ends in exactly one way: a shot (made, missed or blocked), a
+    // steal or interception, or the shot clock.
+    assert_eq!(
+        count("shots") + count("stolen") + count("shot_clock_violations"),
+        40
+    );
+    assert!(count("made") + count("blocked") <= count("shots"));
+    assert!((num(&doc["points_per_possession"]) - count("points") as f64 / 40.0).abs() < 1e-12);
+    assert_eq!(eval("--offense costmap --possessions 40 --seed 3"), doc);
+    assert_ne!(eval("--offense costmap --possessions 40 --seed 4"), doc);
+}
+
+#[test]
+fn both_offenses_are_compared_on_the_same_possessions() {
+    let doc = eval("--possessions 30 --seed 2");
+    let reports = doc["reports"].as_array().unwrap();
+    assert_eq!(reports[0]["offense"], "simple");
+    assert_eq!(reports[1]["offense"], "costmap");
+    let diff =
+        num(&reports[1]["points_per_possession"]) - num(&reports[0]["points_per_possession"]);
+    assert!((num(&doc["comparison"]["difference"]) - diff).abs() < 1e-12);
+    let out = fieldhouse(&format!(
+        "basketball-eval --possessions 30 --seed 2 {}",
+        source()
+    ));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("Welch"), "{text}");
+}
