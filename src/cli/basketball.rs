@@ -170,6 +170,7 @@ const SHOOTER: Rgb = [40, 200, 60];
 const DEFENDER: Rgb = [230, 40, 40];
 const BASKET: Rgb = [255, 140, 0];
 const FAILS: Rgb = [120, 120, 120];
+const LINE: Rgb = [40, 90, 200];
 const GAP: usize = 12;
 
 /// Three court panels from above (x right, z down): the shooter's dribbling time C_d,
@@ -226,6 +227,14 @@ fn picture(
         }
     }
     for panel in 0..3 {
+        // The three-point arc, where it lies on the court.
+        for k in 0..=720 {
+            let a = (f64::from(k) / 720.0 - 0.5) * std::f64::consts::PI;
+            let p = court.basket + DVec2::from_angle(a) * court.three_point_m;
+            if court.contains(p) {
+                canvas.disc(px(panel, p), 1.0, LINE);
+            }
+        }
         canvas.disc(px(panel, court.basket), 0.45 * SCALE, BASKET);
         let pose = |p: &AgentPose, colour: Rgb, canvas: &mut Canvas| {
             canvas.disc(px(panel, p.position), 0.3 * SCALE, colour);
