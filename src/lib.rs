@@ -23,6 +23,12 @@
 //! * [`basketball`]: the paper's basketball domain: a half court, agents that move with
 //!   motion capture along cost-map paths, opponent modelling (`C_o > C_d + T_s + ε`),
 //!   the `simple` and `costmap` offenses, and the possession experiment.
+//! * [`sim`]: a whole match of any sport as one deterministic [`sim::World`]: scenarios
+//!   checked field by field, fly balls with fielders, basketball, bots' commands.
+//! * [`protocol`]: the WebSocket messages (version 1), as the server sends and reads them.
+//! * [`server`]: the I/O shell (tokio, axum, tower): match tasks that tick worlds,
+//!   WebSockets for spectators and bots, the REST API, metrics. The only module that
+//!   reads a clock or opens a socket.
 //! * [`names`]: the names users type for presets, and the error a wrong one gets.
 //!
 //! The `fieldhouse` binary (`src/main.rs`, `src/cli/`) is a thin shell: it parses the
@@ -35,3 +41,6 @@ pub mod motion;
 pub mod names;
 pub mod perception;
 pub mod physics;
+pub mod protocol;
+pub mod server;
+pub mod sim;

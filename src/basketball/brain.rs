@@ -7,7 +7,7 @@ use super::agent::{Action, Movement, Team};
 use super::capability::Mover;
 use super::decision::{Chosen, Keep, Situation};
 use super::event::Event;
-use super::game::Game;
+use super::game::{Game, Order};
 use super::params::Brain;
 use crate::costmap::AgentPose;
 use glam::DVec2;
@@ -49,6 +49,10 @@ impl Game {
                 continue;
             }
             self.agents[k].next_plan_s = now + self.params.replan_s;
+            if self.controlled[k] {
+                self.obey(k, events);
+                continue;
+            }
             match (self.agents[k].team, self.holder() == Some(k)) {
                 (Team::Defense, _) => self.defend(k),
                 (Team::Offense, true) => {
@@ -61,6 +65,46 @@ impl Game {
                 (Team::Offense, false) => self.get_open(k),
             }
         }
+    }
+
+    /// A bot-controlled agent carries out its latest order (and keeps moving toward a
+    /// target it was given).
+    fn obey(&mut self, k: usize, events: &mut Vec<Event>) {
+        let Some(order) = self.orders[k].take() else {
+            return;
+        };
+        let reason = "bot order".to_string();
+        let holds = self.holder() == Some(k);
+        let play = match order {
+            Order::Shoot if holds => Play::Shoot {
+                reason,
+                chosen: None,
+            },
+            Order::Pass { to } if holds => Play::Pass { to, reason },
+            Order::MoveTo(goal) if holds => Play::Move {
+                action: Action::Maneuver,
+                goal,
+                reason,
+                chosen: None,
+            },
+            Order::MoveTo(goal) => {
+                let caps = self.caps.clone();
+                let mover = match self.agents[k].team {
+                    Team::Defense => caps.defender(self.params.defender.motion),
+                    Team::Offense => &caps.run,
+                };
+                self.head_for(k, mover, goal);
+                return;
+            }
+            Order::Stand => {
+                self.agents[k].stop();
+                return;
+            }
+            // The ball moved on since the order was accepted.
+            Order::Shoot | Order::Pass { .. } => return,
+        };
+        self.candidates.clear();
+        self.carry_out(k, play, events);
     }
 
     fn carry_out(&mut self, k: usize, play: Play, events: &mut Vec<Event>) {

@@ -72,10 +72,43 @@ pub struct Game {
     pub(super) candidates: Vec<Candidate>,
     /// Each agent's last decision (action, square), to report only changes.
     pub(super) last_decision: Vec<Option<(super::agent::Action, Option<[f64; 2]>)>>,
+    /// Agent names: offense first, then defense.
+    names: Vec<String>,
+    /// Agents a bot controls: they follow `orders` instead of a brain.
+    pub(super) controlled: Vec<bool>,
+    pub(super) orders: Vec<Option<Order>>,
+}
+
+/// What a bot may tell its agent to do; applied on the agent's next decision tick.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Order {
+    /// Move (dribbling with the ball, running without) toward a point on the court.
+    MoveTo(DVec2),
+    /// Pass to the teammate with this agent index.
+    Pass {
+        to: usize,
+    },
+    Shoot,
+    Stand,
 }
 
 impl Game {
+    /// A game whose agents are called o1, o2, ... and d1, d2, ...
     pub fn new(caps: Arc<Capabilities>, params: GameParams) -> Game {
+        let names = (0..params.offense_players)
+            .map(|k| format!("o{}", k + 1))
+            .chain((0..params.defenders).map(|k| format!("d{}", k + 1)))
+            .collect();
+        Game::named(caps, params, names)
+    }
+
+    /// A game whose agents have the given names, offense first.
+    ///
+    /// # Panics
+    /// If there is not one name per agent.
+    pub fn named(caps: Arc<Capabilities>, params: GameParams, names: Vec<String>) -> Game {
+        let agents = params.offense_players + params.defenders;
+        assert_eq!(names.len(), agents, "one name per agent");
         let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
         rng.set_stream(1);
         let pass_radius_m = caps.run.radius_within(params.pass_pressure_s);
@@ -95,6 +128,9 @@ impl Game {
             rng,
             candidates: Vec::new(),
             last_decision: Vec::new(),
+            names,
+            controlled: vec![false; agents],
+            orders: vec![None; agents],
         };
         game.start_possession();
         game
@@ -108,6 +144,10 @@ impl Game {
         &self.agents
     }
 
+    pub fn tick(&self) -> u64 {
+        self.tick
+    }
+
     pub fn time_s(&self) -> f64 {
         self.tick as f64 / self.params.tick_hz
     }
@@ -119,6 +159,63 @@ impl Game {
 
     pub fn score(&self) -> u32 {
         self.score
+    }
+
+    /// Hands agent `k` to a bot (`true`) or back to its brain.
+    pub fn set_controlled(&mut self, k: usize, by_bot: bool) {
+        self.controlled[k] = by_bot;
+        self.orders[k] = None;
+    }
+
+    pub fn is_controlled(&self, k: usize) -> bool {
+        self.controlled[k]
+    }
+
+    /// The agent index of the one holding the ball, if any.
+    pub fn ball_holder(&self) -> Option<usize> {
+        self.holder()
+    }
+
+    /// Accepts a bot's order for agent `k`, or says why it is impossible now. The order
+    /// is carried out on the agent's next decision tick.
+    pub fn order(&mut self, k: usize, order: Order) -> Result<(), String> {
+        let agent = &self.agents[k];
+        let holds = self.holder() == Some(k);
+        match order {
+            Order::MoveTo(p) => {
+                if !p.is_finite() {
+                    return Err("the target is not a finite point".into());
+                }
+                let court = self.params.court;
+                // A metre's grace beyond the lines: a body near one may aim past it.
+                if court.clamp(p).distance(p) > 1.0 {
+                    return Err(format!(
+                        "the target ({:.1}, {:.1}) is off the court (x 0 to {} m, z ±{} m)",
+                        p.x,
+                        p.y,
+                        court.length_m,
+                        court.width_m / 2.0
+                    ));
+                }
+            }
+            Order::Pass { to } => {
+                if !holds {
+                    return Err(format!("{} does not have the ball", agent.id));
+                }
+                if to == k || self.agents.get(to).is_none_or(|a| a.team != Team::Offense) {
+                    return Err("a pass goes to a teammate".into());
+                }
+            }
+            Order::Shoot if !holds => {
+                return Err(format!("{} does not have the ball", agent.id));
+            }
+            Order::Shoot | Order::Stand => {}
+        }
+        if agent.shooting_s.is_some() {
+            return Err(format!("{} is taking a shot", agent.id));
+        }
+        self.orders[k] = Some(order);
+        Ok(())
     }
 
     /// The behaviour an agent moves with now: the ball handler dribbles, other
@@ -365,7 +462,7 @@ impl Game {
         let mut agents = Vec::with_capacity(p.offense_players + p.defenders);
         let handler = DVec2::new(rng.gen_range(8.0..12.0), rng.gen_range(-5.0..5.0));
         agents.push(Agent::new(
-            "o1".into(),
+            self.names[0].clone(),
             Team::Offense,
             handler,
             facing(handler, basket),
@@ -375,7 +472,7 @@ impl Game {
             let side = if k % 2 == 1 { other_side } else { -other_side };
             let at = DVec2::new(rng.gen_range(5.0..10.0), side * rng.gen_range(2.0..6.5));
             agents.push(Agent::new(
-                format!("o{}", k + 1),
+                self.names[k].clone(),
                 Team::Offense,
                 at,
                 facing(at, basket),
@@ -385,7 +482,7 @@ impl Game {
             let mark = agents[k % p.offense_players].pose.position;
             let at = mark + (basket - mark).normalize_or_zero() * DEFENDER_START_M;
             agents.push(Agent::new(
-                format!("d{}", k + 1),
+                self.names[p.offense_players + k].clone(),
                 Team::Defense,
                 at,
                 facing(at, mark),
@@ -395,6 +492,7 @@ impl Game {
             a.next_plan_s = now;
         }
         self.last_decision = vec![None; agents.len()];
+        self.orders = vec![None; agents.len()];
         self.agents = agents;
         self.ball = Ball::Held { by: 0 };
         self.possession_start_s = now;

@@ -28,7 +28,7 @@ pub use court::Court;
 pub use decision::{Candidate, Chosen, Decision, DecisionParams, Keep, Situation};
 pub use eval::{compare, evaluate, Comparison, EvalReport};
 pub use event::{Event, Outcome, Snapshot};
-pub use game::Game;
+pub use game::{Game, Order};
 pub use params::{Brain, DefenderParams, GameParams, SimpleParams};
 pub use shot::ShotModel;
 #[cfg(test)]

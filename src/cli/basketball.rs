@@ -30,7 +30,7 @@ pub struct CapabilityArgs {
 }
 
 impl CapabilityArgs {
-    fn load(&self) -> anyhow::Result<Arc<Capabilities>> {
+    pub fn load(&self) -> anyhow::Result<Arc<Capabilities>> {
         let library = self.source.load()?;
         let started = Instant::now();
         let caps = Capabilities::build(&library, self.cache.dir().as_deref())

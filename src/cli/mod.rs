@@ -3,12 +3,14 @@
 
 mod args;
 mod basketball;
+mod bot;
 mod canvas;
 mod catch;
 mod costmap;
 mod heatmap;
 mod motion;
 mod plots;
+mod serve;
 mod sweep;
 
 use clap::{Parser, Subcommand};
@@ -21,9 +23,10 @@ use std::process::ExitCode;
     version,
     about = "A multi-agent team sports simulation server",
     long_about = "fieldhouse simulates team sports with agents that act on what they perceive. \
-        Today it runs fly-ball catching experiments: outfielders chasing baseballs or cricket \
-        balls with Chapman's optical acceleration cancellation, the Linear Optical Trajectory, \
-        or trajectory prediction.\n\nSet FIELDHOUSE_LOG (e.g. FIELDHOUSE_LOG=debug) for more log output on stderr."
+        It serves live matches (baseball and cricket fielders chasing fly balls with Chapman's \
+        optical acceleration cancellation or the Linear Optical Trajectory; basketball agents \
+        that move with human motion capture and model their opponent with cost maps) to a \
+        browser and to bots, and runs the experiments behind them.\n\nSet FIELDHOUSE_LOG (e.g. FIELDHOUSE_LOG=debug) for more log output on stderr."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -44,6 +47,10 @@ enum Command {
     BasketballDecide(basketball::DecideArgs),
     /// The paper's experiment: points per possession of the simple and cost-map offenses.
     BasketballEval(basketball::EvalArgs),
+    /// Run the match server: demo matches, WebSockets for spectators and bots, REST API.
+    Serve(serve::ServeArgs),
+    /// The reference bot: connect to a match and play one agent.
+    Bot(bot::BotArgs),
 }
 
 pub fn main() -> ExitCode {
@@ -63,6 +70,8 @@ pub fn main() -> ExitCode {
         Command::Costmap(args) => costmap::run(args, &mut out),
         Command::BasketballDecide(args) => basketball::decide(args, &mut out),
         Command::BasketballEval(args) => basketball::eval(args, &mut out),
+        Command::Serve(args) => serve::run(args),
+        Command::Bot(args) => bot::run(args, &mut out),
     }
     .and_then(|()| Ok(out.flush()?));
     match result {

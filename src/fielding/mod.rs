@@ -17,4 +17,4 @@ pub use fielder::{Fielder, FielderConfig, Step};
 pub use path_shape::{OpticalFit, PathShape};
 pub use strategy::{Brain, Forecast, StrategyKind};
 pub use sweep::{LaunchDistribution, StrategySummary, Sweep, SweepCase, SweepReport};
-pub use trial::{Outcome, TraceEntry, Trial, TrialConfig, TrialResult};
+pub use trial::{forecast, Outcome, TraceEntry, Trial, TrialConfig, TrialResult};

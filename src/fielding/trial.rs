@@ -61,20 +61,22 @@ pub struct Trial<'a> {
     pub config: &'a TrialConfig,
 }
 
+/// The point and time `flight` descends through the middle of `zone`'s catch band (or
+/// lands, if it never does): what the `predictive` fielder is told.
+pub fn forecast(flight: &Flight, zone: &CatchZone) -> Forecast {
+    let mid = 0.5 * (zone.min_height_m + zone.max_height_m);
+    let s = flight.descending_through(mid).unwrap_or(flight.landing);
+    Forecast {
+        point: DVec2::new(s.pos.x, s.pos.z),
+        t: s.t,
+    }
+}
+
 impl Trial<'_> {
     /// The point and time the ball descends through the middle of the catch band: what
     /// the `predictive` fielder is told.
     pub fn forecast(&self) -> Forecast {
-        let zone = &self.config.zone;
-        let mid = 0.5 * (zone.min_height_m + zone.max_height_m);
-        let s = self
-            .flight
-            .descending_through(mid)
-            .unwrap_or(self.flight.landing);
-        Forecast {
-            point: DVec2::new(s.pos.x, s.pos.z),
-            t: s.t,
-        }
+        forecast(self.flight, &self.config.zone)
     }
 
     pub fn run(&self, strategy: StrategyKind, start: DVec2) -> TrialResult {

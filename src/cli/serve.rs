@@ -1,0 +1,90 @@
+//! `fieldhouse serve`: the match server.
+
+use super::basketball::CapabilityArgs;
+use anyhow::Context;
+use clap::Args;
+use fieldhouse::server::{self, auth, ServerConfig};
+use std::net::SocketAddr;
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+#[command(
+    after_help = "Open http://127.0.0.1:7878/ to watch. Creating and deleting matches needs the admin token: \
+    set FIELDHOUSE_ADMIN_TOKEN, or use the one printed at start.\n\
+    Example: fieldhouse serve --mocap ../shared/mocap"
+)]
+pub struct ServeArgs {
+    /// Address to listen on (default 127.0.0.1:7878; loopback unless told otherwise).
+    #[arg(long, env = "FIELDHOUSE_ADDR")]
+    addr: Option<SocketAddr>,
+    /// Do not start the built-in demo matches.
+    #[arg(long)]
+    no_demo: bool,
+    /// A TOML file of server settings (addr, max_matches, max_message_bytes,
+    /// bot_messages_per_second, bot_burst, send_timeout_ms, ...); flags override it.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    #[command(flatten)]
+    capability: CapabilityArgs,
+}
+
+pub fn run(args: ServeArgs) -> anyhow::Result<()> {
+    let mut config = match &args.config {
+        Some(path) => ServerConfig::load(path).map_err(anyhow::Error::msg)?,
+        None => ServerConfig::default(),
+    };
+    if let Some(addr) = args.addr {
+        config.addr = addr;
+    }
+    if args.no_demo {
+        config.demo = false;
+    }
+    let caps = args.capability.load()?;
+    tracing::info!(motion = %caps.source, "motion source");
+    let admin_token = match std::env::var("FIELDHOUSE_ADMIN_TOKEN") {
+        Ok(t) if t.len() >= 16 => t,
+        Ok(_) => anyhow::bail!("FIELDHOUSE_ADMIN_TOKEN must be at least 16 characters"),
+        Err(_) => {
+            let t = auth::new_token();
+            // Printed once, on the terminal only: never into the logs.
+            eprintln!("admin token (set FIELDHOUSE_ADMIN_TOKEN to choose one): {t}");
+            t
+        }
+    };
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .context("starting the async runtime")?;
+    runtime.block_on(async move {
+        let listener = tokio::net::TcpListener::bind(config.addr)
+            .await
+            .with_context(|| format!("cannot listen on {}", config.addr))?;
+        let addr = listener.local_addr()?;
+        tracing::info!(%addr, "listening: open http://{addr}/");
+        server::serve(listener, config, admin_token, caps, shutdown_signal()).await?;
+        tracing::info!("stopped");
+        Ok(())
+    })
+}
+
+/// SIGINT (Ctrl-C) or SIGTERM.
+async fn shutdown_signal() {
+    let interrupt = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let terminate = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let terminate = std::future::pending::<()>();
+    tokio::select! {
+        _ = interrupt => {}
+        _ = terminate => {}
+    }
+}

@@ -1,0 +1,146 @@
+//! The WebSocket protocol, version 1: every message is a JSON object with a `"type"`.
+//! Each type has a JSON Schema in `proto/<type>.schema.json`, and `PROTOCOL.md` explains
+//! them for bot authors. Fields are only ever added; a breaking change bumps [`VERSION`].
+//!
+//! Server to client: `hello` (first, always), `frame` (spectators), `perception`
+//! (bots), `end`, `error`. Client to server: `command` (bots).
+
+use crate::sim::Action;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+pub const PROTOCOL: &str = "fieldhouse";
+pub const VERSION: u32 = 1;
+
+/// Everything static about a match, as `hello` and `GET /api/matches/{id}` show it.
+#[derive(Debug, Clone, Serialize)]
+pub struct MatchInfo {
+    pub id: String,
+    pub name: Option<String>,
+    pub sport: &'static str,
+    pub mode: &'static str,
+    pub seed: u64,
+    pub tick_hz: f64,
+    pub frame_hz: f64,
+    /// Bots get a `perception` every this many ticks, and answer with a `command`.
+    pub perception_every_ticks: u64,
+    pub field: Value,
+    pub agents: Vec<Value>,
+    /// Where the motion data came from (`synthetic` or the mocap directory and its
+    /// fingerprint).
+    pub motion_source: String,
+}
+
+/// Limits a client must respect, announced in `hello`.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Limits {
+    /// Largest message the server reads; a larger one closes the socket with 1009.
+    pub max_message_bytes: usize,
+    /// Sustained messages per second a bot may send; flooding closes with 1008.
+    pub messages_per_second: u32,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Hello<'a> {
+    #[serde(rename = "type")]
+    pub kind: &'static str,
+    pub protocol: &'static str,
+    pub version: u32,
+    /// `spectator` or `bot`.
+    pub role: &'static str,
+    #[serde(rename = "match")]
+    pub match_info: &'a MatchInfo,
+    /// The agent a bot controls.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub agent: Option<&'a str>,
+    pub limits: Limits,
+}
+
+impl<'a> Hello<'a> {
+    pub fn new(
+        role: &'static str,
+        match_info: &'a MatchInfo,
+        agent: Option<&'a str>,
+        limits: Limits,
+    ) -> Self {
+        Hello {
+            kind: "hello",
+            protocol: PROTOCOL,
+            version: VERSION,
+            role,
+            match_info,
+            agent,
+            limits,
+        }
+    }
+}
+
+/// The world at one tick, with the events since the previous frame.
+#[derive(Debug, Clone, Serialize)]
+pub struct Frame<'a> {
+    #[serde(rename = "type")]
+    pub kind: &'static str,
+    #[serde(rename = "match")]
+    pub match_id: &'a str,
+    pub tick: u64,
+    pub time_s: f64,
+    pub ball: &'a Value,
+    pub agents: &'a [Value],
+    pub score: &'a Value,
+    pub events: &'a [Value],
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct End<'a> {
+    #[serde(rename = "type")]
+    pub kind: &'static str,
+    #[serde(rename = "match")]
+    pub match_id: &'a str,
+    pub tick: u64,
+    /// `finished`, `deleted` or `shutdown`.
+    pub reason: &'a str,
+    pub result: &'a Value,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Perception<'a> {
+    #[serde(rename = "type")]
+    pub kind: &'static str,
+    pub tick: u64,
+    pub time_s: f64,
+    pub agent: &'a str,
+    /// What the agent perceives; its shape depends on the sport (PROTOCOL.md).
+    pub perception: &'a Value,
+}
+
+/// An error about a client's message; the connection stays open.
+#[derive(Debug, Clone, Serialize)]
+pub struct ErrorMessage<'a> {
+    #[serde(rename = "type")]
+    pub kind: &'static str,
+    pub code: &'a str,
+    pub message: &'a str,
+}
+
+impl<'a> ErrorMessage<'a> {
+    pub fn new(code: &'a str, message: &'a str) -> Self {
+        ErrorMessage {
+            kind: "error",
+            code,
+            message,
+        }
+    }
+}
+
+/// What a bot sends.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ClientMessage {
+    /// The action for its agent, answering the perception of `tick`.
+    Command { tick: u64, action: Action },
+}
+
+/// Serialises a message (they always serialise: their fields are plain data).
+pub fn encode(message: &impl Serialize) -> String {
+    serde_json::to_string(message).expect("protocol messages serialise")
+}

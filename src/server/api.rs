@@ -1,0 +1,224 @@
+//! The REST API under `/api/`: list, show, create and delete matches. Errors are JSON,
+//! `{"error": {"code": .., "message": ..}}`, with the status that fits.
+
+use super::auth;
+use super::match_task;
+use super::state::{AppState, Control, MatchEntry};
+use crate::sim::Scenario;
+use axum::body::Bytes;
+use axum::extract::{Path, State};
+use axum::http::{HeaderMap, StatusCode};
+use axum::response::{IntoResponse, Response};
+use axum::Json;
+use serde_json::{json, Value};
+use std::sync::atomic::Ordering::Relaxed;
+use std::sync::Arc;
+
+#[derive(Debug)]
+pub struct ApiError {
+    status: StatusCode,
+    code: &'static str,
+    message: String,
+}
+
+impl ApiError {
+    pub fn new(status: StatusCode, code: &'static str, message: impl Into<String>) -> Self {
+        ApiError {
+            status,
+            code,
+            message: message.into(),
+        }
+    }
+    pub fn not_found(id: &str) -> Self {
+        Self::new(
+            StatusCode::NOT_FOUND,
+            "not_found",
+            format!("no match \"{id}\""),
+        )
+    }
+    pub fn gone(id: &str) -> Self {
+        Self::new(
+            StatusCode::GONE,
+            "ended",
+            format!("match \"{id}\" has ended"),
+        )
+    }
+    pub fn unauthorized(message: &str) -> Self {
+        Self::new(StatusCode::UNAUTHORIZED, "unauthorized", message)
+    }
+    pub fn forbidden(message: &str) -> Self {
+        Self::new(StatusCode::FORBIDDEN, "forbidden", message)
+    }
+}
+
+impl IntoResponse for ApiError {
+    fn into_response(self) -> Response {
+        let body = json!({"error": {"code": self.code, "message": self.message}});
+        (self.status, Json(body)).into_response()
+    }
+}
+
+/// Checks the admin bearer token: missing is 401, wrong is 403.
+fn admin(app: &AppState, headers: &HeaderMap) -> Result<(), ApiError> {
+    let given = headers
+        .get("authorization")
+        .and_then(|v| v.to_str().ok())
+        .and_then(auth::bearer)
+        .ok_or_else(|| ApiError::unauthorized("this needs Authorization: Bearer <admin token>"))?;
+    if auth::same(given, &app.admin_token) {
+        Ok(())
+    } else {
+        Err(ApiError::forbidden("wrong admin token"))
+    }
+}
+
+/// A match as the API lists it.
+pub fn summary(entry: &MatchEntry) -> Value {
+    let controlled = entry.controlled.lock().expect("not poisoned").clone();
+    let agents: Vec<Value> = entry
+        .info
+        .agents
+        .iter()
+        .zip(controlled)
+        .map(|(a, bot)| {
+            json!({
+                "id": a["id"],
+                "team": a["team"],
+                "strategy": a["strategy"],
+                "controller": if bot { "bot" } else { "builtin" },
+                "bot_slot": entry.tokens.iter().any(|(_, id, _)| Some(id.as_str()) == a["id"].as_str()),
+            })
+        })
+        .collect();
+    json!({
+        "id": entry.info.id,
+        "name": entry.info.name,
+        "sport": entry.info.sport,
+        "mode": entry.info.mode,
+        "status": if entry.ended.load(Relaxed) { "ended" } else { "running" },
+        "tick": entry.tick.load(Relaxed),
+        "tick_hz": entry.info.tick_hz,
+        "agents": agents,
+        "spectators": entry.spectators.load(Relaxed),
+        "motion_source": entry.info.motion_source,
+    })
+}
+
+pub async fn list(State(app): State<Arc<AppState>>) -> Json<Value> {
+    let matches = app.matches.read().expect("not poisoned");
+    Json(json!({"matches": matches.values().map(|m| summary(m)).collect::<Vec<_>>()}))
+}
+
+pub async fn show(
+    Path(id): Path<String>,
+    State(app): State<Arc<AppState>>,
+) -> Result<Json<Value>, ApiError> {
+    let entry = app.get(&id).ok_or_else(|| ApiError::not_found(&id))?;
+    let mut doc = summary(&entry);
+    doc["match"] = serde_json::to_value(&entry.info).expect("match info serialises");
+    doc["scenario"] = serde_json::to_value(&entry.scenario).expect("scenarios serialise");
+    Ok(Json(doc))
+}
+
+pub async fn create(
+    State(app): State<Arc<AppState>>,
+    headers: HeaderMap,
+    body: Bytes,
+) -> Result<Response, ApiError> {
+    admin(&app, &headers)?;
+    let scenario = Scenario::from_json(&body).map_err(|e| {
+        ApiError::new(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "bad_scenario",
+            e.to_string(),
+        )
+    })?;
+    let (id, entry) = start(&app, scenario, None)?;
+    let tokens: serde_json::Map<String, Value> = entry
+        .tokens
+        .iter()
+        .map(|(_, agent, token)| (agent.clone(), json!(token)))
+        .collect();
+    tracing::info!(%id, sport = entry.info.sport, bots = tokens.len(), "match created");
+    Ok((
+        StatusCode::CREATED,
+        Json(json!({"id": id, "bot_tokens": tokens})),
+    )
+        .into_response())
+}
+
+/// Starts a match; `id` picks its id (the demos), else a random one.
+pub fn start(
+    app: &Arc<AppState>,
+    scenario: Scenario,
+    id: Option<String>,
+) -> Result<(String, Arc<MatchEntry>), ApiError> {
+    let running = app
+        .matches
+        .read()
+        .expect("not poisoned")
+        .values()
+        .filter(|m| !m.ended.load(Relaxed))
+        .count();
+    if running >= app.config.max_matches {
+        return Err(ApiError::new(
+            StatusCode::SERVICE_UNAVAILABLE,
+            "too_many_matches",
+            format!("the server runs at most {} matches", app.config.max_matches),
+        ));
+    }
+    let id = id.unwrap_or_else(|| auth::new_token()[..12].to_string());
+    let entry = match_task::spawn(app, id.clone(), scenario).map_err(|e| {
+        ApiError::new(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "bad_scenario",
+            e.to_string(),
+        )
+    })?;
+    app.matches
+        .write()
+        .expect("not poisoned")
+        .insert(id.clone(), entry.clone());
+    Ok((id, entry))
+}
+
+pub async fn delete(
+    Path(id): Path<String>,
+    State(app): State<Arc<AppState>>,
+    headers: HeaderMap,
+) -> Result<Json<Value>, ApiError> {
+    admin(&app, &headers)?;
+    let entry = app
+        .matches
+        .write()
+        .expect("not poisoned")
+        .remove(&id)
+        .ok_or_else(|| ApiError::not_found(&id))?;
+    let _ = entry.control.send(Control::Stop).await;
+    tracing::info!(%id, "match deleted");
+    Ok(Json(json!({"id": id, "status": "deleted"})))
+}
+
+pub async fn healthz() -> &'static str {
+    "ok"
+}
+
+pub async fn readyz(State(app): State<Arc<AppState>>) -> Json<Value> {
+    let matches = app.matches.read().expect("not poisoned").len();
+    Json(json!({"ready": true, "matches": matches, "motion_source": app.caps.source.to_string()}))
+}
+
+pub async fn metrics(State(app): State<Arc<AppState>>) -> impl IntoResponse {
+    (
+        [("content-type", "text/plain; version=0.0.4")],
+        app.metrics.render(),
+    )
+}
+
+pub async fn fallback() -> ApiError {
+    ApiError::new(
+        StatusCode::NOT_FOUND,
+        "not_found",
+        "no such route; see /api/matches",
+    )
+}

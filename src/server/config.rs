@@ -1,0 +1,66 @@
+//! The server's settings: defaults that suit a laptop, overridable by a TOML file
+//! (`serve --config FILE`) and by flags.
+
+use serde::Deserialize;
+use std::net::SocketAddr;
+use std::path::Path;
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ServerConfig {
+    /// Where to listen. Loopback unless told otherwise.
+    pub addr: SocketAddr,
+    /// Start the built-in demo matches.
+    pub demo: bool,
+    /// Most matches at once (demos included).
+    pub max_matches: usize,
+    /// Largest WebSocket message the server reads, bytes; larger closes with 1009.
+    pub max_message_bytes: usize,
+    /// Messages per second a bot may send, sustained.
+    pub bot_messages_per_second: u32,
+    /// Messages a bot may send in a burst above the sustained rate.
+    pub bot_burst: u32,
+    /// A spectator whose socket takes longer than this to accept a frame is dropped, ms.
+    pub send_timeout_ms: u64,
+    /// A REST request taking longer than this is answered 408, ms.
+    pub request_timeout_ms: u64,
+    /// Largest REST request body, bytes.
+    pub max_body_bytes: usize,
+}
+
+impl Default for ServerConfig {
+    fn default() -> Self {
+        ServerConfig {
+            addr: SocketAddr::from(([127, 0, 0, 1], 7878)),
+            demo: true,
+            max_matches: 64,
+            max_message_bytes: 4096,
+            bot_messages_per_second: 200,
+            bot_burst: 400,
+            send_timeout_ms: 5000,
+            request_timeout_ms: 10_000,
+            max_body_bytes: 64 * 1024,
+        }
+    }
+}
+
+impl ServerConfig {
+    /// Reads a TOML file; an error names the file and the field at fault.
+    pub fn load(path: &Path) -> Result<ServerConfig, String> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+        let de = toml::Deserializer::new(&text);
+        let config: ServerConfig = serde_path_to_error::deserialize(de)
+            .map_err(|e| format!("{}: {}: {}", path.display(), e.path(), e.inner().message()))?;
+        if config.max_message_bytes < 256
+            || config.bot_messages_per_second == 0
+            || config.max_matches == 0
+        {
+            return Err(format!(
+                "{}: max_message_bytes must be at least 256, bot_messages_per_second and max_matches at least 1",
+                path.display()
+            ));
+        }
+        Ok(config)
+    }
+}

@@ -1,0 +1,343 @@
+//! A match is a task that owns one [`World`] and ticks it: on the wall clock
+//! (`realtime`), as fast as possible (`fast`), or in lock-step with its bots
+//! (`lockstep`). Each frame is encoded once and published; sockets pick it up.
+
+use super::auth::new_token;
+use super::metrics::Metrics;
+use super::state::{AppState, Control, MatchEntry, Published};
+use crate::protocol::{encode, End, ErrorMessage, Frame, MatchInfo, Perception};
+use crate::sim::{Mode, Scenario, ScenarioError, World};
+use axum::extract::ws::Utf8Bytes;
+use serde_json::Value;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tokio::sync::{mpsc, watch};
+use tokio::time::Instant;
+
+/// A bot connected to an agent.
+struct Bot {
+    conn: u64,
+    out: mpsc::Sender<Utf8Bytes>,
+    /// The latest tick it has answered.
+    answered: Option<u64>,
+}
+
+/// Builds the world a scenario describes and starts its task. Returns the match and the
+/// bot tokens of its bot-controlled agents.
+pub fn spawn(
+    app: &Arc<AppState>,
+    id: String,
+    scenario: Scenario,
+) -> Result<Arc<MatchEntry>, ScenarioError> {
+    let world = World::new(&scenario, Some(app.caps.clone()))?;
+    let agent_ids = world.agent_ids();
+    let info = MatchInfo {
+        id: id.clone(),
+        name: scenario.name.clone(),
+        sport: scenario.sport.name(),
+        mode: scenario.mode.name(),
+        seed: scenario.seed,
+        tick_hz: scenario.tick_hz,
+        frame_hz: scenario.frame_hz,
+        perception_every_ticks: world.perception_every_ticks(),
+        field: world.field(),
+        agents: world.agents_info(),
+        motion_source: app.caps.source.to_string(),
+    };
+    let bot_ids: Vec<String> = if scenario.agents.is_empty() {
+        Vec::new()
+    } else {
+        scenario
+            .agents
+            .iter()
+            .filter(|a| a.bot)
+            .map(|a| a.id.clone())
+            .collect()
+    };
+    let tokens = bot_ids
+        .into_iter()
+        .map(|a| {
+            let k = agent_ids
+                .iter()
+                .position(|x| *x == a)
+                .expect("scenario agents are in the world");
+            (k, a, new_token())
+        })
+        .collect::<Vec<_>>();
+    let mut controlled = vec![false; agent_ids.len()];
+    for (k, _, _) in &tokens {
+        controlled[*k] = true;
+    }
+    let first = first_frame(&id, &world);
+    let (publish, published) = watch::channel(Published {
+        seq: 0,
+        frame: first,
+        end: None,
+    });
+    let (control_tx, control_rx) = mpsc::channel(1024);
+    let entry = Arc::new(MatchEntry {
+        info,
+        mode: scenario.mode,
+        scenario,
+        published,
+        control: control_tx,
+        tokens,
+        spectators: AtomicU64::new(0),
+        tick: AtomicU64::new(0),
+        ended: AtomicBool::new(false),
+        controlled: Mutex::new(controlled),
+    });
+    app.metrics.matches_created.fetch_add(1, Relaxed);
+    app.metrics.matches_running.fetch_add(1, Relaxed);
+    let task = Ticker {
+        world,
+        entry: entry.clone(),
+        publish,
+        control: control_rx,
+        metrics: app.metrics.clone(),
+        shutdown: app.shutdown.clone(),
+        bots: (0..agent_ids.len()).map(|_| None).collect(),
+        events: Vec::new(),
+        agent_ids,
+        seq: 0,
+    };
+    tokio::spawn(task.run());
+    Ok(entry)
+}
+
+fn first_frame(id: &str, world: &World) -> Utf8Bytes {
+    let (ball, agents, score) = world.state();
+    Utf8Bytes::from(encode(&Frame {
+        kind: "frame",
+        match_id: id,
+        tick: world.tick(),
+        time_s: world.time_s(),
+        ball: &ball,
+        agents: &agents,
+        score: &score,
+        events: &[],
+    }))
+}
+
+struct Ticker {
+    world: World,
+    entry: Arc<MatchEntry>,
+    publish: watch::Sender<Published>,
+    control: mpsc::Receiver<Control>,
+    metrics: Arc<Metrics>,
+    shutdown: watch::Receiver<bool>,
+    bots: Vec<Option<Bot>>,
+    /// Events since the last frame.
+    events: Vec<Value>,
+    agent_ids: Vec<String>,
+    seq: u64,
+}
+
+impl Ticker {
+    async fn run(mut self) {
+        let info = &self.entry.info;
+        let period = Duration::from_secs_f64(1.0 / info.tick_hz);
+        let frame_every = ((info.tick_hz / info.frame_hz).round() as u64).max(1);
+        let perceive_every = info.perception_every_ticks;
+        let deadline = Duration::from_millis(self.entry.scenario.lockstep_deadline_ms);
+        let mode = self.entry.mode;
+        let mut next_tick = Instant::now() + period;
+        // Lockstep: when the tick waiting for bots must go anyway.
+        let mut waiting_until: Option<Instant> = None;
+        let reason = loop {
+            if self.world.finished() {
+                break "finished";
+            }
+            let wake = match (mode, waiting_until) {
+                (Mode::Fast, _) => Instant::now(),
+                (Mode::Lockstep, Some(until)) => until,
+                _ => next_tick,
+            };
+            tokio::select! {
+                biased;
+                _ = self.shutdown.changed() => break "shutdown",
+                message = self.control.recv() => {
+                    match message {
+                        None | Some(Control::Stop) => break "deleted",
+                        Some(m) => self.handle(m),
+                    }
+                    let all_answered = waiting_until.is_some() && self.all_answered();
+                    if !all_answered {
+                        continue;
+                    }
+                }
+                _ = tokio::time::sleep_until(wake) => {}
+            }
+            // Time for a tick.
+            let now = Instant::now();
+            if mode == Mode::Realtime || (mode == Mode::Lockstep && waiting_until.is_none()) {
+                if now > next_tick + period {
+                    self.metrics.tick_overruns.fetch_add(1, Relaxed);
+                    // More than a second behind: do not try to catch up that far.
+                    if now > next_tick + Duration::from_secs(1) {
+                        next_tick = now;
+                    }
+                }
+                next_tick += period;
+            } else {
+                next_tick = now + period;
+            }
+            waiting_until = None;
+            self.tick(frame_every);
+            let tick = self.world.tick();
+            if tick.is_multiple_of(perceive_every) && self.bots.iter().any(Option::is_some) {
+                self.perceive();
+                if mode == Mode::Lockstep {
+                    waiting_until = Some(Instant::now() + deadline);
+                }
+            }
+            if mode == Mode::Fast && tick.is_multiple_of(256) {
+                tokio::task::yield_now().await;
+            }
+        };
+        self.end(reason);
+    }
+
+    fn all_answered(&self) -> bool {
+        let tick = self.world.tick();
+        self.bots
+            .iter()
+            .flatten()
+            .all(|b| b.answered.is_some_and(|t| t >= tick))
+    }
+
+    fn tick(&mut self, frame_every: u64) {
+        let started = std::time::Instant::now();
+        self.world.step(&mut self.events);
+        self.metrics.observe_tick(started.elapsed().as_secs_f64());
+        let tick = self.world.tick();
+        self.entry.tick.store(tick, Relaxed);
+        if tick.is_multiple_of(frame_every) || self.world.finished() {
+            self.publish_frame();
+        }
+    }
+
+    fn publish_frame(&mut self) {
+        let (ball, agents, score) = self.world.state();
+        let bytes = Utf8Bytes::from(encode(&Frame {
+            kind: "frame",
+            match_id: &self.entry.info.id,
+            tick: self.world.tick(),
+            time_s: self.world.time_s(),
+            ball: &ball,
+            agents: &agents,
+            score: &score,
+            events: &self.events,
+        }));
+        self.events.clear();
+        self.seq += 1;
+        let seq = self.seq;
+        self.publish.send_modify(|p| {
+            p.seq = seq;
+            p.frame = bytes;
+        });
+    }
+
+    fn perceive(&mut self) {
+        let (tick, time_s) = (self.world.tick(), self.world.time_s());
+        for (k, bot) in self.bots.iter().enumerate() {
+            let Some(bot) = bot else { continue };
+            let perception = self.world.perception(k);
+            let message = encode(&Perception {
+                kind: "perception",
+                tick,
+                time_s,
+                agent: &self.agent_ids[k],
+                perception: &perception,
+            });
+            // A bot that is not reading misses perceptions rather than holding a tick.
+            let _ = bot.out.try_send(Utf8Bytes::from(message));
+        }
+    }
+
+    fn tell(&self, agent: usize, code: &str, message: &str) {
+        if let Some(bot) = &self.bots[agent] {
+            self.metrics.client_errors.fetch_add(1, Relaxed);
+            let _ = bot
+                .out
+                .try_send(Utf8Bytes::from(encode(&ErrorMessage::new(code, message))));
+        }
+    }
+
+    fn set_controlled(&mut self, agent: usize, by_bot: bool) {
+        self.world.set_controlled(agent, by_bot);
+        self.entry.controlled.lock().expect("not poisoned")[agent] = by_bot;
+    }
+
+    fn handle(&mut self, message: Control) {
+        match message {
+            Control::BotJoin { agent, conn, out } => {
+                if self.bots[agent].is_some() {
+                    self.tell(agent, "replaced", "another connection took over this agent");
+                }
+                self.bots[agent] = Some(Bot {
+                    conn,
+                    out,
+                    answered: None,
+                });
+                self.set_controlled(agent, true);
+            }
+            Control::BotLeave { agent, conn } => {
+                if self.bots[agent].as_ref().is_some_and(|b| b.conn == conn) {
+                    self.bots[agent] = None;
+                    // Back to the built-in brain until a bot reconnects.
+                    self.set_controlled(agent, false);
+                }
+            }
+            Control::Command {
+                agent,
+                conn,
+                tick,
+                action,
+            } => {
+                if self.bots[agent].as_ref().is_none_or(|b| b.conn != conn) {
+                    return; // a replaced connection
+                }
+                let now = self.world.tick();
+                let every = self.entry.info.perception_every_ticks;
+                if tick + 4 * every < now {
+                    let text = format!("command for tick {tick} arrived at tick {now}");
+                    return self.tell(agent, "stale_tick", &text);
+                }
+                if tick > now + every {
+                    let text = format!("command for tick {tick}, but the match is at tick {now}");
+                    return self.tell(agent, "future_tick", &text);
+                }
+                match self.world.command(agent, &action) {
+                    Ok(()) => {
+                        if let Some(b) = &mut self.bots[agent] {
+                            b.answered = Some(b.answered.map_or(tick, |a| a.max(tick)));
+                        }
+                    }
+                    Err(reason) => self.tell(agent, "rejected", &reason),
+                }
+            }
+            Control::Stop => unreachable!("the tick loop stops on Stop"),
+        }
+    }
+
+    fn end(mut self, reason: &str) {
+        self.publish_frame();
+        let result = self.world.result();
+        let end = Utf8Bytes::from(encode(&End {
+            kind: "end",
+            match_id: &self.entry.info.id,
+            tick: self.world.tick(),
+            reason,
+            result: &result,
+        }));
+        for bot in self.bots.iter().flatten() {
+            let _ = bot.out.try_send(end.clone());
+        }
+        self.entry.ended.store(true, Relaxed);
+        self.publish.send_modify(|p| p.end = Some(end));
+        self.metrics.matches_running.fetch_sub(1, Relaxed);
+        tracing::info!(id = %self.entry.info.id, reason, tick = self.world.tick(), "match ended");
+    }
+}

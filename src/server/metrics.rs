@@ -1,0 +1,139 @@
+//! Prometheus metrics, kept as atomics and rendered in the text exposition format on
+//! `GET /metrics`. A handful of counters does not need a metrics framework.
+
+use std::fmt::Write;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+/// Upper bounds of the tick-duration histogram, seconds.
+const TICK_BUCKETS_S: [f64; 10] = [
+    0.000_05, 0.000_1, 0.000_25, 0.000_5, 0.001, 0.002_5, 0.005, 0.01, 0.025, 0.05,
+];
+
+#[derive(Default)]
+pub struct Metrics {
+    pub ticks: AtomicU64,
+    pub tick_overruns: AtomicU64,
+    tick_buckets: [AtomicU64; TICK_BUCKETS_S.len()],
+    tick_count: AtomicU64,
+    tick_sum_ns: AtomicU64,
+    pub matches_created: AtomicU64,
+    pub matches_running: AtomicU64,
+    pub spectators: AtomicU64,
+    pub bots: AtomicU64,
+    pub frames_sent: AtomicU64,
+    pub frames_dropped: AtomicU64,
+    pub bytes_out: AtomicU64,
+    pub client_errors: AtomicU64,
+    pub closed_for_size: AtomicU64,
+    pub closed_for_rate: AtomicU64,
+    pub slow_clients_dropped: AtomicU64,
+}
+
+impl Metrics {
+    pub fn observe_tick(&self, seconds: f64) {
+        self.ticks.fetch_add(1, Relaxed);
+        self.tick_count.fetch_add(1, Relaxed);
+        self.tick_sum_ns.fetch_add((seconds * 1e9) as u64, Relaxed);
+        if let Some(k) = TICK_BUCKETS_S.iter().position(|&b| seconds <= b) {
+            self.tick_buckets[k].fetch_add(1, Relaxed);
+        }
+    }
+
+    pub fn render(&self) -> String {
+        let mut out = String::new();
+        let mut counter = |name: &str, help: &str, kind: &str, value: u64| {
+            let _ = writeln!(
+                out,
+                "# HELP {name} {help}\n# TYPE {name} {kind}\n{name} {value}"
+            );
+        };
+        counter(
+            "fieldhouse_ticks_total",
+            "Ticks simulated, all matches.",
+            "counter",
+            self.ticks.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_tick_overruns_total",
+            "Ticks that started more than a tick period late.",
+            "counter",
+            self.tick_overruns.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_matches_created_total",
+            "Matches created, demos included.",
+            "counter",
+            self.matches_created.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_matches",
+            "Matches running.",
+            "gauge",
+            self.matches_running.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_frames_sent_total",
+            "Frames written to spectators.",
+            "counter",
+            self.frames_sent.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_frames_dropped_total",
+            "Frames a slow spectator skipped (it got a newer one).",
+            "counter",
+            self.frames_dropped.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_bytes_out_total",
+            "Bytes of WebSocket messages written.",
+            "counter",
+            self.bytes_out.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_client_errors_total",
+            "Error messages sent to clients about their input.",
+            "counter",
+            self.client_errors.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_closed_oversized_total",
+            "Sockets closed for an oversized message (1009).",
+            "counter",
+            self.closed_for_size.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_closed_flooding_total",
+            "Sockets closed for flooding (1008).",
+            "counter",
+            self.closed_for_rate.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_slow_clients_dropped_total",
+            "Spectators dropped for lagging too long.",
+            "counter",
+            self.slow_clients_dropped.load(Relaxed),
+        );
+        let _ = writeln!(
+            out,
+            "# HELP fieldhouse_connections Open WebSocket connections by role.\n# TYPE fieldhouse_connections gauge\nfieldhouse_connections{{role=\"spectator\"}} {}\nfieldhouse_connections{{role=\"bot\"}} {}",
+            self.spectators.load(Relaxed),
+            self.bots.load(Relaxed)
+        );
+        let _ = writeln!(out, "# HELP fieldhouse_tick_duration_seconds Time to simulate one tick.\n# TYPE fieldhouse_tick_duration_seconds histogram");
+        let mut cumulative = 0;
+        for (bound, bucket) in TICK_BUCKETS_S.iter().zip(&self.tick_buckets) {
+            cumulative += bucket.load(Relaxed);
+            let _ = writeln!(
+                out,
+                "fieldhouse_tick_duration_seconds_bucket{{le=\"{bound}\"}} {cumulative}"
+            );
+        }
+        let count = self.tick_count.load(Relaxed);
+        let _ = writeln!(
+            out,
+            "fieldhouse_tick_duration_seconds_bucket{{le=\"+Inf\"}} {count}\nfieldhouse_tick_duration_seconds_sum {}\nfieldhouse_tick_duration_seconds_count {count}",
+            self.tick_sum_ns.load(Relaxed) as f64 / 1e9
+        );
+        out
+    }
+}

@@ -1,0 +1,98 @@
+//! The server: the I/O shell around the simulation core (tokio, axum, tower). Matches
+//! are tasks that tick their worlds; sockets and REST requests talk to them through
+//! channels and a shared table. Nothing here changes what a world computes.
+//!
+//! * [`config`]: settings, defaults and the TOML file.
+//! * [`state`]: the shared table of matches and what a match publishes.
+//! * [`match_task`]: the tick loop of one match (realtime, fast, lockstep).
+//! * [`ws`]: spectator and bot WebSockets.
+//! * [`api`]: the REST API, health, readiness and metrics.
+//! * [`auth`]: tokens, compared in constant time.
+//! * [`metrics`]: Prometheus counters.
+//! * [`demo`]: the built-in demo matches.
+
+pub mod api;
+pub mod auth;
+pub mod config;
+pub mod demo;
+pub mod match_task;
+pub mod metrics;
+pub mod state;
+pub mod web;
+pub mod ws;
+
+pub use config::ServerConfig;
+
+use crate::basketball::Capabilities;
+use axum::routing::get;
+use axum::Router;
+use state::AppState;
+use std::collections::BTreeMap;
+use std::future::Future;
+use std::sync::atomic::AtomicU64;
+use std::sync::{Arc, RwLock};
+use std::time::Duration;
+use tokio::net::TcpListener;
+use tokio::sync::watch;
+use tower_http::limit::RequestBodyLimitLayer;
+use tower_http::timeout::TimeoutLayer;
+use tower_http::trace::TraceLayer;
+
+/// Runs the server on `listener` until `shutdown` completes; then every match ends,
+/// every socket is closed with 1001, and it returns.
+pub async fn serve(
+    listener: TcpListener,
+    config: ServerConfig,
+    admin_token: String,
+    caps: Arc<Capabilities>,
+    shutdown: impl Future<Output = ()> + Send + 'static,
+) -> std::io::Result<()> {
+    let (stop_tx, stop_rx) = watch::channel(false);
+    let app = Arc::new(AppState {
+        config: config.clone(),
+        admin_token,
+        caps,
+        metrics: Arc::default(),
+        matches: RwLock::new(BTreeMap::new()),
+        shutdown: stop_rx,
+        next_conn: AtomicU64::new(0),
+    });
+    if config.demo {
+        demo::start_all(&app);
+    }
+    let router = router(app.clone());
+    let graceful = async move {
+        shutdown.await;
+        tracing::info!("shutting down: ending matches and closing sockets");
+        let _ = stop_tx.send(true);
+        // Give sockets a moment to send their close frames.
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    };
+    axum::serve(listener, router)
+        .with_graceful_shutdown(graceful)
+        .await
+}
+
+pub fn router(app: Arc<AppState>) -> Router {
+    let config = &app.config;
+    let api = Router::new()
+        .route("/api/matches", get(api::list).post(api::create))
+        .route("/api/matches/{id}", get(api::show).delete(api::delete))
+        .route("/healthz", get(api::healthz))
+        .route("/readyz", get(api::readyz))
+        .route("/metrics", get(api::metrics))
+        .layer(TimeoutLayer::with_status_code(
+            axum::http::StatusCode::REQUEST_TIMEOUT,
+            Duration::from_millis(config.request_timeout_ms),
+        ))
+        .layer(RequestBodyLimitLayer::new(config.max_body_bytes));
+    Router::new()
+        .merge(api)
+        .route("/ws/matches/{id}", get(ws::spectate))
+        .route("/ws/matches/{id}/play", get(ws::play))
+        .route("/", get(web::index))
+        .route("/app.js", get(web::script))
+        .fallback(api::fallback)
+        .layer(TraceLayer::new_for_http())
+        .with_state(app)
+}

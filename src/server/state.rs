@@ -1,0 +1,74 @@
+//! What the server shares between requests: the matches and their handles, the motion
+//! capabilities, the admin token, the metrics.
+
+use super::config::ServerConfig;
+use super::metrics::Metrics;
+use crate::basketball::Capabilities;
+use crate::protocol::MatchInfo;
+use crate::sim::{Action, Mode, Scenario};
+use axum::extract::ws::Utf8Bytes;
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, AtomicU64};
+use std::sync::{Arc, Mutex, RwLock};
+use tokio::sync::{mpsc, watch};
+
+/// The newest frame of a match (encoded once; every spectator gets the same bytes), and
+/// its `end` once it has ended.
+#[derive(Debug, Clone)]
+pub struct Published {
+    /// Frames published so far: a spectator that sees a gap skipped frames.
+    pub seq: u64,
+    pub frame: Utf8Bytes,
+    pub end: Option<Utf8Bytes>,
+}
+
+/// What sockets and the API tell a match task.
+pub enum Control {
+    BotJoin {
+        agent: usize,
+        conn: u64,
+        out: mpsc::Sender<Utf8Bytes>,
+    },
+    BotLeave {
+        agent: usize,
+        conn: u64,
+    },
+    Command {
+        agent: usize,
+        conn: u64,
+        tick: u64,
+        action: Action,
+    },
+    Stop,
+}
+
+pub struct MatchEntry {
+    pub info: MatchInfo,
+    pub mode: Mode,
+    pub scenario: Scenario,
+    pub published: watch::Receiver<Published>,
+    pub control: mpsc::Sender<Control>,
+    /// Bot tokens: (agent index, agent id, token).
+    pub tokens: Vec<(usize, String, String)>,
+    pub spectators: AtomicU64,
+    pub tick: AtomicU64,
+    pub ended: AtomicBool,
+    /// Who controls each agent now (`true`: a bot).
+    pub controlled: Mutex<Vec<bool>>,
+}
+
+pub struct AppState {
+    pub config: ServerConfig,
+    pub admin_token: String,
+    pub caps: Arc<Capabilities>,
+    pub metrics: Arc<Metrics>,
+    pub matches: RwLock<BTreeMap<String, Arc<MatchEntry>>>,
+    pub shutdown: watch::Receiver<bool>,
+    pub next_conn: AtomicU64,
+}
+
+impl AppState {
+    pub fn get(&self, id: &str) -> Option<Arc<MatchEntry>> {
+        self.matches.read().expect("not poisoned").get(id).cloned()
+    }
+}

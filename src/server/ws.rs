@@ -1,0 +1,373 @@
+//! The WebSocket endpoints: spectators (`/ws/matches/{id}`) watch a match's frames; bots
+//! (`/ws/matches/{id}/play?token=T`) get their agent's perceptions and send commands.
+//!
+//! Every socket says `hello` first. A spectator gets the newest frame at once and then
+//! each new one; one that falls behind skips to the newest (counted as dropped), and one
+//! whose socket stops accepting data is disconnected, so it never holds up a tick or
+//! anyone else. Bad input gets an `error` message and the socket stays open; an
+//! oversized message closes it with 1009, flooding with 1008, shutdown with 1001.
+
+use super::api::ApiError;
+use super::auth;
+use super::state::{AppState, Control, MatchEntry};
+use crate::protocol::{encode, ClientMessage, ErrorMessage, Hello, Limits};
+use axum::extract::ws::{CloseFrame, Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
+use axum::extract::{Path, Query, State};
+use axum::http::HeaderMap;
+use axum::response::{IntoResponse, Response};
+use futures_util::{SinkExt, StreamExt};
+use std::collections::HashMap;
+use std::sync::atomic::Ordering::Relaxed;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use tokio::sync::mpsc;
+
+/// Close codes (RFC 6455).
+const GOING_AWAY: u16 = 1001;
+const POLICY: u16 = 1008;
+const TOO_BIG: u16 = 1009;
+const NORMAL: u16 = 1000;
+
+/// Sockets buffer little: frames are small and a slow reader should skip, not queue.
+const SOCKET_BUFFER_BYTES: usize = 8 * 1024;
+
+fn limits(app: &AppState) -> Limits {
+    Limits {
+        max_message_bytes: app.config.max_message_bytes,
+        messages_per_second: app.config.bot_messages_per_second,
+    }
+}
+
+fn upgrade(ws: WebSocketUpgrade, app: &AppState) -> WebSocketUpgrade {
+    ws.max_message_size(app.config.max_message_bytes)
+        .max_frame_size(app.config.max_message_bytes)
+        .read_buffer_size(SOCKET_BUFFER_BYTES)
+        .write_buffer_size(SOCKET_BUFFER_BYTES)
+}
+
+fn close(code: u16, reason: &str) -> Message {
+    Message::Close(Some(CloseFrame {
+        code,
+        reason: Utf8Bytes::from(reason.to_string()),
+    }))
+}
+
+/// Why reading a socket stopped, if it did.
+enum Read {
+    Text(Utf8Bytes),
+    Binary,
+    Ignore,
+    Closed,
+    TooBig,
+}
+
+fn classify(incoming: Option<Result<Message, axum::Error>>) -> Read {
+    match incoming {
+        None | Some(Ok(Message::Close(_))) => Read::Closed,
+        Some(Ok(Message::Text(t))) => Read::Text(t),
+        Some(Ok(Message::Binary(_))) => Read::Binary,
+        Some(Ok(_)) => Read::Ignore, // ping and pong are answered by the library
+        Some(Err(e)) => {
+            let too_big = e
+                .into_inner()
+                .downcast_ref::<tokio_tungstenite::tungstenite::Error>()
+                .is_some_and(|e| matches!(e, tokio_tungstenite::tungstenite::Error::Capacity(_)));
+            if too_big {
+                Read::TooBig
+            } else {
+                Read::Closed
+            }
+        }
+    }
+}
+
+#[derive(Debug, PartialEq, Eq)]
+enum Sent {
+    Ok,
+    Failed,
+    /// The socket did not take the message in time: the client stopped reading.
+    TimedOut,
+}
+
+/// Writes to a spectator's socket, counting bytes, giving up after `timeout`.
+struct Sender<'a> {
+    sink: &'a mut futures_util::stream::SplitSink<WebSocket, Message>,
+    timeout: Duration,
+    metrics: &'a super::metrics::Metrics,
+}
+
+impl Sender<'_> {
+    async fn text(&mut self, text: Utf8Bytes) -> Sent {
+        self.metrics.bytes_out.fetch_add(text.len() as u64, Relaxed);
+        match tokio::time::timeout(self.timeout, self.sink.send(Message::Text(text))).await {
+            Ok(Ok(())) => Sent::Ok,
+            Ok(Err(_)) => Sent::Failed,
+            Err(_) => Sent::TimedOut,
+        }
+    }
+
+    async fn close(&mut self, code: u16, reason: &str) {
+        let _ = tokio::time::timeout(self.timeout, self.sink.send(close(code, reason))).await;
+    }
+}
+
+pub async fn spectate(
+    ws: WebSocketUpgrade,
+    Path(id): Path<String>,
+    State(app): State<Arc<AppState>>,
+) -> Response {
+    let Some(entry) = app.get(&id) else {
+        return ApiError::not_found(&id).into_response();
+    };
+    upgrade(ws, &app).on_upgrade(move |socket| spectator(socket, entry, app))
+}
+
+async fn spectator(socket: WebSocket, entry: Arc<MatchEntry>, app: Arc<AppState>) {
+    let metrics = app.metrics.clone();
+    metrics.spectators.fetch_add(1, Relaxed);
+    entry.spectators.fetch_add(1, Relaxed);
+    let (mut sink, mut stream) = socket.split();
+    let timeout = Duration::from_millis(app.config.send_timeout_ms);
+    let mut shutdown = app.shutdown.clone();
+    let mut published = entry.published.clone();
+    let hello = encode(&Hello::new("spectator", &entry.info, None, limits(&app)));
+    let first = published.borrow_and_update().clone();
+    let mut last_seq = first.seq;
+    let mut send = Sender {
+        sink: &mut sink,
+        timeout,
+        metrics: &metrics,
+    };
+    let mut ok =
+        send.text(hello.into()).await == Sent::Ok && send.text(first.frame).await == Sent::Ok;
+    if ok {
+        metrics.frames_sent.fetch_add(1, Relaxed);
+    }
+    if let (true, Some(end)) = (ok, first.end) {
+        send.text(end).await;
+        send.close(NORMAL, "match ended").await;
+        ok = false;
+    }
+    if ok {
+        loop {
+            tokio::select! {
+                changed = published.changed() => {
+                    if changed.is_err() {
+                        break;
+                    }
+                    let p = published.borrow_and_update().clone();
+                    if p.seq > last_seq {
+                        app.metrics.frames_dropped.fetch_add(p.seq - last_seq - 1, Relaxed);
+                        last_seq = p.seq;
+                        match send.text(p.frame).await {
+                            Sent::Ok => { metrics.frames_sent.fetch_add(1, Relaxed); }
+                            Sent::Failed => break,
+                            Sent::TimedOut => {
+                                metrics.slow_clients_dropped.fetch_add(1, Relaxed);
+                                tracing::info!(id = %entry.info.id, "dropping a spectator that stopped reading");
+                                break;
+                            }
+                        }
+                    }
+                    if let Some(end) = p.end {
+                        send.text(end).await;
+                        send.close(NORMAL, "match ended").await;
+                        break;
+                    }
+                }
+                incoming = stream.next() => match classify(incoming) {
+                    Read::Closed => break,
+                    Read::TooBig => {
+                        metrics.closed_for_size.fetch_add(1, Relaxed);
+                        send.close(TOO_BIG, "message too big").await;
+                        break;
+                    }
+                    // Spectators only listen; what they say is not read.
+                    Read::Text(_) | Read::Binary | Read::Ignore => {}
+                },
+                _ = shutdown.changed() => {
+                    send.close(GOING_AWAY, "server shutting down").await;
+                    break;
+                }
+            }
+        }
+    }
+    entry.spectators.fetch_sub(1, Relaxed);
+    metrics.spectators.fetch_sub(1, Relaxed);
+}
+
+/// The bot token of a request: `?token=T`, `Authorization: Bearer T` or
+/// `X-Fieldhouse-Token: T`.
+fn token_of<'a>(query: &'a HashMap<String, String>, headers: &'a HeaderMap) -> Option<&'a str> {
+    query.get("token").map(String::as_str).or_else(|| {
+        headers
+            .get("authorization")
+            .and_then(|v| v.to_str().ok())
+            .and_then(auth::bearer)
+            .or_else(|| {
+                headers
+                    .get("x-fieldhouse-token")
+                    .and_then(|v| v.to_str().ok())
+            })
+    })
+}
+
+pub async fn play(
+    ws: WebSocketUpgrade,
+    Path(id): Path<String>,
+    Query(query): Query<HashMap<String, String>>,
+    headers: HeaderMap,
+    State(app): State<Arc<AppState>>,
+) -> Response {
+    let Some(entry) = app.get(&id) else {
+        return ApiError::not_found(&id).into_response();
+    };
+    // The token is checked before the upgrade: a wrong one never gets a socket.
+    let Some(token) = token_of(&query, &headers) else {
+        return ApiError::unauthorized(
+            "a bot token is required: ?token=T or Authorization: Bearer T",
+        )
+        .into_response();
+    };
+    // Compare against every token so the time taken does not say which agent matched.
+    let mut found = None;
+    for (k, agent, expected) in &entry.tokens {
+        if auth::same(token, expected) {
+            found = Some((*k, agent.clone()));
+        }
+    }
+    let Some((k, agent)) = found else {
+        return ApiError::forbidden("this token controls no agent of this match").into_response();
+    };
+    if entry.ended.load(Relaxed) {
+        return ApiError::gone(&id).into_response();
+    }
+    upgrade(ws, &app).on_upgrade(move |socket| bot(socket, entry, app, k, agent))
+}
+
+/// A token bucket: `rate` messages a second, `burst` at once.
+struct Bucket {
+    tokens: f64,
+    rate: f64,
+    burst: f64,
+    last: Instant,
+    /// Messages refused since the bucket last had room.
+    refused: u32,
+}
+
+impl Bucket {
+    fn take(&mut self) -> bool {
+        let now = Instant::now();
+        self.tokens = (self.tokens + (now - self.last).as_secs_f64() * self.rate).min(self.burst);
+        self.last = now;
+        if self.tokens >= 1.0 {
+            self.tokens -= 1.0;
+            self.refused = 0;
+            true
+        } else {
+            self.refused += 1;
+            false
+        }
+    }
+}
+
+async fn bot(
+    socket: WebSocket,
+    entry: Arc<MatchEntry>,
+    app: Arc<AppState>,
+    k: usize,
+    agent: String,
+) {
+    let metrics = app.metrics.clone();
+    metrics.bots.fetch_add(1, Relaxed);
+    let conn = app.next_conn.fetch_add(1, Relaxed);
+    let (out_tx, mut out_rx) = mpsc::channel::<Utf8Bytes>(16);
+    let (mut sink, mut stream) = socket.split();
+    let mut shutdown = app.shutdown.clone();
+    let hello = encode(&Hello::new("bot", &entry.info, Some(&agent), limits(&app)));
+    let joined = sink.send(Message::Text(hello.into())).await.is_ok()
+        && entry
+            .control
+            .send(Control::BotJoin {
+                agent: k,
+                conn,
+                out: out_tx.clone(),
+            })
+            .await
+            .is_ok();
+    let mut bucket = Bucket {
+        tokens: f64::from(app.config.bot_burst),
+        rate: f64::from(app.config.bot_messages_per_second),
+        burst: f64::from(app.config.bot_burst),
+        last: Instant::now(),
+        refused: 0,
+    };
+    let error = |code: &str, message: &str| {
+        metrics.client_errors.fetch_add(1, Relaxed);
+        let _ = out_tx.try_send(Utf8Bytes::from(encode(&ErrorMessage::new(code, message))));
+    };
+    if joined {
+        loop {
+            tokio::select! {
+                outgoing = out_rx.recv() => {
+                    let Some(text) = outgoing else { break };
+                    let is_end = text.as_str().starts_with("{\"type\":\"end\"");
+                    metrics.bytes_out.fetch_add(text.len() as u64, Relaxed);
+                    if sink.send(Message::Text(text)).await.is_err() {
+                        break;
+                    }
+                    if is_end {
+                        let _ = sink.send(close(NORMAL, "match ended")).await;
+                        break;
+                    }
+                }
+                incoming = stream.next() => match classify(incoming) {
+                    Read::Closed => break,
+                    Read::TooBig => {
+                        metrics.closed_for_size.fetch_add(1, Relaxed);
+                        let _ = sink.send(close(TOO_BIG, "message too big")).await;
+                        break;
+                    }
+                    Read::Ignore => {}
+                    _ if !bucket.take() => {
+                        // Sustained flooding: more than a burst's worth refused in a row.
+                        if bucket.refused > app.config.bot_burst {
+                            metrics.closed_for_rate.fetch_add(1, Relaxed);
+                            let _ = sink.send(close(POLICY, "too many messages")).await;
+                            break;
+                        }
+                        if bucket.refused == 1 {
+                            error("rate_limited", "too many messages; slow down or be disconnected");
+                        }
+                    }
+                    Read::Binary => error("binary", "binary frames are not part of the protocol; send JSON text"),
+                    Read::Text(text) => match serde_json::from_str::<ClientMessage>(&text) {
+                        Ok(ClientMessage::Command { tick, action }) => {
+                            let command = Control::Command { agent: k, conn, tick, action };
+                            if entry.control.send(command).await.is_err() {
+                                break;
+                            }
+                        }
+                        Err(e) => {
+                            let code = if serde_json::from_str::<serde_json::Value>(&text).is_err() {
+                                "malformed_json"
+                            } else {
+                                "bad_message"
+                            };
+                            error(code, &e.to_string());
+                        }
+                    },
+                },
+                _ = shutdown.changed() => {
+                    let _ = sink.send(close(GOING_AWAY, "server shutting down")).await;
+                    break;
+                }
+            }
+        }
+    }
+    let _ = entry
+        .control
+        .send(Control::BotLeave { agent: k, conn })
+        .await;
+    metrics.bots.fetch_sub(1, Relaxed);
+}

@@ -1,0 +1,217 @@
+//! Basketball in a live match: the core's [`Game`] with a line-up from the scenario.
+
+use super::scenario::{Scenario, ScenarioError};
+use crate::basketball::{
+    Brain, Capabilities, DefenderMotion, Event, Game, GameParams, Order, Team,
+};
+use serde_json::{json, Value};
+use std::sync::Arc;
+
+pub struct HoopsWorld {
+    pub game: Game,
+    /// Possessions to play; none: for ever.
+    pub possessions: Option<u64>,
+}
+
+impl HoopsWorld {
+    pub fn new(s: &Scenario, caps: Arc<Capabilities>) -> Result<HoopsWorld, ScenarioError> {
+        let mut params = GameParams {
+            tick_hz: s.tick_hz,
+            seed: s.seed,
+            ..GameParams::default()
+        };
+        if let Some(clock) = s.options.shot_clock_s {
+            if !(clock.is_finite() && (1.0..=600.0).contains(&clock)) {
+                return Err(ScenarioError::at(
+                    "options.shot_clock_s",
+                    "between 1 and 600 s",
+                ));
+            }
+            params.shot_clock_s = clock;
+        }
+        if s.options.possessions == Some(0) {
+            return Err(ScenarioError::at("options.possessions", "at least 1"));
+        }
+        let (mut offense, mut defense) = (Vec::new(), Vec::new());
+        let mut offense_brain: Option<(usize, Brain)> = None;
+        let mut defender_motion: Option<(usize, DefenderMotion)> = None;
+        let mut bots = Vec::new();
+        if s.agents.is_empty() {
+            offense = vec!["o1".to_string(), "o2".to_string()];
+            defense = vec!["d1".to_string()];
+        }
+        for (i, a) in s.agents.iter().enumerate() {
+            if a.position.is_some() {
+                return Err(ScenarioError::at(
+                    format!("agents[{i}].position"),
+                    "basketball players start from the possession's random positions",
+                ));
+            }
+            let strategy = a.strategy.as_deref();
+            match a.team.as_deref() {
+                Some("offense") => {
+                    if let Some(name) = strategy {
+                        let brain: Brain =
+                            name.parse().map_err(|e: crate::names::UnknownName| {
+                                ScenarioError::at(format!("agents[{i}].strategy"), e.to_string())
+                            })?;
+                        if let Some((j, other)) = offense_brain.filter(|(_, b)| *b != brain) {
+                            return Err(ScenarioError::at(
+                                format!("agents[{i}].strategy"),
+                                format!("a team has one brain; agents[{j}] uses {}", other.name()),
+                            ));
+                        }
+                        offense_brain = Some((i, brain));
+                    }
+                    offense.push(a.id.clone());
+                }
+                Some("defense") => {
+                    if let Some(name) = strategy {
+                        let motion: DefenderMotion =
+                            name.parse().map_err(|e: crate::names::UnknownName| {
+                                ScenarioError::at(format!("agents[{i}].strategy"), e.to_string())
+                            })?;
+                        if let Some((j, _)) = defender_motion.filter(|(_, m)| *m != motion) {
+                            return Err(ScenarioError::at(
+                                format!("agents[{i}].strategy"),
+                                format!("defenders move alike; agents[{j}] differs"),
+                            ));
+                        }
+                        defender_motion = Some((i, motion));
+                    }
+                    defense.push(a.id.clone());
+                }
+                Some(other) => {
+                    return Err(ScenarioError::at(
+                        format!("agents[{i}].team"),
+                        format!("unknown team \"{other}\"; expected one of offense, defense"),
+                    ))
+                }
+                None => {
+                    return Err(ScenarioError::at(
+                        format!("agents[{i}].team"),
+                        "a basketball agent needs a team: offense or defense",
+                    ))
+                }
+            }
+            if a.bot {
+                bots.push(a.id.clone());
+            }
+        }
+        if offense.is_empty() {
+            return Err(ScenarioError::at(
+                "agents",
+                "basketball needs at least one offensive player",
+            ));
+        }
+        if let Some((_, brain)) = offense_brain {
+            params.offense = brain;
+        }
+        if let Some((_, motion)) = defender_motion {
+            params.defender.motion = motion;
+        }
+        params.offense_players = offense.len();
+        params.defenders = defense.len();
+        let names: Vec<String> = offense.into_iter().chain(defense).collect();
+        let mut game = Game::named(caps, params, names.clone());
+        for id in bots {
+            let k = names.iter().position(|n| *n == id).expect("a listed agent");
+            game.set_controlled(k, true);
+        }
+        Ok(HoopsWorld {
+            game,
+            possessions: s.options.possessions,
+        })
+    }
+
+    pub fn step(&mut self, events: &mut Vec<Value>) {
+        let mut happened: Vec<Event> = Vec::new();
+        self.game.step(&mut happened);
+        events.extend(
+            happened
+                .iter()
+                .map(|e| serde_json::to_value(e).expect("events serialise")),
+        );
+    }
+
+    pub fn finished(&self) -> bool {
+        self.possessions
+            .is_some_and(|n| self.game.possessions() >= n)
+    }
+
+    pub fn field(&self) -> Value {
+        let p = self.game.params();
+        json!({
+            "kind": "basketball",
+            "court": p.court,
+            "shot_clock_s": p.shot_clock_s,
+            "offense": p.offense.name(),
+            "defender_motion": p.defender.motion.name(),
+        })
+    }
+
+    pub fn agents_info(&self) -> Vec<Value> {
+        let p = self.game.params();
+        self.game
+            .agents()
+            .iter()
+            .map(|a| {
+                json!({
+                    "id": a.id,
+                    "team": a.team,
+                    "strategy": match a.team {
+                        Team::Offense => p.offense.name(),
+                        Team::Defense => p.defender.motion.name(),
+                    },
+                })
+            })
+            .collect()
+    }
+
+    pub fn state(&self) -> (Value, Vec<Value>, Value) {
+        let snap = self.game.snapshot();
+        let agents = snap
+            .agents
+            .iter()
+            .enumerate()
+            .map(|(k, a)| {
+                let mut v = serde_json::to_value(a).expect("agents serialise");
+                v["controller"] = json!(if self.game.is_controlled(k) {
+                    "bot"
+                } else {
+                    "builtin"
+                });
+                v
+            })
+            .collect();
+        let score = json!({
+            "points": snap.score,
+            "possession": snap.possession,
+            "shot_clock_s": snap.shot_clock_s,
+        });
+        (
+            serde_json::to_value(&snap.ball).expect("balls serialise"),
+            agents,
+            score,
+        )
+    }
+
+    /// What agent `k` perceives: the court as a player sees it (everyone's position and
+    /// heading, the ball, the clock).
+    pub fn perception(&self, k: usize) -> Value {
+        let snap = self.game.snapshot();
+        json!({
+            "self": snap.agents[k].id,
+            "team": snap.agents[k].team,
+            "has_ball": self.game.ball_holder() == Some(k),
+            "agents": snap.agents.iter().map(|a| json!({"id": a.id, "team": a.team, "position": a.position, "heading": a.heading, "action": a.action})).collect::<Vec<_>>(),
+            "ball": snap.ball,
+            "shot_clock_s": snap.shot_clock_s,
+            "basket": self.game.params().court.basket.to_array(),
+        })
+    }
+
+    pub fn order(&mut self, k: usize, order: Order) -> Result<(), String> {
+        self.game.order(k, order)
+    }
+}

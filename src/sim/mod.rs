@@ -1,0 +1,229 @@
+//! The simulation of a whole match, whatever the sport: one [`World`] that steps a tick
+//! at a time, reports what happened, shows its state, and takes bots' commands. Pure
+//! and deterministic like the rest of the core: the server's match task drives it.
+//!
+//! * [`scenario`]: what a match is made of, checked field by field.
+//! * [`fly`]: baseball and cricket fly balls with fielders.
+//! * [`hoops`]: basketball, the core's game with a line-up from the scenario.
+
+pub mod fly;
+pub mod hoops;
+pub mod scenario;
+
+pub use scenario::{AgentSpec, Mode, Options, Scenario, ScenarioError, Sport};
+
+use crate::basketball::{Capabilities, Order};
+use fly::{FielderOrder, FlyWorld};
+use glam::DVec2;
+use hoops::HoopsWorld;
+use serde::Deserialize;
+use serde_json::Value;
+use std::sync::Arc;
+
+/// What a bot asks of its agent.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Action {
+    /// Fielder: accelerate along `[ax, az]`, m/s² (clamped to the body's limits).
+    Accelerate { accel: [f64; 2] },
+    /// Fielder: run to `[x, z]` and stop there.
+    RunTo { target: [f64; 2] },
+    /// Basketball: move toward `[x, z]` (dribbling if holding the ball).
+    MoveTo { target: [f64; 2] },
+    /// Basketball: pass to the teammate with this id.
+    Pass { to: String },
+    /// Basketball: shoot from here.
+    Shoot {},
+    /// Stop: a fielder decelerates to rest, a player stands.
+    Stand {},
+}
+
+impl Action {
+    fn name(&self) -> &'static str {
+        match self {
+            Action::Accelerate { .. } => "accelerate",
+            Action::RunTo { .. } => "run_to",
+            Action::MoveTo { .. } => "move_to",
+            Action::Pass { .. } => "pass",
+            Action::Shoot {} => "shoot",
+            Action::Stand {} => "stand",
+        }
+    }
+}
+
+enum Inner {
+    Fly(Box<FlyWorld>),
+    Hoops(Box<HoopsWorld>),
+}
+
+pub struct World {
+    sport: Sport,
+    tick_hz: f64,
+    end_tick: Option<u64>,
+    inner: Inner,
+}
+
+impl World {
+    /// Builds the world a scenario describes. Basketball needs the motion capabilities
+    /// (built once by whoever runs matches).
+    pub fn new(s: &Scenario, caps: Option<Arc<Capabilities>>) -> Result<World, ScenarioError> {
+        s.check()?;
+        let inner = match s.sport {
+            Sport::Baseball | Sport::Cricket => Inner::Fly(Box::new(FlyWorld::new(s)?)),
+            Sport::Basketball => {
+                let caps = caps.ok_or_else(|| {
+                    ScenarioError::at(
+                        "sport",
+                        "basketball needs the motion data, which is not loaded",
+                    )
+                })?;
+                Inner::Hoops(Box::new(HoopsWorld::new(s, caps)?))
+            }
+        };
+        Ok(World {
+            sport: s.sport,
+            tick_hz: s.tick_hz,
+            end_tick: s.duration_s.map(|d| (d * s.tick_hz).round() as u64),
+            inner,
+        })
+    }
+
+    pub fn sport(&self) -> Sport {
+        self.sport
+    }
+
+    pub fn tick(&self) -> u64 {
+        match &self.inner {
+            Inner::Fly(w) => w.tick(),
+            Inner::Hoops(w) => w.game.tick(),
+        }
+    }
+
+    pub fn time_s(&self) -> f64 {
+        self.tick() as f64 / self.tick_hz
+    }
+
+    /// Advances one tick, appending the events that happened.
+    pub fn step(&mut self, events: &mut Vec<Value>) {
+        match &mut self.inner {
+            Inner::Fly(w) => w.step(events),
+            Inner::Hoops(w) => w.step(events),
+        }
+    }
+
+    /// Whether the match has reached its end (its duration, or its possessions).
+    pub fn finished(&self) -> bool {
+        self.end_tick.is_some_and(|end| self.tick() >= end)
+            || matches!(&self.inner, Inner::Hoops(w) if w.finished())
+    }
+
+    pub fn agent_ids(&self) -> Vec<String> {
+        match &self.inner {
+            Inner::Fly(w) => w.agent_ids().map(str::to_string).collect(),
+            Inner::Hoops(w) => w.game.agents().iter().map(|a| a.id.clone()).collect(),
+        }
+    }
+
+    pub fn agent_index(&self, id: &str) -> Option<usize> {
+        self.agent_ids().iter().position(|a| a == id)
+    }
+
+    /// The static description of the field.
+    pub fn field(&self) -> Value {
+        match &self.inner {
+            Inner::Fly(w) => w.field(),
+            Inner::Hoops(w) => w.field(),
+        }
+    }
+
+    /// Each agent's static description (id, team, strategy).
+    pub fn agents_info(&self) -> Vec<Value> {
+        match &self.inner {
+            Inner::Fly(w) => w.agents_info(),
+            Inner::Hoops(w) => w.agents_info(),
+        }
+    }
+
+    /// The state now: the ball, every agent, the score.
+    pub fn state(&self) -> (Value, Vec<Value>, Value) {
+        match &self.inner {
+            Inner::Fly(w) => w.state(),
+            Inner::Hoops(w) => w.state(),
+        }
+    }
+
+    /// Bots hear from their agent every this many ticks: fielders every tick, basketball
+    /// players at each of their decisions.
+    pub fn perception_every_ticks(&self) -> u64 {
+        match &self.inner {
+            Inner::Fly(_) => 1,
+            Inner::Hoops(w) => ((w.game.params().replan_s * self.tick_hz).round() as u64).max(1),
+        }
+    }
+
+    /// What agent `k` perceives now.
+    pub fn perception(&self, k: usize) -> Value {
+        match &self.inner {
+            Inner::Fly(w) => w.perception(k),
+            Inner::Hoops(w) => w.perception(k),
+        }
+    }
+
+    /// Hands agent `k` to a bot or back to its built-in brain.
+    pub fn set_controlled(&mut self, k: usize, by_bot: bool) {
+        match &mut self.inner {
+            Inner::Fly(w) => w.set_controlled(k, by_bot),
+            Inner::Hoops(w) => w.game.set_controlled(k, by_bot),
+        }
+    }
+
+    /// A bot's command for agent `k`: accepted (carried out from the next tick), or the
+    /// reason it is impossible. Nothing non-finite ever reaches the world.
+    pub fn command(&mut self, k: usize, action: &Action) -> Result<(), String> {
+        let point = |p: [f64; 2]| {
+            let v = DVec2::from_array(p);
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err("coordinates must be finite numbers".to_string())
+            }
+        };
+        let wrong = |sport: Sport| {
+            Err(format!(
+                "{} is not a {} action",
+                action.name(),
+                sport.name()
+            ))
+        };
+        match &mut self.inner {
+            Inner::Fly(w) => match action {
+                Action::Accelerate { accel } => {
+                    w.order(k, FielderOrder::Accelerate(point(*accel)?))
+                }
+                Action::RunTo { target } => w.order(k, FielderOrder::RunTo(point(*target)?)),
+                Action::Stand {} => w.order(k, FielderOrder::Accelerate(DVec2::ZERO)),
+                _ => wrong(self.sport),
+            },
+            Inner::Hoops(w) => match action {
+                Action::MoveTo { target } => w.order(k, Order::MoveTo(point(*target)?)),
+                Action::Pass { to } => {
+                    let to = w
+                        .game
+                        .agents()
+                        .iter()
+                        .position(|a| a.id == *to)
+                        .ok_or_else(|| format!("no agent \"{to}\""))?;
+                    w.order(k, Order::Pass { to })
+                }
+                Action::Shoot {} => w.order(k, Order::Shoot),
+                Action::Stand {} => w.order(k, Order::Stand),
+                _ => wrong(self.sport),
+            },
+        }
+    }
+
+    /// The result so far (the score).
+    pub fn result(&self) -> Value {
+        self.state().2
+    }
+}

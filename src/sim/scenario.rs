@@ -1,0 +1,307 @@
+//! A match, completely described: the JSON body of `POST /api/matches` (and the TOML of
+//! a scenario file). Parsing checks every field and names the one that is wrong
+//! (`agents[2].strategy: unknown strategy "lott"; expected one of ...`), before anything
+//! runs.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Sport {
+    Baseball,
+    Cricket,
+    Basketball,
+}
+
+impl Sport {
+    pub fn name(self) -> &'static str {
+        match self {
+            Sport::Baseball => "baseball",
+            Sport::Cricket => "cricket",
+            Sport::Basketball => "basketball",
+        }
+    }
+}
+
+/// How a match's ticks are paced.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// One tick per 1/tick_hz of wall-clock time.
+    #[default]
+    Realtime,
+    /// As fast as the machine goes; no bots.
+    Fast,
+    /// Each tick waits until every connected bot has sent its command for it, or the
+    /// deadline passes (RoboCup's synchronous mode).
+    Lockstep,
+}
+
+impl Mode {
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Realtime => "realtime",
+            Mode::Fast => "fast",
+            Mode::Lockstep => "lockstep",
+        }
+    }
+}
+
+/// One agent of a scenario.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AgentSpec {
+    /// Unique in the match: letters, digits, `-` and `_`, at most 32.
+    pub id: String,
+    /// Fielders: a catching strategy (`chapman`, `lot-optical`, `predictive`, `lot`,
+    /// `chapman-1d`). Basketball offense: its brain (`simple`, `costmap`; one per team);
+    /// defense: how it moves (`defense` footwork or `run`).
+    #[serde(default)]
+    pub strategy: Option<String>,
+    /// Fielders: where it stands when the ball is hit, metres `[x, z]`.
+    #[serde(default)]
+    pub position: Option<[f64; 2]>,
+    /// Basketball: `offense` or `defense`.
+    #[serde(default)]
+    pub team: Option<String>,
+    /// Whether a bot controls it (it gets a bot token when the match is created).
+    #[serde(default)]
+    pub bot: bool,
+}
+
+/// Sport options; each applies to the sports it names.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Options {
+    /// Baseball, cricket: launch speed range, m/s.
+    #[serde(default)]
+    pub launch_speed_m_s: Option<[f64; 2]>,
+    /// Baseball, cricket: elevation range above the horizontal, degrees.
+    #[serde(default)]
+    pub launch_elevation_deg: Option<[f64; 2]>,
+    /// Baseball, cricket: azimuth range from +x toward +z, degrees.
+    #[serde(default)]
+    pub launch_azimuth_deg: Option<[f64; 2]>,
+    /// Baseball, cricket: backspin range, rpm.
+    #[serde(default)]
+    pub spin_rpm: Option<[f64; 2]>,
+    /// Baseball, cricket: seconds between one ball's end and the next launch.
+    #[serde(default)]
+    pub pause_s: Option<f64>,
+    /// Basketball: possessions to play (the match ends after them).
+    #[serde(default)]
+    pub possessions: Option<u64>,
+    /// Basketball: the shot clock, s.
+    #[serde(default)]
+    pub shot_clock_s: Option<f64>,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+fn default_tick_hz() -> f64 {
+    60.0
+}
+fn default_frame_hz() -> f64 {
+    30.0
+}
+fn default_deadline_ms() -> u64 {
+    1000
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    #[serde(default)]
+    pub name: Option<String>,
+    pub sport: Sport,
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    #[serde(default = "default_tick_hz")]
+    pub tick_hz: f64,
+    /// Frames sent to spectators per second (a divisor of the tick rate is exact).
+    #[serde(default = "default_frame_hz")]
+    pub frame_hz: f64,
+    #[serde(default)]
+    pub mode: Mode,
+    /// Lockstep: how long a tick waits for bots, ms.
+    #[serde(default = "default_deadline_ms")]
+    pub lockstep_deadline_ms: u64,
+    /// Match length in simulated seconds; none: until deleted (or, in basketball, until
+    /// `options.possessions` are played).
+    #[serde(default)]
+    pub duration_s: Option<f64>,
+    /// The agents; none: the sport's default line-up.
+    #[serde(default)]
+    pub agents: Vec<AgentSpec>,
+    #[serde(default)]
+    pub options: Options,
+}
+
+/// What is wrong with a scenario, and where.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ScenarioError {
+    /// The field, as a path (`agents[2].strategy`); empty for the document as a whole.
+    pub path: String,
+    pub message: String,
+}
+
+impl fmt::Display for ScenarioError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.path.is_empty() {
+            f.write_str(&self.message)
+        } else {
+            write!(f, "{}: {}", self.path, self.message)
+        }
+    }
+}
+
+impl std::error::Error for ScenarioError {}
+
+impl ScenarioError {
+    pub fn at(path: impl Into<String>, message: impl Into<String>) -> ScenarioError {
+        ScenarioError {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+}
+
+/// Most agents a match may have.
+pub const MAX_AGENTS: usize = 32;
+
+impl Scenario {
+    /// Parses a JSON scenario, naming the field at fault.
+    pub fn from_json(bytes: &[u8]) -> Result<Scenario, ScenarioError> {
+        let mut de = serde_json::Deserializer::from_slice(bytes);
+        let scenario: Scenario = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+            let path = e.path().to_string();
+            ScenarioError::at(
+                if path == "." { String::new() } else { path },
+                e.into_inner().to_string(),
+            )
+        })?;
+        scenario.check()?;
+        Ok(scenario)
+    }
+
+    /// Checks what types alone cannot: ranges, names, and agreement between fields.
+    pub fn check(&self) -> Result<(), ScenarioError> {
+        let positive = |path: &str, x: f64| {
+            if x.is_finite() && x > 0.0 {
+                Ok(())
+            } else {
+                Err(ScenarioError::at(
+                    path,
+                    format!("{x} must be a positive number"),
+                ))
+            }
+        };
+        positive("tick_hz", self.tick_hz)?;
+        if self.tick_hz > 1000.0 {
+            return Err(ScenarioError::at("tick_hz", "at most 1000 ticks a second"));
+        }
+        positive("frame_hz", self.frame_hz)?;
+        if self.frame_hz > self.tick_hz {
+            return Err(ScenarioError::at("frame_hz", "cannot exceed tick_hz"));
+        }
+        if !(1..=60_000).contains(&self.lockstep_deadline_ms) {
+            return Err(ScenarioError::at(
+                "lockstep_deadline_ms",
+                "between 1 and 60000",
+            ));
+        }
+        if let Some(d) = self.duration_s {
+            positive("duration_s", d)?;
+        }
+        if self.mode == Mode::Fast
+            && self.duration_s.is_none()
+            && self.options.possessions.is_none()
+        {
+            return Err(ScenarioError::at(
+                "mode",
+                "a fast match needs an end: duration_s (or, in basketball, options.possessions)",
+            ));
+        }
+        if self.agents.len() > MAX_AGENTS {
+            return Err(ScenarioError::at(
+                "agents",
+                format!("at most {MAX_AGENTS} agents"),
+            ));
+        }
+        for (i, a) in self.agents.iter().enumerate() {
+            let valid = !a.id.is_empty()
+                && a.id.len() <= 32
+                && a.id
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
+            if !valid {
+                return Err(ScenarioError::at(
+                    format!("agents[{i}].id"),
+                    format!("\"{}\" is not an id: 1–32 letters, digits, - or _", a.id),
+                ));
+            }
+            if self.agents[..i].iter().any(|b| b.id == a.id) {
+                return Err(ScenarioError::at(
+                    format!("agents[{i}].id"),
+                    format!("\"{}\" is used twice", a.id),
+                ));
+            }
+            if a.bot && self.mode == Mode::Fast {
+                return Err(ScenarioError::at(
+                    format!("agents[{i}].bot"),
+                    "a fast match has no bots (use realtime or lockstep)",
+                ));
+            }
+        }
+        let o = &self.options;
+        let fly_only = [
+            ("options.launch_speed_m_s", o.launch_speed_m_s.is_some()),
+            (
+                "options.launch_elevation_deg",
+                o.launch_elevation_deg.is_some(),
+            ),
+            ("options.launch_azimuth_deg", o.launch_azimuth_deg.is_some()),
+            ("options.spin_rpm", o.spin_rpm.is_some()),
+            ("options.pause_s", o.pause_s.is_some()),
+        ];
+        let hoops_only = [
+            ("options.possessions", o.possessions.is_some()),
+            ("options.shot_clock_s", o.shot_clock_s.is_some()),
+        ];
+        let foreign = match self.sport {
+            Sport::Basketball => &fly_only[..],
+            _ => &hoops_only[..],
+        };
+        if let Some((path, _)) = foreign.iter().find(|(_, given)| *given) {
+            return Err(ScenarioError::at(
+                *path,
+                format!("does not apply to {}", self.sport.name()),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Checks a `[lo, hi]` range option: finite, ordered, within `bounds`.
+pub(crate) fn range(
+    path: &str,
+    given: Option<[f64; 2]>,
+    default: (f64, f64),
+    bounds: (f64, f64),
+) -> Result<(f64, f64), ScenarioError> {
+    let Some([lo, hi]) = given else {
+        return Ok(default);
+    };
+    if !(lo.is_finite() && hi.is_finite() && lo <= hi && lo >= bounds.0 && hi <= bounds.1) {
+        return Err(ScenarioError::at(
+            path,
+            format!(
+                "[{lo}, {hi}] must be a range [low, high] within [{}, {}]",
+                bounds.0, bounds.1
+            ),
+        ));
+    }
+    Ok((lo, hi))
+}
