@@ -5,7 +5,8 @@
 //! each new one; one that falls behind skips to the newest (counted as dropped), and one
 //! whose socket stops accepting data is disconnected, so it never holds up a tick or
 //! anyone else. Bad input gets an `error` message and the socket stays open; an
-//! oversized message closes it with 1009, flooding with 1008, shutdown with 1001.
+//! oversized message closes it with 1009, flooding with 1008. On shutdown every match
+//! ends: its sockets get `end` and close with 1001.
 
 use super::api::ApiError;
 use super::auth;
@@ -43,6 +44,16 @@ fn upgrade(ws: WebSocketUpgrade, app: &AppState) -> WebSocketUpgrade {
         .max_frame_size(app.config.max_message_bytes)
         .read_buffer_size(SOCKET_BUFFER_BYTES)
         .write_buffer_size(SOCKET_BUFFER_BYTES)
+}
+
+/// How a socket closes after its match's `end`: 1001 when the server is shutting down
+/// (every match ends then), else 1000.
+fn ending(shutdown: &tokio::sync::watch::Receiver<bool>) -> (u16, &'static str) {
+    if *shutdown.borrow() {
+        (GOING_AWAY, "server shutting down")
+    } else {
+        (NORMAL, "match ended")
+    }
 }
 
 fn close(code: u16, reason: &str) -> Message {
@@ -128,7 +139,7 @@ async fn spectator(socket: WebSocket, entry: Arc<MatchEntry>, app: Arc<AppState>
     entry.spectators.fetch_add(1, Relaxed);
     let (mut sink, mut stream) = socket.split();
     let timeout = Duration::from_millis(app.config.send_timeout_ms);
-    let mut shutdown = app.shutdown.clone();
+    let shutdown = app.shutdown.clone();
     let mut published = entry.published.clone();
     let hello = encode(&Hello::new("spectator", &entry.info, None, limits(&app)));
     let first = published.borrow_and_update().clone();
@@ -171,7 +182,8 @@ async fn spectator(socket: WebSocket, entry: Arc<MatchEntry>, app: Arc<AppState>
                     }
                     if let Some(end) = p.end {
                         send.text(end).await;
-                        send.close(NORMAL, "match ended").await;
+                        let (code, reason) = ending(&shutdown);
+                        send.close(code, reason).await;
                         break;
                     }
                 }
@@ -185,10 +197,6 @@ async fn spectator(socket: WebSocket, entry: Arc<MatchEntry>, app: Arc<AppState>
                     // Spectators only listen; what they say is not read.
                     Read::Text(_) | Read::Binary | Read::Ignore => {}
                 },
-                _ = shutdown.changed() => {
-                    send.close(GOING_AWAY, "server shutting down").await;
-                    break;
-                }
             }
         }
     }
@@ -283,7 +291,7 @@ async fn bot(
     let conn = app.next_conn.fetch_add(1, Relaxed);
     let (out_tx, mut out_rx) = mpsc::channel::<Utf8Bytes>(16);
     let (mut sink, mut stream) = socket.split();
-    let mut shutdown = app.shutdown.clone();
+    let shutdown = app.shutdown.clone();
     let hello = encode(&Hello::new("bot", &entry.info, Some(&agent), limits(&app)));
     let joined = sink.send(Message::Text(hello.into())).await.is_ok()
         && entry
@@ -317,7 +325,8 @@ async fn bot(
                         break;
                     }
                     if is_end {
-                        let _ = sink.send(close(NORMAL, "match ended")).await;
+                        let (code, reason) = ending(&shutdown);
+                        let _ = sink.send(close(code, reason)).await;
                         break;
                     }
                 }
@@ -358,10 +367,6 @@ async fn bot(
                         }
                     },
                 },
-                _ = shutdown.changed() => {
-                    let _ = sink.send(close(GOING_AWAY, "server shutting down")).await;
-                    break;
-                }
             }
         }
     }

@@ -1,5 +1,8 @@
 //! Running the real `fieldhouse` binary from integration tests.
 
+// Each test binary uses the part of this it needs.
+#![allow(dead_code)]
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -36,7 +39,6 @@ pub fn failure(command_line: &str) -> String {
 }
 
 /// The CMU motion capture beside the project (or where `FIELDHOUSE_MOCAP_DIR` says).
-#[allow(dead_code)] // not every test binary needs motion capture
 pub fn mocap() -> PathBuf {
     let beside = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/mocap");
     if beside.is_dir() {

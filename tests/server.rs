@@ -1,0 +1,603 @@
+//! The match server as users meet it: the real binary on a loopback port, real HTTP and
+//! real WebSockets, traffic checked against the JSON Schemas in proto/.
+
+mod common;
+
+use common::mocap;
+use futures_util::{SinkExt, StreamExt};
+use serde_json::{json, Value};
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+use tokio_tungstenite::tungstenite::protocol::frame::coding::CloseCode;
+use tokio_tungstenite::tungstenite::Message;
+
+const ADMIN: &str = "test-admin-token-0123456789";
+
+/// A `fieldhouse serve` on a free loopback port, killed when dropped.
+struct Server {
+    child: Child,
+    addr: String,
+}
+
+impl Server {
+    fn start(extra: &[&str]) -> Server {
+        let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("server-cache");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+            .args(["serve", "--addr", "127.0.0.1:0", "--mocap"])
+            .arg(mocap())
+            .arg("--cache-dir")
+            .arg(&cache)
+            .args(extra)
+            .env("FIELDHOUSE_ADMIN_TOKEN", ADMIN)
+            .env("FIELDHOUSE_LOG", "info")
+            .env_remove("FIELDHOUSE_ADDR")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("the binary starts");
+        let stderr = BufReader::new(child.stderr.take().unwrap());
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut tx = Some(tx);
+            for line in stderr.lines().map_while(Result::ok) {
+                if let Some(at) = line.find("http://") {
+                    let addr: String = line[at + 7..].chars().take_while(|c| *c != '/').collect();
+                    if let Some(tx) = tx.take() {
+                        let _ = tx.send(addr);
+                    }
+                }
+            }
+        });
+        let addr = rx
+            .recv_timeout(Duration::from_secs(120))
+            .expect("the server says where it listens");
+        Server { child, addr }
+    }
+
+    fn http(&self, path: &str) -> String {
+        format!("http://{}{path}", self.addr)
+    }
+
+    fn ws(&self, path: &str) -> String {
+        format!("ws://{}{path}", self.addr)
+    }
+
+    fn get(&self, path: &str) -> Value {
+        ureq::get(&self.http(path))
+            .call()
+            .unwrap()
+            .into_json()
+            .unwrap()
+    }
+
+    /// Creates a match; returns its id and bot tokens.
+    fn create(&self, scenario: Value) -> (String, Value) {
+        let doc: Value = ureq::post(&self.http("/api/matches"))
+            .set("Authorization", &format!("Bearer {ADMIN}"))
+            .send_json(scenario)
+            .expect("created")
+            .into_json()
+            .unwrap();
+        (
+            doc["id"].as_str().unwrap().to_string(),
+            doc["bot_tokens"].clone(),
+        )
+    }
+
+    fn tick(&self, id: &str) -> u64 {
+        self.get(&format!("/api/matches/{id}"))["tick"]
+            .as_u64()
+            .unwrap()
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The schema of a message type, from proto/.
+fn schema(kind: &str) -> jsonschema::Validator {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("proto/{kind}.schema.json"));
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    jsonschema::validator_for(&serde_json::from_str(&text).unwrap()).expect("a valid schema")
+}
+
+fn assert_valid(message: &Value) {
+    let kind = message["type"].as_str().expect("every message has a type");
+    let validator = schema(kind);
+    let errors: Vec<String> = validator
+        .iter_errors(message)
+        .map(|e| format!("{e} at {}", e.instance_path))
+        .collect();
+    assert!(
+        errors.is_empty(),
+        "{kind} does not match its schema: {errors:?}\n{message}"
+    );
+}
+
+type Socket =
+    tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
+
+async fn connect(url: &str) -> Socket {
+    tokio_tungstenite::connect_async(url)
+        .await
+        .expect("the socket opens")
+        .0
+}
+
+/// The next text message as JSON (within 10 s).
+async fn next(socket: &mut Socket) -> Value {
+    loop {
+        let message = tokio::time::timeout(Duration::from_secs(10), socket.next())
+            .await
+            .expect("a message within 10 s")
+            .expect("the socket is open")
+            .expect("no error");
+        if let Message::Text(t) = message {
+            return serde_json::from_str(&t).expect("JSON");
+        }
+    }
+}
+
+/// The next message of a type, skipping others.
+async fn next_of(socket: &mut Socket, kind: &str) -> Value {
+    loop {
+        let m = next(socket).await;
+        if m["type"] == kind {
+            return m;
+        }
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn demo_matches_are_listed_and_stream_schema_valid_frames() {
+    let server = Server::start(&[]);
+    let list = server.get("/api/matches");
+    let sports: Vec<&str> = list["matches"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["sport"].as_str().unwrap())
+        .collect();
+    for sport in ["baseball", "cricket", "basketball"] {
+        assert!(sports.contains(&sport), "{sport} demo missing: {list}");
+    }
+    for m in list["matches"].as_array().unwrap() {
+        let id = m["id"].as_str().unwrap();
+        let mut socket = connect(&server.ws(&format!("/ws/matches/{id}"))).await;
+        let hello = next(&mut socket).await;
+        assert_eq!(hello["type"], "hello");
+        assert_eq!(
+            (hello["protocol"].as_str(), hello["version"].as_u64()),
+            (Some("fieldhouse"), Some(1))
+        );
+        assert_eq!(hello["role"], "spectator");
+        assert!(hello["match"]["motion_source"]
+            .as_str()
+            .unwrap()
+            .contains("mocap"));
+        assert_valid(&hello);
+        let mut last = None;
+        for _ in 0..8 {
+            let frame = next(&mut socket).await;
+            assert_eq!(frame["type"], "frame");
+            assert_valid(&frame);
+            let tick = frame["tick"].as_u64().unwrap();
+            assert!(
+                last.is_none_or(|l| tick > l),
+                "ticks increase: {last:?} then {tick}"
+            );
+            last = Some(tick);
+        }
+    }
+    let metrics = ureq::get(&server.http("/metrics"))
+        .call()
+        .unwrap()
+        .into_string()
+        .unwrap();
+    assert!(metrics.contains("fieldhouse_ticks_total"));
+    assert!(metrics.contains("fieldhouse_tick_duration_seconds_bucket"));
+}
+
+fn fielder_with_bot(mode: &str, deadline_ms: u64) -> Value {
+    json!({
+        "sport": "baseball",
+        "mode": mode,
+        "lockstep_deadline_ms": deadline_ms,
+        "agents": [
+            {"id": "cf", "strategy": "chapman", "position": [60.0, 60.0], "bot": true},
+            {"id": "rf", "strategy": "lot-optical", "position": [20.0, 80.0]}
+        ],
+        "options": {"pause_s": 30.0}
+    })
+}
+
+fn agent<'a>(frame: &'a Value, id: &str) -> &'a Value {
+    frame["agents"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|a| a["id"] == id)
+        .unwrap()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_bots_commands_move_its_agent_and_a_disconnect_hands_it_back() {
+    let server = Server::start(&["--no-demo"]);
+    let (id, tokens) = server.create(fielder_with_bot("realtime", 1000));
+    let token = tokens["cf"].as_str().unwrap();
+    let mut bot = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    let hello = next(&mut bot).await;
+    assert_eq!(
+        (hello["role"].as_str(), hello["agent"].as_str()),
+        (Some("bot"), Some("cf"))
+    );
+    assert_valid(&hello);
+    let mut spectator = connect(&server.ws(&format!("/ws/matches/{id}"))).await;
+    next_of(&mut spectator, "frame").await;
+    // Run 12 m toward the batter's side of the field, answering every perception.
+    let target = [60.0, 48.0];
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(4) {
+        let p = next_of(&mut bot, "perception").await;
+        assert_valid(&p);
+        assert_eq!(p["agent"], "cf");
+        let command = json!({"type": "command", "tick": p["tick"], "action": {"kind": "run_to", "target": target}});
+        assert_valid(&command);
+        bot.send(Message::Text(command.to_string().into()))
+            .await
+            .unwrap();
+    }
+    let frame = next_of(&mut spectator, "frame").await;
+    let cf = agent(&frame, "cf");
+    assert_eq!(cf["controller"], "bot");
+    let at = [
+        cf["position"][0].as_f64().unwrap(),
+        cf["position"][1].as_f64().unwrap(),
+    ];
+    let gap = (at[0] - target[0]).hypot(at[1] - target[1]);
+    assert!(gap < 2.0, "cf is {gap} m from its target after 4 s: {at:?}");
+    // The other fielder is the server's and stayed home: the token controls only cf.
+    assert_eq!(agent(&frame, "rf")["position"], json!([20.0, 80.0]));
+    drop(bot);
+    let deadline = Instant::now() + Duration::from_secs(5);
+    loop {
+        let doc = server.get(&format!("/api/matches/{id}"));
+        let cf = doc["agents"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|a| a["id"] == "cf")
+            .unwrap()
+            .clone();
+        if cf["controller"] == "builtin" {
+            break;
+        }
+        assert!(Instant::now() < deadline, "cf was not handed back: {doc}");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    // Reconnecting with the same token resumes control.
+    let mut again = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    assert_eq!(next(&mut again).await["agent"], "cf");
+    next_of(&mut again, "perception").await;
+    let doc = server.get(&format!("/api/matches/{id}"));
+    assert!(doc["agents"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|a| a["id"] == "cf" && a["controller"] == "bot"));
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn lockstep_advances_only_when_the_bot_answers_or_at_the_deadline() {
+    let server = Server::start(&["--no-demo"]);
+    let (id, tokens) = server.create(fielder_with_bot("lockstep", 400));
+    let token = tokens["cf"].as_str().unwrap();
+    let mut bot = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    next(&mut bot).await;
+    // Answering at once: the match runs as fast as the bot (far faster than 60 Hz).
+    let started = Instant::now();
+    let first = next_of(&mut bot, "perception").await["tick"]
+        .as_u64()
+        .unwrap();
+    let mut tick = first;
+    while tick < first + 120 {
+        let command = json!({"type": "command", "tick": tick, "action": {"kind": "stand"}});
+        bot.send(Message::Text(command.to_string().into()))
+            .await
+            .unwrap();
+        tick = next_of(&mut bot, "perception").await["tick"]
+            .as_u64()
+            .unwrap();
+    }
+    assert!(
+        started.elapsed() < Duration::from_secs(2),
+        "120 answered ticks took {:?}",
+        started.elapsed()
+    );
+    // Silent: each tick waits for the 400 ms deadline.
+    let waiting = server.tick(&id);
+    tokio::time::sleep(Duration::from_millis(1000)).await;
+    let later = server.tick(&id);
+    assert!(
+        (1..=4).contains(&(later - waiting)),
+        "{waiting} → {later} in 1 s without answers"
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_wrong_or_missing_token_is_refused_before_the_upgrade() {
+    let server = Server::start(&["--no-demo"]);
+    let (id, tokens) = server.create(fielder_with_bot("realtime", 1000));
+    let (other, _) = server.create(fielder_with_bot("realtime", 1000));
+    let status = |result: Result<_, tokio_tungstenite::tungstenite::Error>| match result {
+        Err(tokio_tungstenite::tungstenite::Error::Http(response)) => response.status().as_u16(),
+        Err(e) => panic!("unexpected error {e}"),
+        Ok(_) => panic!("the upgrade succeeded"),
+    };
+    let play = |m: &str, token: Option<&str>| {
+        let query = token.map(|t| format!("?token={t}")).unwrap_or_default();
+        server.ws(&format!("/ws/matches/{m}/play{query}"))
+    };
+    assert_eq!(
+        status(tokio_tungstenite::connect_async(play(&id, None)).await),
+        401
+    );
+    assert_eq!(
+        status(
+            tokio_tungstenite::connect_async(play(&id, Some("0123456789abcdef0123456789abcdef")))
+                .await
+        ),
+        403
+    );
+    // A token controls only its own match's agent.
+    let token = tokens["cf"].as_str().unwrap();
+    assert_eq!(
+        status(tokio_tungstenite::connect_async(play(&other, Some(token))).await),
+        403
+    );
+    assert_eq!(
+        status(tokio_tungstenite::connect_async(play("nope", Some(token))).await),
+        404
+    );
+    // And the right one gets in.
+    assert!(tokio_tungstenite::connect_async(play(&id, Some(token)))
+        .await
+        .is_ok());
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn malformed_input_gets_an_error_and_the_match_keeps_ticking() {
+    let server = Server::start(&["--no-demo"]);
+    let (id, tokens) = server.create(fielder_with_bot("realtime", 1000));
+    let token = tokens["cf"].as_str().unwrap();
+    let mut bot = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    next(&mut bot).await;
+    let before = server.tick(&id);
+    for (sent, code) in [
+        (Message::Text("{not json".into()), "malformed_json"),
+        (
+            Message::Text(r#"{"type":"teleport"}"#.into()),
+            "bad_message",
+        ),
+        (
+            Message::Text(r#"{"type":"command","tick":"soon","action":{"kind":"stand"}}"#.into()),
+            "bad_message",
+        ),
+        (
+            Message::Text(
+                r#"{"type":"command","tick":1,"action":{"kind":"run_to","target":[1e400,0]}}"#
+                    .into(),
+            ),
+            "bad_message",
+        ),
+        (Message::Binary(vec![1, 2, 3].into()), "binary"),
+    ] {
+        bot.send(sent).await.unwrap();
+        let error = next_of(&mut bot, "error").await;
+        assert_eq!(error["code"], code, "{error}");
+        assert_valid(&error);
+    }
+    // A well-formed command the sport cannot do is rejected with the reason.
+    let tick = next_of(&mut bot, "perception").await["tick"].clone();
+    let shoot = json!({"type": "command", "tick": tick, "action": {"kind": "shoot"}});
+    bot.send(Message::Text(shoot.to_string().into()))
+        .await
+        .unwrap();
+    let error = next_of(&mut bot, "error").await;
+    assert_eq!(error["code"], "rejected");
+    assert!(error["message"]
+        .as_str()
+        .unwrap()
+        .contains("not a baseball action"));
+    let stale = json!({"type": "command", "tick": 0, "action": {"kind": "stand"}});
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    bot.send(Message::Text(stale.to_string().into()))
+        .await
+        .unwrap();
+    assert_eq!(next_of(&mut bot, "error").await["code"], "stale_tick");
+    // The socket is still open and the match still ticks.
+    assert_eq!(next_of(&mut bot, "perception").await["agent"], "cf");
+    assert!(server.tick(&id) > before);
+    // A message over the limit closes the socket with 1009.
+    let big = format!("{{\"type\":\"command\",\"pad\":\"{}\"}}", "x".repeat(5000));
+    bot.send(Message::Text(big.into())).await.unwrap();
+    let code = loop {
+        match tokio::time::timeout(Duration::from_secs(5), bot.next())
+            .await
+            .expect("closed in time")
+        {
+            Some(Ok(Message::Close(Some(frame)))) => break Some(frame.code),
+            Some(Ok(_)) => continue,
+            _ => break None,
+        }
+    };
+    assert_eq!(code, Some(CloseCode::Size));
+    assert!(server.tick(&id) > before);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_slow_spectator_does_not_slow_a_fast_one() {
+    let server = Server::start(&["--no-demo"]);
+    let (id, _) = server.create(json!({"sport": "cricket"}));
+    // Opened and never read: its frames pile up in the socket buffers.
+    let _slow = connect(&server.ws(&format!("/ws/matches/{id}"))).await;
+    let mut fast = connect(&server.ws(&format!("/ws/matches/{id}"))).await;
+    next(&mut fast).await;
+    let (started, first) = (
+        Instant::now(),
+        next(&mut fast).await["tick"].as_u64().unwrap(),
+    );
+    let mut frames = 0;
+    let mut last = first;
+    while started.elapsed() < Duration::from_secs(3) {
+        let frame = next_of(&mut fast, "frame").await;
+        let tick = frame["tick"].as_u64().unwrap();
+        assert!(tick > last);
+        last = tick;
+        frames += 1;
+    }
+    // 30 frames a second for 3 s; a spectator that kept up got nearly all.
+    assert!(frames >= 80, "only {frames} frames in 3 s");
+    assert!(
+        last - first >= 170,
+        "the match ran {} ticks in 3 s",
+        last - first
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn rest_errors_are_json_with_the_right_status() {
+    let server = Server::start(&["--no-demo"]);
+    let error = |result: Result<ureq::Response, ureq::Error>| match result {
+        Err(ureq::Error::Status(code, response)) => (code, response.into_json::<Value>().unwrap()),
+        other => panic!("expected an error status, got {other:?}"),
+    };
+    let post = |auth: Option<&str>, body: &str| {
+        let mut request =
+            ureq::post(&server.http("/api/matches")).set("content-type", "application/json");
+        if let Some(a) = auth {
+            request = request.set("Authorization", a);
+        }
+        request.send_string(body)
+    };
+    let (code, body) = error(post(None, r#"{"sport":"baseball"}"#));
+    assert_eq!(
+        (code, body["error"]["code"].as_str()),
+        (401, Some("unauthorized"))
+    );
+    let (code, _) = error(post(
+        Some("Bearer not-the-token"),
+        r#"{"sport":"baseball"}"#,
+    ));
+    assert_eq!(code, 403);
+    let admin = format!("Bearer {ADMIN}");
+    let (code, body) = error(post(
+        Some(&admin),
+        r#"{"sport":"baseball","agents":[{"id":"a"},{"id":"b","strategy":"lott"}]}"#,
+    ));
+    assert_eq!(code, 422);
+    let message = body["error"]["message"].as_str().unwrap();
+    assert!(
+        message.starts_with("agents[1].strategy: unknown strategy \"lott\""),
+        "{message}"
+    );
+    let (code, body) = error(post(Some(&admin), r#"{"sport":"curling"}"#));
+    assert_eq!(code, 422);
+    assert!(
+        body["error"]["message"]
+            .as_str()
+            .unwrap()
+            .starts_with("sport:"),
+        "{body}"
+    );
+    let (code, _) = error(post(Some(&admin), "{not json"));
+    assert_eq!(code, 422);
+    let (code, _) = error(ureq::get(&server.http("/api/matches/nope")).call());
+    assert_eq!(code, 404);
+    // Deleting ends the match for its spectators.
+    let (id, _) = server.create(json!({"sport": "baseball"}));
+    let mut spectator = connect(&server.ws(&format!("/ws/matches/{id}"))).await;
+    next(&mut spectator).await;
+    let (code, _) = error(ureq::delete(&server.http(&format!("/api/matches/{id}"))).call());
+    assert_eq!(code, 401);
+    ureq::delete(&server.http(&format!("/api/matches/{id}")))
+        .set("Authorization", &admin)
+        .call()
+        .unwrap();
+    let end = next_of(&mut spectator, "end").await;
+    assert_eq!(end["reason"], "deleted");
+    assert_valid(&end);
+    let (code, _) = error(ureq::get(&server.http(&format!("/api/matches/{id}"))).call());
+    assert_eq!(code, 404);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn sigterm_ends_matches_and_closes_sockets_with_1001() {
+    let mut server = Server::start(&[]);
+    let mut spectator = connect(&server.ws("/ws/matches/demo-basketball")).await;
+    next(&mut spectator).await;
+    let status = Command::new("kill")
+        .args(["-TERM", &server.child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let (mut end, mut code) = (None, None);
+    while let Ok(Some(Ok(message))) =
+        tokio::time::timeout(Duration::from_secs(5), spectator.next()).await
+    {
+        match message {
+            Message::Text(t) => {
+                let v: Value = serde_json::from_str(&t).unwrap();
+                if v["type"] == "end" {
+                    end = Some(v);
+                }
+            }
+            Message::Close(frame) => {
+                code = frame.map(|f| f.code);
+                break;
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(end.expect("an end message")["reason"], "shutdown");
+    assert_eq!(code, Some(CloseCode::Away));
+    let exit = server.child.wait().unwrap();
+    assert!(exit.success(), "{exit:?}");
+}
+
+#[test]
+fn every_example_scenario_is_a_valid_body() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let validator = schema("scenario");
+    let mut sports = Vec::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().and_then(|e| e.to_str()) != Some("toml") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        let body: Value =
+            toml::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let errors: Vec<String> = validator
+            .iter_errors(&body)
+            .map(|e| e.to_string())
+            .collect();
+        assert!(errors.is_empty(), "{}: {errors:?}", path.display());
+        let scenario = fieldhouse::sim::Scenario::from_json(body.to_string().as_bytes())
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        sports.push(scenario.sport);
+    }
+    for sport in [
+        fieldhouse::sim::Sport::Baseball,
+        fieldhouse::sim::Sport::Cricket,
+        fieldhouse::sim::Sport::Basketball,
+    ] {
+        assert!(sports.contains(&sport), "no example for {sport:?}");
+    }
+}
