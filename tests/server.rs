@@ -601,3 +601,87 @@ fn every_example_scenario_is_a_valid_body() {
         assert!(sports.contains(&sport), "no example for {sport:?}");
     }
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn flooding_is_rate_limited_then_closed_with_1008() {
+    let server = Server::start(&["--no-demo"]);
+    let (id, tokens) = server.create(fielder_with_bot("realtime", 1000));
+    let token = tokens["cf"].as_str().unwrap();
+    let mut bot = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    next(&mut bot).await;
+    let stand = json!({"type": "command", "tick": 0, "action": {"kind": "stand"}}).to_string();
+    let (mut sink, mut stream) = bot.split();
+    let flood = tokio::spawn(async move {
+        for _ in 0..5000 {
+            if sink
+                .send(Message::Text(stand.clone().into()))
+                .await
+                .is_err()
+            {
+                break;
+            }
+        }
+    });
+    let (mut limited, mut code) = (false, None);
+    while let Ok(Some(Ok(message))) =
+        tokio::time::timeout(Duration::from_secs(10), stream.next()).await
+    {
+        match message {
+            Message::Text(t) => {
+                limited |= serde_json::from_str::<Value>(&t).unwrap()["code"] == "rate_limited"
+            }
+            Message::Close(frame) => {
+                code = frame.map(|f| f.code);
+                break;
+            }
+            _ => {}
+        }
+    }
+    flood.abort();
+    assert!(limited, "no rate_limited error before the close");
+    assert_eq!(code, Some(CloseCode::Policy));
+    // The match is unharmed.
+    let before = server.tick(&id);
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    assert!(server.tick(&id) > before);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_reference_bot_plays_a_match_to_its_end() {
+    let server = Server::start(&["--no-demo"]);
+    let mut scenario = fielder_with_bot("realtime", 1000);
+    scenario["duration_s"] = json!(3.0);
+    scenario["options"]["pause_s"] = json!(0.5);
+    let (id, tokens) = server.create(scenario);
+    let output = tokio::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args(["bot", "--strategy", "chapman", "--url"])
+        .arg(server.ws(&format!("/ws/matches/{id}/play")))
+        .arg("--token")
+        .arg(tokens["cf"].as_str().unwrap())
+        .output()
+        .await
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let result: Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(result["reason"], "finished");
+    // A command for every tick of play, give or take the start.
+    assert!(result["commands"].as_u64().unwrap() > 120, "{result}");
+    assert_eq!(
+        result["result"]["balls"].as_u64().map(|b| b >= 1),
+        Some(true),
+        "{result}"
+    );
+    // A wrong token is refused with a clear error, before any WebSocket opens.
+    let refused = tokio::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args(["bot", "--token", "wrong", "--url"])
+        .arg(server.ws(&format!("/ws/matches/{id}/play")))
+        .output()
+        .await
+        .unwrap();
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("refused"));
+}
