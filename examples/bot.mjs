@@ -31,14 +31,14 @@ ws.onmessage = (event) => {
     case "error": // about something we sent; the connection stays open
       console.error(`error ${msg.code}: ${msg.message}`);
       break;
-    case "end": // the last message; the server closes the socket (1000) right after it
+    case "end": // the last message; the server then closes the socket (1000; 1001 on shutdown)
       console.log(`end (${msg.reason}): ${JSON.stringify(msg.result)}`);
       break;
     default: // ignore types this bot does not know
   }
 };
 ws.onclose = (event) => {
-  // 1001: server shutting down; 1008: flooding; 1009: a message over the size limit.
+  // 1001: after `end` on shutdown; 1008: flooding; 1009: a message over the size limit.
   if (event.code !== 1000) console.error(`closed: ${event.code} ${event.reason}`);
 };
 

@@ -35,7 +35,8 @@ async fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             // About something we sent; the connection stays open.
             Some("error") => eprintln!("error {}: {}", msg["code"], msg["message"]),
-            // The last message: the server closes the socket (1000) right after it.
+            // The last message: the server closes the socket right after it (1000, or
+            // 1001 if the server is shutting down).
             Some("end") => {
                 println!("end ({}): {}", msg["reason"], msg["result"]);
                 break;
