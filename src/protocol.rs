@@ -140,6 +140,21 @@ pub enum ClientMessage {
     Command { tick: u64, action: Action },
 }
 
+/// Reads a client's message, or says what is wrong with it: `(code, message)` with code
+/// `malformed_json` (not JSON at all) or `bad_message` (JSON, but not a message we know).
+/// Only objects are messages: serde would otherwise also read a struct from an array.
+pub fn decode(text: &str) -> Result<ClientMessage, (&'static str, String)> {
+    let value: Value = serde_json::from_str(text).map_err(|e| ("malformed_json", e.to_string()))?;
+    let is_object = |v: &Value| v.is_object();
+    if !is_object(&value) || value.get("action").is_some_and(|a| !is_object(a)) {
+        return Err((
+            "bad_message",
+            "a message and its action are JSON objects".into(),
+        ));
+    }
+    serde_json::from_value(value).map_err(|e| ("bad_message", e.to_string()))
+}
+
 /// Serialises a message (they always serialise: their fields are plain data).
 pub fn encode(message: &impl Serialize) -> String {
     serde_json::to_string(message).expect("protocol messages serialise")

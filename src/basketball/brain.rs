@@ -44,15 +44,18 @@ impl Game {
     /// Every agent whose time has come decides, in a fixed order.
     pub(super) fn plan(&mut self, now: f64, events: &mut Vec<Event>) {
         for k in 0..self.agents.len() {
+            if self.controlled[k] {
+                // A bot's order is carried out on the next tick, whenever it comes.
+                if self.agents[k].shooting_s.is_none() {
+                    self.obey(k, events);
+                }
+                continue;
+            }
             let a = &self.agents[k];
             if a.shooting_s.is_some() || now + 1e-9 < a.next_plan_s {
                 continue;
             }
             self.agents[k].next_plan_s = now + self.params.replan_s;
-            if self.controlled[k] {
-                self.obey(k, events);
-                continue;
-            }
             match (self.agents[k].team, self.holder() == Some(k)) {
                 (Team::Defense, _) => self.defend(k),
                 (Team::Offense, true) => {

@@ -19,9 +19,6 @@ pub enum Outcome {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Event {
-    PossessionStarted {
-        possession: u64,
-    },
     /// An agent chose a new action (or, with the ball, a new shooting square). `chosen`
     /// and `candidates` are those of `basketball-decide`; `candidates` here holds only
     /// the squares that satisfied the rule, so a spectator can outline them.

@@ -79,7 +79,7 @@ pub struct Game {
     pub(super) orders: Vec<Option<Order>>,
 }
 
-/// What a bot may tell its agent to do; applied on the agent's next decision tick.
+/// What a bot may tell its agent to do; carried out on the next tick.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Order {
     /// Move (dribbling with the ball, running without) toward a point on the court.
@@ -177,7 +177,7 @@ impl Game {
     }
 
     /// Accepts a bot's order for agent `k`, or says why it is impossible now. The order
-    /// is carried out on the agent's next decision tick.
+    /// is carried out on the next tick.
     pub fn order(&mut self, k: usize, order: Order) -> Result<(), String> {
         let agent = &self.agents[k];
         let holds = self.holder() == Some(k);

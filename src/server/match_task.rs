@@ -65,10 +65,8 @@ pub fn spawn(
             (k, a, new_token())
         })
         .collect::<Vec<_>>();
-    let mut controlled = vec![false; agent_ids.len()];
-    for (k, _, _) in &tokens {
-        controlled[*k] = true;
-    }
+    // Agents play their built-in brains until a bot connects.
+    let controlled = vec![false; agent_ids.len()];
     let first = first_frame(&id, &world);
     let (publish, published) = watch::channel(Published {
         seq: 0,
@@ -274,6 +272,7 @@ impl Ticker {
         match message {
             Control::BotJoin { agent, conn, out } => {
                 if self.bots[agent].is_some() {
+                    // The old connection closes once it has passed this on.
                     self.tell(agent, "replaced", "another connection took over this agent");
                 }
                 self.bots[agent] = Some(Bot {
@@ -309,13 +308,13 @@ impl Ticker {
                     let text = format!("command for tick {tick}, but the match is at tick {now}");
                     return self.tell(agent, "future_tick", &text);
                 }
-                match self.world.command(agent, &action) {
-                    Ok(()) => {
-                        if let Some(b) = &mut self.bots[agent] {
-                            b.answered = Some(b.answered.map_or(tick, |a| a.max(tick)));
-                        }
-                    }
-                    Err(reason) => self.tell(agent, "rejected", &reason),
+                // Any command answers its tick, even one the world rejects: lockstep
+                // waits for bots to speak, not to be right.
+                if let Some(b) = &mut self.bots[agent] {
+                    b.answered = Some(b.answered.map_or(tick, |a| a.max(tick)));
+                }
+                if let Err(reason) = self.world.command(agent, &action) {
+                    self.tell(agent, "rejected", &reason);
                 }
             }
             Control::Stop => unreachable!("the tick loop stops on Stop"),
@@ -332,9 +331,6 @@ impl Ticker {
             reason,
             result: &result,
         }));
-        for bot in self.bots.iter().flatten() {
-            let _ = bot.out.try_send(end.clone());
-        }
         self.entry.ended.store(true, Relaxed);
         self.publish.send_modify(|p| p.end = Some(end));
         self.metrics.matches_running.fetch_sub(1, Relaxed);

@@ -93,6 +93,7 @@ pub fn router(app: Arc<AppState>) -> Router {
         .route("/", get(web::index))
         .route("/app.js", get(web::script))
         .fallback(api::fallback)
+        .layer(axum::middleware::map_response(api::json_errors))
         .layer(TraceLayer::new_for_http())
         .with_state(app)
 }

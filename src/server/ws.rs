@@ -11,11 +11,12 @@
 use super::api::ApiError;
 use super::auth;
 use super::state::{AppState, Control, MatchEntry};
-use crate::protocol::{encode, ClientMessage, ErrorMessage, Hello, Limits};
+use crate::protocol::{decode, encode, ClientMessage, ErrorMessage, Hello, Limits};
 use axum::extract::ws::{CloseFrame, Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::extract::{Path, Query, State};
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
+use futures_util::stream::{SplitSink, SplitStream};
 use futures_util::{SinkExt, StreamExt};
 use std::collections::HashMap;
 use std::sync::atomic::Ordering::Relaxed;
@@ -102,7 +103,7 @@ enum Sent {
 
 /// Writes to a spectator's socket, counting bytes, giving up after `timeout`.
 struct Sender<'a> {
-    sink: &'a mut futures_util::stream::SplitSink<WebSocket, Message>,
+    sink: &'a mut SplitSink<WebSocket, Message>,
     timeout: Duration,
     metrics: &'a super::metrics::Metrics,
 }
@@ -117,9 +118,28 @@ impl Sender<'_> {
         }
     }
 
-    async fn close(&mut self, code: u16, reason: &str) {
-        let _ = tokio::time::timeout(self.timeout, self.sink.send(close(code, reason))).await;
+    async fn close(&mut self, stream: &mut SplitStream<WebSocket>, code: u16, reason: &str) {
+        shut(self.sink, stream, code, reason).await;
     }
+}
+
+/// Sends a close frame, then reads on until the client answers it (or a second passes),
+/// so the client gets the close code rather than a connection reset.
+async fn shut(
+    sink: &mut SplitSink<WebSocket, Message>,
+    stream: &mut SplitStream<WebSocket>,
+    code: u16,
+    reason: &str,
+) {
+    let _ = tokio::time::timeout(Duration::from_secs(1), sink.send(close(code, reason))).await;
+    let _ = tokio::time::timeout(Duration::from_secs(1), async {
+        while let Some(Ok(message)) = stream.next().await {
+            if matches!(message, Message::Close(_)) {
+                break;
+            }
+        }
+    })
+    .await;
 }
 
 pub async fn spectate(
@@ -156,7 +176,7 @@ async fn spectator(socket: WebSocket, entry: Arc<MatchEntry>, app: Arc<AppState>
     }
     if let (true, Some(end)) = (ok, first.end) {
         send.text(end).await;
-        send.close(NORMAL, "match ended").await;
+        send.close(&mut stream, NORMAL, "match ended").await;
         ok = false;
     }
     if ok {
@@ -183,7 +203,7 @@ async fn spectator(socket: WebSocket, entry: Arc<MatchEntry>, app: Arc<AppState>
                     if let Some(end) = p.end {
                         send.text(end).await;
                         let (code, reason) = ending(&shutdown);
-                        send.close(code, reason).await;
+                        send.close(&mut stream, code, reason).await;
                         break;
                     }
                 }
@@ -191,7 +211,7 @@ async fn spectator(socket: WebSocket, entry: Arc<MatchEntry>, app: Arc<AppState>
                     Read::Closed => break,
                     Read::TooBig => {
                         metrics.closed_for_size.fetch_add(1, Relaxed);
-                        send.close(TOO_BIG, "message too big").await;
+                        send.close(&mut stream, TOO_BIG, "message too big").await;
                         break;
                     }
                     // Spectators only listen; what they say is not read.
@@ -259,8 +279,10 @@ struct Bucket {
     rate: f64,
     burst: f64,
     last: Instant,
-    /// Messages refused since the bucket last had room.
-    refused: u32,
+    /// Messages refused with no quiet second between them: flooding, once there are
+    /// more than a burst of them.
+    strikes: u32,
+    last_refused: Instant,
 }
 
 impl Bucket {
@@ -270,12 +292,14 @@ impl Bucket {
         self.last = now;
         if self.tokens >= 1.0 {
             self.tokens -= 1.0;
-            self.refused = 0;
-            true
-        } else {
-            self.refused += 1;
-            false
+            return true;
         }
+        if now - self.last_refused > Duration::from_secs(1) {
+            self.strikes = 0;
+        }
+        self.strikes += 1;
+        self.last_refused = now;
+        false
     }
 }
 
@@ -308,67 +332,76 @@ async fn bot(
         rate: f64::from(app.config.bot_messages_per_second),
         burst: f64::from(app.config.bot_burst),
         last: Instant::now(),
-        refused: 0,
+        strikes: 0,
+        last_refused: Instant::now(),
     };
     let error = |code: &str, message: &str| {
         metrics.client_errors.fetch_add(1, Relaxed);
         let _ = out_tx.try_send(Utf8Bytes::from(encode(&ErrorMessage::new(code, message))));
     };
-    if joined {
+    // The match's end comes through what it publishes, so a bot whose queue is full
+    // still gets it.
+    let mut published = entry.published.clone();
+    let closing: Option<(u16, &str)> = if !joined {
+        None
+    } else {
         loop {
             tokio::select! {
                 outgoing = out_rx.recv() => {
-                    let Some(text) = outgoing else { break };
-                    let is_end = text.as_str().starts_with("{\"type\":\"end\"");
+                    let Some(text) = outgoing else { break None };
+                    let replaced = text.as_str().contains("\"code\":\"replaced\"");
                     metrics.bytes_out.fetch_add(text.len() as u64, Relaxed);
                     if sink.send(Message::Text(text)).await.is_err() {
-                        break;
+                        break None;
                     }
-                    if is_end {
-                        let (code, reason) = ending(&shutdown);
-                        let _ = sink.send(close(code, reason)).await;
-                        break;
+                    if replaced {
+                        break Some((POLICY, "another connection took over this agent"));
+                    }
+                }
+                changed = published.changed() => {
+                    let end = published.borrow_and_update().end.clone();
+                    match (changed, end) {
+                        (_, Some(end)) => {
+                            metrics.bytes_out.fetch_add(end.len() as u64, Relaxed);
+                            let _ = sink.send(Message::Text(end)).await;
+                            break Some(ending(&shutdown));
+                        }
+                        (Err(_), None) => break None,
+                        (Ok(()), None) => {}
                     }
                 }
                 incoming = stream.next() => match classify(incoming) {
-                    Read::Closed => break,
+                    Read::Closed => break None,
                     Read::TooBig => {
                         metrics.closed_for_size.fetch_add(1, Relaxed);
-                        let _ = sink.send(close(TOO_BIG, "message too big")).await;
-                        break;
+                        break Some((TOO_BIG, "message too big"));
                     }
                     Read::Ignore => {}
                     _ if !bucket.take() => {
-                        // Sustained flooding: more than a burst's worth refused in a row.
-                        if bucket.refused > app.config.bot_burst {
+                        if bucket.strikes > app.config.bot_burst {
                             metrics.closed_for_rate.fetch_add(1, Relaxed);
-                            let _ = sink.send(close(POLICY, "too many messages")).await;
-                            break;
+                            break Some((POLICY, "too many messages"));
                         }
-                        if bucket.refused == 1 {
+                        if bucket.strikes == 1 {
                             error("rate_limited", "too many messages; slow down or be disconnected");
                         }
                     }
                     Read::Binary => error("binary", "binary frames are not part of the protocol; send JSON text"),
-                    Read::Text(text) => match serde_json::from_str::<ClientMessage>(&text) {
+                    Read::Text(text) => match decode(&text) {
                         Ok(ClientMessage::Command { tick, action }) => {
                             let command = Control::Command { agent: k, conn, tick, action };
                             if entry.control.send(command).await.is_err() {
-                                break;
+                                break None;
                             }
                         }
-                        Err(e) => {
-                            let code = if serde_json::from_str::<serde_json::Value>(&text).is_err() {
-                                "malformed_json"
-                            } else {
-                                "bad_message"
-                            };
-                            error(code, &e.to_string());
-                        }
+                        Err((code, message)) => error(code, &message),
                     },
                 },
             }
         }
+    };
+    if let Some((code, reason)) = closing {
+        shut(&mut sink, &mut stream, code, reason).await;
     }
     let _ = entry
         .control

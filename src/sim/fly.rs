@@ -27,6 +27,8 @@ pub enum FielderOrder {
     Accelerate(DVec2),
     /// Run to this point as fast as the body allows, arriving at rest.
     RunTo(DVec2),
+    /// Slow to a stop.
+    Stand,
 }
 
 #[derive(Debug, Clone)]
@@ -131,11 +133,8 @@ impl FlyWorld {
         if !(pause_s.is_finite() && (0.0..=60.0).contains(&pause_s)) {
             return Err(ScenarioError::at("options.pause_s", "between 0 and 60 s"));
         }
-        let lineup: Vec<(String, StrategyKind, DVec2, bool)> = if s.agents.is_empty() {
+        let lineup: Vec<(String, StrategyKind, DVec2)> = if s.agents.is_empty() {
             default_lineup(s.sport)
-                .into_iter()
-                .map(|(id, st, at)| (id, st, at, false))
-                .collect()
         } else {
             let defaults = default_lineup(s.sport);
             s.agents
@@ -168,7 +167,7 @@ impl FlyWorld {
                         }
                         None => defaults[i % defaults.len()].2,
                     };
-                    Ok((a.id.clone(), strategy, at, a.bot))
+                    Ok((a.id.clone(), strategy, at))
                 })
                 .collect::<Result<_, _>>()?
         };
@@ -178,7 +177,7 @@ impl FlyWorld {
         rng.set_stream(3);
         let fielders = lineup
             .into_iter()
-            .map(|(id, strategy, home, by_bot)| Fielding {
+            .map(|(id, strategy, home)| Fielding {
                 fielder: Fielder::new(strategy, home, DVec2::ZERO, &config, dt, || {
                     crate::fielding::Forecast {
                         point: home,
@@ -188,7 +187,8 @@ impl FlyWorld {
                 id,
                 strategy,
                 home,
-                by_bot,
+                // Its built-in strategy plays until a bot connects.
+                by_bot: false,
                 order: None,
                 last_seen: None,
             })
@@ -309,6 +309,15 @@ impl FlyWorld {
             Play::Between { until_tick } => {
                 if self.tick >= *until_tick {
                     self.new_play(events);
+                    return;
+                }
+                // The ball is dead: bots' fielders follow their orders, the others stop.
+                for f in &mut self.fielders {
+                    let order = if f.by_bot { f.order } else { None };
+                    let command = bot_command(order, &f.fielder.body, &self.config.limits);
+                    f.fielder
+                        .body
+                        .advance(command, &self.config.limits, self.dt);
                 }
                 return;
             }
@@ -343,7 +352,7 @@ impl FlyWorld {
                                 "by": f.id,
                                 "ball": self.score.balls,
                                 "at": f.fielder.body.pos.to_array(),
-                                "time_s": ball.t,
+                                "flight_time_s": ball.t,
                             }));
                             self.play = Play::Between {
                                 until_tick: self.tick + self.pause_ticks,
@@ -474,7 +483,7 @@ impl FlyWorld {
 /// The acceleration a bot's order asks for now (the body clamps it to its limits).
 fn bot_command(order: Option<FielderOrder>, body: &Body, limits: &Limits) -> DVec2 {
     match order {
-        None => -body.vel / RUN_TO_RESPONSE_S,
+        None | Some(FielderOrder::Stand) => -body.vel / RUN_TO_RESPONSE_S,
         Some(FielderOrder::Accelerate(a)) => a,
         Some(FielderOrder::RunTo(target)) => {
             let gap = target - body.pos;

@@ -35,7 +35,6 @@ impl HoopsWorld {
         let (mut offense, mut defense) = (Vec::new(), Vec::new());
         let mut offense_brain: Option<(usize, Brain)> = None;
         let mut defender_motion: Option<(usize, DefenderMotion)> = None;
-        let mut bots = Vec::new();
         if s.agents.is_empty() {
             offense = vec!["o1".to_string(), "o2".to_string()];
             defense = vec!["d1".to_string()];
@@ -94,9 +93,6 @@ impl HoopsWorld {
                     ))
                 }
             }
-            if a.bot {
-                bots.push(a.id.clone());
-            }
         }
         if offense.is_empty() {
             return Err(ScenarioError::at(
@@ -113,11 +109,8 @@ impl HoopsWorld {
         params.offense_players = offense.len();
         params.defenders = defense.len();
         let names: Vec<String> = offense.into_iter().chain(defense).collect();
-        let mut game = Game::named(caps, params, names.clone());
-        for id in bots {
-            let k = names.iter().position(|n| *n == id).expect("a listed agent");
-            game.set_controlled(k, true);
-        }
+        // Bots' agents play their built-in brains until a bot connects.
+        let game = Game::named(caps, params, names);
         Ok(HoopsWorld {
             game,
             possessions: s.options.possessions,

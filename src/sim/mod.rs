@@ -201,7 +201,7 @@ impl World {
                     w.order(k, FielderOrder::Accelerate(point(*accel)?))
                 }
                 Action::RunTo { target } => w.order(k, FielderOrder::RunTo(point(*target)?)),
-                Action::Stand {} => w.order(k, FielderOrder::Accelerate(DVec2::ZERO)),
+                Action::Stand {} => w.order(k, FielderOrder::Stand),
                 _ => wrong(self.sport),
             },
             Inner::Hoops(w) => match action {

@@ -174,8 +174,18 @@ pub const MAX_AGENTS: usize = 32;
 impl Scenario {
     /// Parses a JSON scenario, naming the field at fault.
     pub fn from_json(bytes: &[u8]) -> Result<Scenario, ScenarioError> {
-        let mut de = serde_json::Deserializer::from_slice(bytes);
-        let scenario: Scenario = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        let value: serde_json::Value = serde_json::from_slice(bytes)
+            .map_err(|e| ScenarioError::at("", format!("not JSON: {e}")))?;
+        Scenario::from_value(value)
+    }
+
+    /// Reads a scenario from JSON already parsed (or TOML converted to JSON). Only an
+    /// object is a scenario: serde would otherwise also read one from an array.
+    pub fn from_value(value: serde_json::Value) -> Result<Scenario, ScenarioError> {
+        if !value.is_object() {
+            return Err(ScenarioError::at("", "a scenario is a JSON object"));
+        }
+        let scenario: Scenario = serde_path_to_error::deserialize(value).map_err(|e| {
             let path = e.path().to_string();
             ScenarioError::at(
                 if path == "." { String::new() } else { path },
