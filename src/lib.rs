@@ -26,6 +26,11 @@
 //! * [`sim`]: a whole match of any sport as one deterministic [`sim::World`]: scenarios
 //!   checked field by field, fly balls with fielders, basketball, bots' commands.
 //! * [`protocol`]: the WebSocket messages (version 1), as the server sends and reads them.
+//! * [`session`]: a world with its id and frame rate, stepping and encoding frames: what
+//!   the server, headless runs and replay verification all drive.
+//! * [`replay`]: replay files (JSON lines: header, frames, bot commands, footer with a
+//!   hash over the frames), written append-only, read back to a torn record, verified by
+//!   re-simulation.
 //! * [`server`]: the I/O shell (tokio, axum, tower): match tasks that tick worlds,
 //!   WebSockets for spectators and bots, the REST API, metrics. The only module that
 //!   reads a clock or opens a socket.
@@ -42,5 +47,7 @@ pub mod names;
 pub mod perception;
 pub mod physics;
 pub mod protocol;
+pub mod replay;
 pub mod server;
+pub mod session;
 pub mod sim;

@@ -77,6 +77,8 @@ pub struct Game {
     /// Agents a bot controls: they follow `orders` instead of a brain.
     pub(super) controlled: Vec<bool>,
     pub(super) orders: Vec<Option<Order>>,
+    /// Fixed starting positions, where a scenario gives them (else drawn each possession).
+    starts: Vec<Option<DVec2>>,
 }
 
 /// What a bot may tell its agent to do; carried out on the next tick.
@@ -131,6 +133,7 @@ impl Game {
             names,
             controlled: vec![false; agents],
             orders: vec![None; agents],
+            starts: vec![None; agents],
         };
         game.start_possession();
         game
@@ -159,6 +162,15 @@ impl Game {
 
     pub fn score(&self) -> u32 {
         self.score
+    }
+
+    /// Starts every possession with these agents (index, offense first) at these points
+    /// instead of random ones; the game restarts its first possession.
+    pub fn with_starts(mut self, starts: Vec<Option<DVec2>>) -> Game {
+        assert_eq!(starts.len(), self.starts.len(), "one start per agent");
+        self.starts = starts;
+        self.start_possession();
+        self
     }
 
     /// Hands agent `k` to a bot (`true`) or back to its brain.
@@ -488,8 +500,27 @@ impl Game {
                 facing(at, mark),
             ));
         }
-        for a in &mut agents {
-            a.next_plan_s = now;
+        // Fixed starts replace the drawn ones (drawn all the same, so the others do not
+        // change): the offense faces the basket, a defender its mark.
+        for (k, start) in self.starts.iter().enumerate() {
+            if let Some(at) = *start {
+                agents[k].pose.position = at;
+            }
+        }
+        for k in 0..agents.len() {
+            let at = agents[k].pose.position;
+            let toward = match agents[k].team {
+                Team::Offense => basket,
+                Team::Defense => {
+                    agents[(k - p.offense_players) % p.offense_players]
+                        .pose
+                        .position
+                }
+            };
+            if self.starts[k].is_some() {
+                agents[k].pose.heading = facing(at, toward);
+            }
+            agents[k].next_plan_s = now;
         }
         self.last_decision = vec![None; agents.len()];
         self.orders = vec![None; agents.len()];

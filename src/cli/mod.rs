@@ -10,6 +10,8 @@ mod costmap;
 mod heatmap;
 mod motion;
 mod plots;
+mod replay;
+mod run;
 mod serve;
 mod sweep;
 
@@ -51,6 +53,10 @@ enum Command {
     Serve(serve::ServeArgs),
     /// The reference bot: connect to a match and play one agent.
     Bot(bot::BotArgs),
+    /// Play a scenario file headless, as fast as possible, into a replay file.
+    Run(run::RunArgs),
+    /// Inspect, verify or export a replay file.
+    Replay(replay::ReplayArgs),
 }
 
 pub fn main() -> ExitCode {
@@ -74,6 +80,8 @@ pub fn main() -> ExitCode {
         Command::BasketballEval(args) => basketball::eval(args, &mut out),
         Command::Serve(args) => serve::run(args),
         Command::Bot(args) => bot::run(args, &mut out),
+        Command::Run(args) => run::run(args, &mut out),
+        Command::Replay(args) => replay::run(args, &mut out),
     }
     .and_then(|()| Ok(out.flush()?));
     match result {

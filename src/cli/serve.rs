@@ -20,6 +20,10 @@ pub struct ServeArgs {
     /// Do not start the built-in demo matches.
     #[arg(long)]
     no_demo: bool,
+    /// Record every match as a replay file in this directory (created if missing);
+    /// `GET /api/replays` lists them and `/ws/replays/{id}` plays them.
+    #[arg(long, value_name = "DIR", env = "FIELDHOUSE_REPLAY_DIR")]
+    replay_dir: Option<PathBuf>,
     /// A TOML file of server settings (addr, max_matches, max_message_bytes,
     /// bot_messages_per_second, bot_burst, send_timeout_ms, ...); flags override it.
     #[arg(long, value_name = "FILE")]
@@ -38,6 +42,13 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
     }
     if args.no_demo {
         config.demo = false;
+    }
+    if let Some(dir) = args.replay_dir {
+        config.replay_dir = Some(dir);
+    }
+    if let Some(dir) = &config.replay_dir {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the replay directory {}", dir.display()))?;
     }
     let caps = args.capability.load()?;
     tracing::info!(motion = %caps.source, "motion source");

@@ -101,6 +101,8 @@ pub fn summary(entry: &MatchEntry) -> Value {
         "agents": agents,
         "spectators": entry.spectators.load(Relaxed),
         "motion_source": entry.info.motion_source,
+        "replay": entry.replay,
+        "replay_error": *entry.replay_error.lock().expect("not poisoned"),
     })
 }
 

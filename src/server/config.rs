@@ -26,6 +26,8 @@ pub struct ServerConfig {
     pub request_timeout_ms: u64,
     /// Largest REST request body, bytes.
     pub max_body_bytes: usize,
+    /// Where every match is recorded as a replay (none: matches are not recorded).
+    pub replay_dir: Option<std::path::PathBuf>,
 }
 
 impl Default for ServerConfig {
@@ -40,6 +42,7 @@ impl Default for ServerConfig {
             send_timeout_ms: 5000,
             request_timeout_ms: 10_000,
             max_body_bytes: 64 * 1024,
+            replay_dir: None,
         }
     }
 }

@@ -1,14 +1,16 @@
-//! A match is a task that owns one [`World`] and ticks it: on the wall clock
-//! (`realtime`), as fast as possible (`fast`), or in lock-step with its bots
-//! (`lockstep`). Each frame is encoded once and published; sockets pick it up.
+//! A match is a task that owns one [`World`] (in a [`Session`]) and ticks it: on the
+//! wall clock (`realtime`), as fast as possible (`fast`), or in lock-step with its bots
+//! (`lockstep`). Each frame is encoded once, published for the sockets, and appended to
+//! the match's replay file if the server keeps replays.
 
 use super::auth::new_token;
 use super::metrics::Metrics;
 use super::state::{AppState, Control, MatchEntry, Published};
-use crate::protocol::{encode, End, ErrorMessage, Frame, MatchInfo, Perception};
+use crate::protocol::{encode, End, ErrorMessage, MatchInfo, Perception};
+use crate::replay::Recorder;
+use crate::session::Session;
 use crate::sim::{Mode, Scenario, ScenarioError, World};
 use axum::extract::ws::Utf8Bytes;
-use serde_json::Value;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -67,10 +69,29 @@ pub fn spawn(
         .collect::<Vec<_>>();
     // Agents play their built-in brains until a bot connects.
     let controlled = vec![false; agent_ids.len()];
-    let first = first_frame(&id, &world);
+    let mut session = Session::new(world, id.clone(), scenario.tick_hz, scenario.frame_hz);
+    let first = session.frame();
+    let recorder = app.replay_dir.as_deref().and_then(|dir| {
+        let started = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs());
+        let path = dir.join(format!("{id}-{started}.jsonl"));
+        let made = Recorder::create(&path, &info, &scenario, app.caps.source.fingerprint())
+            .and_then(|mut r| r.frame(&first).map(|()| r));
+        made.map_err(|e| {
+            app.metrics.replay_errors.fetch_add(1, Relaxed);
+            tracing::warn!(path = %path.display(), error = %e, "cannot record this match; it runs unrecorded");
+        })
+        .ok()
+    });
+    let replay = recorder.as_ref().and_then(|r| {
+        r.path()
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+    });
     let (publish, published) = watch::channel(Published {
         seq: 0,
-        frame: first,
+        frame: Utf8Bytes::from(first),
         end: None,
     });
     let (control_tx, control_rx) = mpsc::channel(1024);
@@ -85,18 +106,20 @@ pub fn spawn(
         tick: AtomicU64::new(0),
         ended: AtomicBool::new(false),
         controlled: Mutex::new(controlled),
+        replay,
+        replay_error: Mutex::new(None),
     });
     app.metrics.matches_created.fetch_add(1, Relaxed);
     app.metrics.matches_running.fetch_add(1, Relaxed);
     let task = Ticker {
-        world,
+        session,
+        recorder,
         entry: entry.clone(),
         publish,
         control: control_rx,
         metrics: app.metrics.clone(),
         shutdown: app.shutdown.clone(),
         bots: (0..agent_ids.len()).map(|_| None).collect(),
-        events: Vec::new(),
         agent_ids,
         seq: 0,
     };
@@ -104,30 +127,15 @@ pub fn spawn(
     Ok(entry)
 }
 
-fn first_frame(id: &str, world: &World) -> Utf8Bytes {
-    let (ball, agents, score) = world.state();
-    Utf8Bytes::from(encode(&Frame {
-        kind: "frame",
-        match_id: id,
-        tick: world.tick(),
-        time_s: world.time_s(),
-        ball: &ball,
-        agents: &agents,
-        score: &score,
-        events: &[],
-    }))
-}
-
 struct Ticker {
-    world: World,
+    session: Session,
+    recorder: Option<Recorder>,
     entry: Arc<MatchEntry>,
     publish: watch::Sender<Published>,
     control: mpsc::Receiver<Control>,
     metrics: Arc<Metrics>,
     shutdown: watch::Receiver<bool>,
     bots: Vec<Option<Bot>>,
-    /// Events since the last frame.
-    events: Vec<Value>,
     agent_ids: Vec<String>,
     seq: u64,
 }
@@ -136,7 +144,6 @@ impl Ticker {
     async fn run(mut self) {
         let info = &self.entry.info;
         let period = Duration::from_secs_f64(1.0 / info.tick_hz);
-        let frame_every = ((info.tick_hz / info.frame_hz).round() as u64).max(1);
         let perceive_every = info.perception_every_ticks;
         let deadline = Duration::from_millis(self.entry.scenario.lockstep_deadline_ms);
         let mode = self.entry.mode;
@@ -144,7 +151,7 @@ impl Ticker {
         // Lockstep: when the tick waiting for bots must go anyway.
         let mut waiting_until: Option<Instant> = None;
         let reason = loop {
-            if self.world.finished() {
+            if self.session.world.finished() {
                 break "finished";
             }
             let wake = match (mode, waiting_until) {
@@ -182,8 +189,8 @@ impl Ticker {
                 next_tick = now + period;
             }
             waiting_until = None;
-            self.tick(frame_every);
-            let tick = self.world.tick();
+            self.tick();
+            let tick = self.session.world.tick();
             if tick.is_multiple_of(perceive_every) && self.bots.iter().any(Option::is_some) {
                 self.perceive();
                 if mode == Mode::Lockstep {
@@ -198,50 +205,51 @@ impl Ticker {
     }
 
     fn all_answered(&self) -> bool {
-        let tick = self.world.tick();
+        let tick = self.session.world.tick();
         self.bots
             .iter()
             .flatten()
             .all(|b| b.answered.is_some_and(|t| t >= tick))
     }
 
-    fn tick(&mut self, frame_every: u64) {
+    fn tick(&mut self) {
         let started = std::time::Instant::now();
-        self.world.step(&mut self.events);
+        let frame = self.session.step();
         self.metrics.observe_tick(started.elapsed().as_secs_f64());
-        let tick = self.world.tick();
-        self.entry.tick.store(tick, Relaxed);
-        if tick.is_multiple_of(frame_every) || self.world.finished() {
-            self.publish_frame();
+        self.entry.tick.store(self.session.world.tick(), Relaxed);
+        if let Some(frame) = frame {
+            self.publish_frame(frame);
         }
     }
 
-    fn publish_frame(&mut self) {
-        let (ball, agents, score) = self.world.state();
-        let bytes = Utf8Bytes::from(encode(&Frame {
-            kind: "frame",
-            match_id: &self.entry.info.id,
-            tick: self.world.tick(),
-            time_s: self.world.time_s(),
-            ball: &ball,
-            agents: &agents,
-            score: &score,
-            events: &self.events,
-        }));
-        self.events.clear();
+    fn publish_frame(&mut self, frame: String) {
+        self.record(|r| r.frame(&frame));
         self.seq += 1;
-        let seq = self.seq;
+        let (seq, bytes) = (self.seq, Utf8Bytes::from(frame));
         self.publish.send_modify(|p| {
             p.seq = seq;
             p.frame = bytes;
         });
     }
 
+    /// Appends to the replay; a failure (a full or unwritable disk) stops the recording,
+    /// never the match, and is logged, counted and shown in the API.
+    fn record(&mut self, write: impl FnOnce(&mut Recorder) -> std::io::Result<()>) {
+        let Some(r) = &mut self.recorder else { return };
+        if let Err(e) = write(r) {
+            self.metrics.replay_errors.fetch_add(1, Relaxed);
+            tracing::warn!(id = %self.entry.info.id, error = %e, "replay recording stopped");
+            *self.entry.replay_error.lock().expect("not poisoned") = Some(e.to_string());
+            self.recorder = None;
+        }
+    }
+
     fn perceive(&mut self) {
-        let (tick, time_s) = (self.world.tick(), self.world.time_s());
+        let world = &self.session.world;
+        let (tick, time_s) = (world.tick(), world.time_s());
         for (k, bot) in self.bots.iter().enumerate() {
             let Some(bot) = bot else { continue };
-            let perception = self.world.perception(k);
+            let perception = world.perception(k);
             let message = encode(&Perception {
                 kind: "perception",
                 tick,
@@ -264,7 +272,10 @@ impl Ticker {
     }
 
     fn set_controlled(&mut self, agent: usize, by_bot: bool) {
-        self.world.set_controlled(agent, by_bot);
+        self.session.world.set_controlled(agent, by_bot);
+        let tick = self.session.world.tick();
+        let id = self.agent_ids[agent].clone();
+        self.record(|r| r.control(tick, &id, by_bot));
         self.entry.controlled.lock().expect("not poisoned")[agent] = by_bot;
     }
 
@@ -298,7 +309,7 @@ impl Ticker {
                 if self.bots[agent].as_ref().is_none_or(|b| b.conn != conn) {
                     return; // a replaced connection
                 }
-                let now = self.world.tick();
+                let now = self.session.world.tick();
                 let every = self.entry.info.perception_every_ticks;
                 if tick + 4 * every < now {
                     let text = format!("command for tick {tick} arrived at tick {now}");
@@ -313,8 +324,12 @@ impl Ticker {
                 if let Some(b) = &mut self.bots[agent] {
                     b.answered = Some(b.answered.map_or(tick, |a| a.max(tick)));
                 }
-                if let Err(reason) = self.world.command(agent, &action) {
-                    self.tell(agent, "rejected", &reason);
+                match self.session.world.command(agent, &action) {
+                    Ok(()) => {
+                        let id = self.agent_ids[agent].clone();
+                        self.record(|r| r.command(now, &id, &action));
+                    }
+                    Err(reason) => self.tell(agent, "rejected", &reason),
                 }
             }
             Control::Stop => unreachable!("the tick loop stops on Stop"),
@@ -322,18 +337,29 @@ impl Ticker {
     }
 
     fn end(mut self, reason: &str) {
-        self.publish_frame();
-        let result = self.world.result();
+        if let Some(frame) = self.session.last_frame() {
+            self.publish_frame(frame);
+        }
+        let world = &self.session.world;
+        let (tick, result) = (world.tick(), world.result());
         let end = Utf8Bytes::from(encode(&End {
             kind: "end",
             match_id: &self.entry.info.id,
-            tick: self.world.tick(),
+            tick,
             reason,
             result: &result,
         }));
+        // The replay is complete on disk before anyone hears the match ended.
+        if let Some(r) = self.recorder.take() {
+            if let Err(e) = r.finish(tick, reason, &result) {
+                self.metrics.replay_errors.fetch_add(1, Relaxed);
+                tracing::warn!(id = %self.entry.info.id, error = %e, "cannot finish the replay");
+                *self.entry.replay_error.lock().expect("not poisoned") = Some(e.to_string());
+            }
+        }
         self.entry.ended.store(true, Relaxed);
         self.publish.send_modify(|p| p.end = Some(end));
         self.metrics.matches_running.fetch_sub(1, Relaxed);
-        tracing::info!(id = %self.entry.info.id, reason, tick = self.world.tick(), "match ended");
+        tracing::info!(id = %self.entry.info.id, reason, tick, "match ended");
     }
 }

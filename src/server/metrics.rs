@@ -27,6 +27,7 @@ pub struct Metrics {
     pub closed_for_size: AtomicU64,
     pub closed_for_rate: AtomicU64,
     pub slow_clients_dropped: AtomicU64,
+    pub replay_errors: AtomicU64,
 }
 
 impl Metrics {

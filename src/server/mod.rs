@@ -6,6 +6,7 @@
 //! * [`state`]: the shared table of matches and what a match publishes.
 //! * [`match_task`]: the tick loop of one match (realtime, fast, lockstep).
 //! * [`ws`]: spectator and bot WebSockets.
+//! * [`replays`]: recorded matches: listed, downloaded, played with controls.
 //! * [`api`]: the REST API, health, readiness and metrics.
 //! * [`auth`]: tokens, compared in constant time.
 //! * [`metrics`]: Prometheus counters.
@@ -17,6 +18,7 @@ pub mod config;
 pub mod demo;
 pub mod match_task;
 pub mod metrics;
+pub mod replays;
 pub mod state;
 pub mod web;
 pub mod ws;
@@ -56,6 +58,7 @@ pub async fn serve(
         matches: RwLock::new(BTreeMap::new()),
         shutdown: stop_rx,
         next_conn: AtomicU64::new(0),
+        replay_dir: config.replay_dir.clone(),
     });
     if config.demo {
         demo::start_all(&app);
@@ -78,6 +81,8 @@ pub fn router(app: Arc<AppState>) -> Router {
     let api = Router::new()
         .route("/api/matches", get(api::list).post(api::create))
         .route("/api/matches/{id}", get(api::show).delete(api::delete))
+        .route("/api/replays", get(replays::list))
+        .route("/api/replays/{id}", get(replays::download))
         .route("/healthz", get(api::healthz))
         .route("/readyz", get(api::readyz))
         .route("/metrics", get(api::metrics))
@@ -90,6 +95,7 @@ pub fn router(app: Arc<AppState>) -> Router {
         .merge(api)
         .route("/ws/matches/{id}", get(ws::spectate))
         .route("/ws/matches/{id}/play", get(ws::play))
+        .route("/ws/replays/{id}", get(replays::watch))
         .route("/", get(web::index))
         .route("/app.js", get(web::script))
         .fallback(api::fallback)

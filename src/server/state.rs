@@ -55,6 +55,10 @@ pub struct MatchEntry {
     pub ended: AtomicBool,
     /// Who controls each agent now (`true`: a bot).
     pub controlled: Mutex<Vec<bool>>,
+    /// The id of its replay, if the server records matches.
+    pub replay: Option<String>,
+    /// Why recording stopped, if it did.
+    pub replay_error: Mutex<Option<String>>,
 }
 
 pub struct AppState {
@@ -65,6 +69,8 @@ pub struct AppState {
     pub matches: RwLock<BTreeMap<String, Arc<MatchEntry>>>,
     pub shutdown: watch::Receiver<bool>,
     pub next_conn: AtomicU64,
+    /// Where matches are recorded, if anywhere.
+    pub replay_dir: Option<std::path::PathBuf>,
 }
 
 impl AppState {

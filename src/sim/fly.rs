@@ -3,7 +3,7 @@
 //! bots command. Baseball puts three outfielders in fair territory; cricket puts
 //! fielders around the ring, with balls hit all round the wicket.
 
-use super::scenario::{range, Scenario, ScenarioError, Sport};
+use super::scenario::{range, LaunchSpec, Scenario, ScenarioError, Sport};
 use crate::fielding::{forecast, Body, CatchZone, Fielder, FielderConfig, Limits, StrategyKind};
 use crate::perception::Sighting;
 use crate::physics::{AirModel, BallSpec, BallState, Flight, Launch, NATHAN_AIR_DENSITY};
@@ -35,6 +35,7 @@ pub enum FielderOrder {
 struct Fielding {
     id: String,
     strategy: StrategyKind,
+    config: FielderConfig,
     home: DVec2,
     fielder: Fielder,
     by_bot: bool,
@@ -68,7 +69,9 @@ pub struct FlyWorld {
     spin: (f64, f64),
     pause_ticks: u64,
     zone: CatchZone,
-    config: FielderConfig,
+    /// Scripted balls, and how many have been hit.
+    script: Option<Vec<LaunchSpec>>,
+    scripted: usize,
     fielders: Vec<Fielding>,
     play: Play,
     rng: ChaCha8Rng,
@@ -133,8 +136,12 @@ impl FlyWorld {
         if !(pause_s.is_finite() && (0.0..=60.0).contains(&pause_s)) {
             return Err(ScenarioError::at("options.pause_s", "between 0 and 60 s"));
         }
-        let lineup: Vec<(String, StrategyKind, DVec2)> = if s.agents.is_empty() {
+        let human = FielderConfig::default();
+        let lineup: Vec<(String, StrategyKind, DVec2, FielderConfig)> = if s.agents.is_empty() {
             default_lineup(s.sport)
+                .into_iter()
+                .map(|(id, strategy, at)| (id, strategy, at, human))
+                .collect()
         } else {
             let defaults = default_lineup(s.sport);
             s.agents
@@ -167,17 +174,29 @@ impl FlyWorld {
                         }
                         None => defaults[i % defaults.len()].2,
                     };
-                    Ok((a.id.clone(), strategy, at))
+                    let mut config = human;
+                    if let Some(l) = a.limits {
+                        let reaction = l.reaction_s.unwrap_or(human.limits.reaction_s);
+                        let ok = |x: f64, hi: f64| x.is_finite() && x > 0.0 && x <= hi;
+                        if !(ok(l.max_speed_m_s, 50.0) && ok(l.max_accel_m_s2, 100.0) && reaction.is_finite() && (0.0..=5.0).contains(&reaction)) {
+                            return Err(ScenarioError::at(format!("agents[{i}].limits"), "max_speed_m_s in (0, 50], max_accel_m_s2 in (0, 100], reaction_s in [0, 5]"));
+                        }
+                        config.limits = Limits { max_speed: l.max_speed_m_s, max_accel: l.max_accel_m_s2, reaction_s: reaction };
+                    }
+                    Ok((a.id.clone(), strategy, at, config))
                 })
                 .collect::<Result<_, _>>()?
         };
         let dt = 1.0 / s.tick_hz;
-        let config = FielderConfig::default();
+        let script = match &o.launches {
+            Some(list) => Some(check_script(list)?),
+            None => None,
+        };
         let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
         rng.set_stream(3);
         let fielders = lineup
             .into_iter()
-            .map(|(id, strategy, home)| Fielding {
+            .map(|(id, strategy, home, config)| Fielding {
                 fielder: Fielder::new(strategy, home, DVec2::ZERO, &config, dt, || {
                     crate::fielding::Forecast {
                         point: home,
@@ -186,6 +205,7 @@ impl FlyWorld {
                 }),
                 id,
                 strategy,
+                config,
                 home,
                 // Its built-in strategy plays until a bot connects.
                 by_bot: false,
@@ -208,7 +228,8 @@ impl FlyWorld {
             spin,
             pause_ticks: (pause_s / dt).round() as u64,
             zone: CatchZone::default(),
-            config,
+            script,
+            scripted: 0,
             fielders,
             play: Play::Between { until_tick: 1 },
             rng,
@@ -241,10 +262,6 @@ impl FlyWorld {
         self.fielders[k].order = None;
     }
 
-    pub fn limits(&self) -> Limits {
-        self.config.limits
-    }
-
     /// Accepts a bot's order for fielder `k`, or says why it is impossible.
     pub fn order(&mut self, k: usize, order: FielderOrder) -> Result<(), String> {
         match order {
@@ -270,27 +287,39 @@ impl FlyWorld {
                 lo
             }
         };
-        let launch = Launch {
-            speed_m_s: uniform(self.speed),
-            elevation_deg: uniform(self.elevation),
-            azimuth_deg: uniform(self.azimuth),
-            height_m: 1.0,
-            spin_rpm: uniform(self.spin),
-            spin_tilt_deg: 0.0,
+        let launch = match &self.script {
+            Some(script) => {
+                let l = script[self.scripted];
+                self.scripted += 1;
+                Launch {
+                    speed_m_s: l.speed_m_s,
+                    elevation_deg: l.elevation_deg,
+                    azimuth_deg: l.azimuth_deg,
+                    height_m: 1.0,
+                    spin_rpm: l.spin_rpm,
+                    spin_tilt_deg: 0.0,
+                }
+            }
+            None => Launch {
+                speed_m_s: uniform(self.speed),
+                elevation_deg: uniform(self.elevation),
+                azimuth_deg: uniform(self.azimuth),
+                height_m: 1.0,
+                spin_rpm: uniform(self.spin),
+                spin_tilt_deg: 0.0,
+            },
         };
         let air = launch.air(AirModel::Nathan, NATHAN_AIR_DENSITY, &self.ball);
         let flight = Flight::simulate(launch.initial_state(), &air, self.dt, MAX_FLIGHT_S);
         let predicted = forecast(&flight, &self.zone);
         for f in &mut self.fielders {
-            f.fielder = Fielder::new(
-                f.strategy,
-                f.home,
-                DVec2::ZERO,
-                &self.config,
-                self.dt,
-                || predicted,
-            );
+            f.fielder = Fielder::new(f.strategy, f.home, DVec2::ZERO, &f.config, self.dt, || {
+                predicted
+            });
+            // Every ball starts with the fielders at their positions, at rest, and a
+            // bot's orders for the last ball forgotten.
             f.last_seen = None;
+            f.order = None;
         }
         self.score.balls += 1;
         events.push(json!({
@@ -307,17 +336,21 @@ impl FlyWorld {
         self.tick += 1;
         let flight_ended = match &mut self.play {
             Play::Between { until_tick } => {
-                if self.tick >= *until_tick {
+                let due = match &self.script {
+                    Some(script) => script.get(self.scripted).is_some_and(|l| {
+                        self.tick >= *until_tick && self.tick as f64 * self.dt >= l.time_s
+                    }),
+                    None => self.tick >= *until_tick,
+                };
+                if due {
                     self.new_play(events);
                     return;
                 }
                 // The ball is dead: bots' fielders follow their orders, the others stop.
                 for f in &mut self.fielders {
                     let order = if f.by_bot { f.order } else { None };
-                    let command = bot_command(order, &f.fielder.body, &self.config.limits);
-                    f.fielder
-                        .body
-                        .advance(command, &self.config.limits, self.dt);
+                    let command = bot_command(order, &f.fielder.body, &f.config.limits);
+                    f.fielder.body.advance(command, &f.config.limits, self.dt);
                 }
                 return;
             }
@@ -332,12 +365,10 @@ impl FlyWorld {
                             ball.t,
                             ball.pos,
                             before,
-                            self.config.perception.eye_height_m,
+                            f.config.perception.eye_height_m,
                         ));
-                        let command = bot_command(f.order, &f.fielder.body, &self.config.limits);
-                        f.fielder
-                            .body
-                            .advance(command, &self.config.limits, self.dt);
+                        let command = bot_command(f.order, &f.fielder.body, &f.config.limits);
+                        f.fielder.body.advance(command, &f.config.limits, self.dt);
                     } else {
                         f.fielder.step(ball.t, ball.pos, self.dt);
                     }
@@ -454,7 +485,7 @@ impl FlyWorld {
     pub fn perception(&self, k: usize) -> Value {
         let f = &self.fielders[k];
         let b = &f.fielder.body;
-        let eye = self.config.perception.eye_height_m;
+        let eye = f.config.perception.eye_height_m;
         let optics = self.ball_state().map(|ball| {
             let now = Sighting::of(ball.t, ball.pos, b.pos, eye);
             let rates = f.last_seen.map(|prev| {
@@ -466,7 +497,7 @@ impl FlyWorld {
             // a bot gets it too.
             json!({"tan_psi": now.tan_psi, "alpha": now.alpha(), "distance_m": now.distance, "rates": rates, "t": ball.t})
         });
-        let limits = &self.config.limits;
+        let limits = &f.config.limits;
         json!({
             "self": {"position": b.pos.to_array(), "velocity": b.vel.to_array(), "home": f.home.to_array()},
             "ball_in_play": optics.is_some(),
@@ -475,9 +506,43 @@ impl FlyWorld {
         })
     }
 
+    /// A scripted session is over once its last ball is dead.
+    pub fn finished(&self) -> bool {
+        matches!(self.play, Play::Between { .. })
+            && self
+                .script
+                .as_ref()
+                .is_some_and(|s| self.scripted >= s.len())
+    }
+
     pub fn score(&self) -> &Score {
         &self.score
     }
+}
+
+/// Checks scripted launches field by field.
+fn check_script(list: &[LaunchSpec]) -> Result<Vec<LaunchSpec>, ScenarioError> {
+    if list.is_empty() {
+        return Err(ScenarioError::at("options.launches", "at least one launch"));
+    }
+    for (i, l) in list.iter().enumerate() {
+        let checks = [
+            ("time_s", l.time_s, 0.0, 1e6),
+            ("speed_m_s", l.speed_m_s, 1.0, 70.0),
+            ("elevation_deg", l.elevation_deg, 1.0, 89.0),
+            ("azimuth_deg", l.azimuth_deg, -360.0, 360.0),
+            ("spin_rpm", l.spin_rpm, 0.0, 6000.0),
+        ];
+        for (field, x, lo, hi) in checks {
+            if !(x.is_finite() && (lo..=hi).contains(&x)) {
+                return Err(ScenarioError::at(
+                    format!("options.launches[{i}].{field}"),
+                    format!("{x} is outside [{lo}, {hi}]"),
+                ));
+            }
+        }
+    }
+    Ok(list.to_vec())
 }
 
 /// The acceleration a bot's order asks for now (the body clamps it to its limits).

@@ -36,15 +36,18 @@ impl HoopsWorld {
         let mut offense_brain: Option<(usize, Brain)> = None;
         let mut defender_motion: Option<(usize, DefenderMotion)> = None;
         if s.agents.is_empty() {
-            offense = vec!["o1".to_string(), "o2".to_string()];
-            defense = vec!["d1".to_string()];
+            offense = vec![("o1".to_string(), None), ("o2".to_string(), None)];
+            defense = vec![("d1".to_string(), None)];
         }
         for (i, a) in s.agents.iter().enumerate() {
-            if a.position.is_some() {
-                return Err(ScenarioError::at(
-                    format!("agents[{i}].position"),
-                    "basketball players start from the possession's random positions",
-                ));
+            if let Some([x, z]) = a.position {
+                let p = glam::DVec2::new(x, z);
+                if !(p.is_finite() && params.court.contains(p)) {
+                    return Err(ScenarioError::at(
+                        format!("agents[{i}].position"),
+                        "must be on the court: x 0 to 14 m, z -7.5 to 7.5 m",
+                    ));
+                }
             }
             let strategy = a.strategy.as_deref();
             match a.team.as_deref() {
@@ -62,7 +65,7 @@ impl HoopsWorld {
                         }
                         offense_brain = Some((i, brain));
                     }
-                    offense.push(a.id.clone());
+                    offense.push((a.id.clone(), a.position));
                 }
                 Some("defense") => {
                     if let Some(name) = strategy {
@@ -78,7 +81,7 @@ impl HoopsWorld {
                         }
                         defender_motion = Some((i, motion));
                     }
-                    defense.push(a.id.clone());
+                    defense.push((a.id.clone(), a.position));
                 }
                 Some(other) => {
                     return Err(ScenarioError::at(
@@ -108,9 +111,15 @@ impl HoopsWorld {
         }
         params.offense_players = offense.len();
         params.defenders = defense.len();
-        let names: Vec<String> = offense.into_iter().chain(defense).collect();
+        let (names, starts): (Vec<String>, Vec<Option<[f64; 2]>>) =
+            offense.into_iter().chain(defense).unzip();
         // Bots' agents play their built-in brains until a bot connects.
-        let game = Game::named(caps, params, names);
+        let game = Game::named(caps, params, names).with_starts(
+            starts
+                .into_iter()
+                .map(|p| p.map(glam::DVec2::from_array))
+                .collect(),
+        );
         Ok(HoopsWorld {
             game,
             possessions: s.options.possessions,

@@ -10,18 +10,20 @@ pub mod fly;
 pub mod hoops;
 pub mod scenario;
 
-pub use scenario::{AgentSpec, Mode, Options, Scenario, ScenarioError, Sport};
+pub use scenario::{
+    AgentSpec, LaunchSpec, LimitsSpec, Mode, Options, Scenario, ScenarioError, Sport,
+};
 
 use crate::basketball::{Capabilities, Order};
 use fly::{FielderOrder, FlyWorld};
 use glam::DVec2;
 use hoops::HoopsWorld;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::sync::Arc;
 
 /// What a bot asks of its agent.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Action {
     /// Fielder: accelerate along `[ax, az]`, m/s² (clamped to the body's limits).
@@ -114,7 +116,10 @@ impl World {
     /// Whether the match has reached its end (its duration, or its possessions).
     pub fn finished(&self) -> bool {
         self.end_tick.is_some_and(|end| self.tick() >= end)
-            || matches!(&self.inner, Inner::Hoops(w) if w.finished())
+            || match &self.inner {
+                Inner::Fly(w) => w.finished(),
+                Inner::Hoops(w) => w.finished(),
+            }
     }
 
     pub fn agent_ids(&self) -> Vec<String> {

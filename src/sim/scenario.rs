@@ -59,7 +59,8 @@ pub struct AgentSpec {
     /// defense: how it moves (`defense` footwork or `run`).
     #[serde(default)]
     pub strategy: Option<String>,
-    /// Fielders: where it stands when the ball is hit, metres `[x, z]`.
+    /// Fielders: where it stands when the ball is hit; basketball: where it starts every
+    /// possession (default: drawn at random each possession). Metres `[x, z]`.
     #[serde(default)]
     pub position: Option<[f64; 2]>,
     /// Basketball: `offense` or `defense`.
@@ -68,6 +69,32 @@ pub struct AgentSpec {
     /// Whether a bot controls it (it gets a bot token when the match is created).
     #[serde(default)]
     pub bot: bool,
+    /// Fielders: the body's limits (default: a human's, 8.5 m/s, 4.5 m/s², 0.3 s).
+    #[serde(default)]
+    pub limits: Option<LimitsSpec>,
+}
+
+/// A fielder's physical limits.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LimitsSpec {
+    pub max_speed_m_s: f64,
+    pub max_accel_m_s2: f64,
+    #[serde(default)]
+    pub reaction_s: Option<f64>,
+}
+
+/// One scripted ball.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LaunchSpec {
+    /// Match time to hit it, s (or as soon as the previous ball is dead).
+    pub time_s: f64,
+    pub speed_m_s: f64,
+    pub elevation_deg: f64,
+    pub azimuth_deg: f64,
+    #[serde(default)]
+    pub spin_rpm: f64,
 }
 
 /// Sport options; each applies to the sports it names.
@@ -89,6 +116,10 @@ pub struct Options {
     /// Baseball, cricket: seconds between one ball's end and the next launch.
     #[serde(default)]
     pub pause_s: Option<f64>,
+    /// Baseball, cricket: the balls to hit, in order, instead of drawing them from the
+    /// ranges above; the match ends once the last one is dead.
+    #[serde(default)]
+    pub launches: Option<Vec<LaunchSpec>>,
     /// Basketball: possessions to play (the match ends after them).
     #[serde(default)]
     pub possessions: Option<u64>,
@@ -225,13 +256,15 @@ impl Scenario {
         if let Some(d) = self.duration_s {
             positive("duration_s", d)?;
         }
+        let o = &self.options;
         if self.mode == Mode::Fast
             && self.duration_s.is_none()
-            && self.options.possessions.is_none()
+            && o.possessions.is_none()
+            && o.launches.is_none()
         {
             return Err(ScenarioError::at(
                 "mode",
-                "a fast match needs an end: duration_s (or, in basketball, options.possessions)",
+                "a fast match needs an end: duration_s, options.possessions (basketball) or options.launches (fly balls)",
             ));
         }
         if self.agents.len() > MAX_AGENTS {
@@ -265,7 +298,6 @@ impl Scenario {
                 ));
             }
         }
-        let o = &self.options;
         let fly_only = [
             ("options.launch_speed_m_s", o.launch_speed_m_s.is_some()),
             (
@@ -275,6 +307,7 @@ impl Scenario {
             ("options.launch_azimuth_deg", o.launch_azimuth_deg.is_some()),
             ("options.spin_rpm", o.spin_rpm.is_some()),
             ("options.pause_s", o.pause_s.is_some()),
+            ("options.launches", o.launches.is_some()),
         ];
         let hoops_only = [
             ("options.possessions", o.possessions.is_some()),

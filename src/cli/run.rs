@@ -1,0 +1,198 @@
+//! `fieldhouse run`: a scenario played headless, as fast as the machine allows, into a
+//! replay file.
+
+use super::basketball::CapabilityArgs;
+use anyhow::{bail, Context};
+use clap::Args;
+use fieldhouse::replay::Recorder;
+use fieldhouse::session::Session;
+use fieldhouse::sim::{Scenario, Sport, World};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde_json::{json, Value};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Args, Debug)]
+#[command(
+    after_help = "Example: fieldhouse run scenarios/baseball-papers.toml --out papers.jsonl\n\
+    Then: fieldhouse replay info papers.jsonl; fieldhouse replay verify papers.jsonl"
+)]
+pub struct RunArgs {
+    /// A scenario file (TOML; the structure of the POST /api/matches body).
+    scenario: PathBuf,
+    /// The replay file to write (default: the scenario's name with .jsonl, here).
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+    /// `builtin`: play bot-controlled agents with their built-in brains.
+    #[arg(long, value_name = "builtin")]
+    bots: Option<String>,
+    /// Print one JSON document.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    capability: CapabilityArgs,
+}
+
+/// Reads a scenario file, naming the file and the field at fault.
+pub fn load_scenario(path: &Path) -> anyhow::Result<Scenario> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let value: toml::Value =
+        toml::from_str(&text).with_context(|| format!("{} is not TOML", path.display()))?;
+    let json = serde_json::to_value(value)?;
+    Scenario::from_value(json).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+}
+
+pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
+    let mut scenario = load_scenario(&args.scenario)?;
+    match args.bots.as_deref() {
+        None => {
+            if let Some(i) = scenario.agents.iter().position(|a| a.bot) {
+                bail!(
+                    "{}: agents[{i}].bot: a headless run has no bots; pass --bots builtin to play them with their built-in brains",
+                    args.scenario.display()
+                );
+            }
+        }
+        Some("builtin") => {}
+        Some(other) => bail!("--bots {other}: the only choice is builtin"),
+    }
+    // Headless: as fast as possible, whatever mode the scenario is for.
+    scenario.mode = fieldhouse::sim::Mode::Fast;
+    for a in &mut scenario.agents {
+        a.bot = false;
+    }
+    let o = &scenario.options;
+    if scenario.duration_s.is_none() && o.possessions.is_none() && o.launches.is_none() {
+        bail!(
+            "{}: a headless run needs an end: duration_s, options.possessions (basketball) or options.launches (fly balls)",
+            args.scenario.display()
+        );
+    }
+    let caps = match scenario.sport {
+        Sport::Basketball => Some(args.capability.load()?),
+        _ => None,
+    };
+    let motion = caps
+        .as_ref()
+        .map_or("none".to_string(), |c| c.source.fingerprint().to_string());
+    let world = World::new(&scenario, caps)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.scenario.display()))?;
+    let stem = args
+        .scenario
+        .file_stem()
+        .map_or("match".to_string(), |s| s.to_string_lossy().into_owned());
+    let id = scenario
+        .name
+        .clone()
+        .filter(|n| !n.is_empty())
+        .map_or(stem.clone(), |_| stem.clone());
+    let info = json!({
+        "id": id,
+        "name": scenario.name,
+        "sport": scenario.sport.name(),
+        "mode": "fast",
+        "seed": scenario.seed,
+        "tick_hz": scenario.tick_hz,
+        "frame_hz": scenario.frame_hz,
+        "perception_every_ticks": world.perception_every_ticks(),
+        "field": world.field(),
+        "agents": world.agents_info(),
+        "motion_source": motion,
+    });
+    let path = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{stem}.jsonl")));
+    let mut recorder = Recorder::create(&path, &info, &scenario, &motion).with_context(|| {
+        format!(
+            "cannot create {} (an existing file is never overwritten)",
+            path.display()
+        )
+    })?;
+    let mut session = Session::new(world, id, scenario.tick_hz, scenario.frame_hz);
+    let write_error = |e: std::io::Error| anyhow::anyhow!("writing {}: {e}", path.display());
+    recorder.frame(&session.frame()).map_err(write_error)?;
+    let end_tick = scenario
+        .duration_s
+        .map(|d| (d * scenario.tick_hz).round() as u64);
+    let bar = end_tick.filter(|&t| t >= 60 * 60 * 60).map(|t| {
+        ProgressBar::new(t).with_style(
+            ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ticks ({eta})")
+                .expect("template is valid"),
+        )
+    });
+    let started = Instant::now();
+    let mut frames = 1u64;
+    while !session.world.finished() {
+        if let Some(frame) = session.step() {
+            recorder.frame(&frame).map_err(write_error)?;
+            frames += 1;
+        }
+        if let Some(b) = &bar {
+            if session.world.tick().is_multiple_of(600) {
+                b.set_position(session.world.tick());
+            }
+        }
+    }
+    if let Some(frame) = session.last_frame() {
+        recorder.frame(&frame).map_err(write_error)?;
+        frames += 1;
+    }
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let elapsed_s = started.elapsed().as_secs_f64();
+    let (tick, result) = (session.world.tick(), session.world.result());
+    recorder
+        .finish(tick, "finished", &result)
+        .map_err(write_error)?;
+    let simulated_s = session.world.time_s();
+    let summary = summary(scenario.sport, &result);
+    if args.json {
+        let doc = json!({
+            "file": path,
+            "sport": scenario.sport.name(),
+            "frames": frames,
+            "ticks": tick,
+            "simulated_s": simulated_s,
+            "elapsed_s": elapsed_s,
+            "simulated_s_per_s": simulated_s / elapsed_s.max(1e-9),
+            "result": result,
+            "summary": summary,
+        });
+        writeln!(out, "{doc}")?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "{}: {} simulated s in {:.2} s ({:.0}× real time); {} frames to {}",
+        scenario.sport.name(),
+        simulated_s,
+        elapsed_s,
+        simulated_s / elapsed_s.max(1e-9),
+        frames,
+        path.display()
+    )?;
+    writeln!(out, "{summary}")?;
+    Ok(())
+}
+
+/// The result in words: catches, or points per possession.
+fn summary(sport: Sport, result: &Value) -> String {
+    match sport {
+        Sport::Basketball => {
+            let points = result["points"].as_u64().unwrap_or(0);
+            let possessions = result["possession"].as_u64().unwrap_or(0);
+            format!(
+                "{points} points in {possessions} possessions ({:.3} per possession)",
+                points as f64 / possessions.max(1) as f64
+            )
+        }
+        _ => format!(
+            "{} balls: {} caught, {} landed",
+            result["balls"], result["caught"], result["dropped"]
+        ),
+    }
+}

@@ -1,0 +1,321 @@
+//! Replay files: what happened in a match, kept so it can be watched and checked later.
+//!
+//! **Encoding**: JSON lines (UTF-8, one record per line, `\n`-terminated), uncompressed:
+//!
+//! 1. a header: `{"record": "header", "format": 1, "fieldhouse": "0.1.0", "match": {...},
+//!    "scenario": {...}, "seed": 1, "motion": "<fingerprint>", "started_unix_ms": ...}`;
+//! 2. the `frame` messages of the wire protocol, byte for byte, in order, interleaved
+//!    with the bot log: `{"record": "control", "tick": t, "agent": "cf", "bot": true}`
+//!    when a bot takes or gives back an agent, and `{"record": "command", "tick": t,
+//!    "agent": "cf", "action": {...}}` for every command the world accepted, applied
+//!    after tick `t`;
+//! 3. a footer: `{"record": "footer", "tick": t, "frames": n, "hash": "<sha256>",
+//!    "reason": "finished", "result": {...}}`, the hash over every frame line and its
+//!    newline. Wall-clock time appears only in the header and is not hashed.
+//!
+//! Records are appended and flushed frame by frame, so a process killed mid-match
+//! leaves complete records behind and at most one torn line, which reading detects and
+//! ignores; a finished file is flushed and synced before the match is reported ended.
+
+mod verify;
+
+pub use verify::{verify, Mismatch, Verified};
+
+use crate::sim::{Action, Scenario};
+use serde::Serialize;
+use serde_json::{json, Value};
+use sha2::{Digest, Sha256};
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Bump when a reader of the old format could not read the new one.
+pub const FORMAT: u32 = 1;
+
+/// Writes a replay as the match goes.
+pub struct Recorder {
+    out: io::BufWriter<std::fs::File>,
+    path: PathBuf,
+    hasher: Sha256,
+    frames: u64,
+}
+
+impl Recorder {
+    /// Creates `path` and writes the header.
+    pub fn create(
+        path: &Path,
+        match_info: &impl Serialize,
+        scenario: &Scenario,
+        motion: &str,
+    ) -> io::Result<Recorder> {
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(path)?;
+        let started = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_millis() as u64);
+        let mut r = Recorder {
+            out: io::BufWriter::new(file),
+            path: path.to_path_buf(),
+            hasher: Sha256::new(),
+            frames: 0,
+        };
+        r.line(
+            &json!({
+                "record": "header",
+                "format": FORMAT,
+                "fieldhouse": env!("CARGO_PKG_VERSION"),
+                "match": match_info,
+                "scenario": scenario,
+                "seed": scenario.seed,
+                "motion": motion,
+                "started_unix_ms": started,
+            })
+            .to_string(),
+        )?;
+        r.out.flush()?;
+        Ok(r)
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn line(&mut self, text: &str) -> io::Result<()> {
+        self.out.write_all(text.as_bytes())?;
+        self.out.write_all(b"\n")
+    }
+
+    /// Appends a frame (exactly the bytes sent on the wire) and flushes it.
+    pub fn frame(&mut self, frame: &str) -> io::Result<()> {
+        self.hasher.update(frame.as_bytes());
+        self.hasher.update(b"\n");
+        self.frames += 1;
+        self.line(frame)?;
+        self.out.flush()
+    }
+
+    pub fn command(&mut self, tick: u64, agent: &str, action: &Action) -> io::Result<()> {
+        let record = json!({"record": "command", "tick": tick, "agent": agent, "action": action});
+        self.line(&record.to_string())
+    }
+
+    pub fn control(&mut self, tick: u64, agent: &str, bot: bool) -> io::Result<()> {
+        let record = json!({"record": "control", "tick": tick, "agent": agent, "bot": bot});
+        self.line(&record.to_string())
+    }
+
+    /// Writes the footer, flushes and syncs: after this the file is complete on disk.
+    pub fn finish(mut self, tick: u64, reason: &str, result: &Value) -> io::Result<()> {
+        let hash = hex(&self.hasher.clone().finalize());
+        let footer = json!({
+            "record": "footer",
+            "tick": tick,
+            "frames": self.frames,
+            "hash": hash,
+            "reason": reason,
+            "result": result,
+        });
+        self.line(&footer.to_string())?;
+        self.out.flush()?;
+        self.out.get_ref().sync_all()
+    }
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// A bot's log entry, as read back.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Logged {
+    Control {
+        tick: u64,
+        agent: String,
+        bot: bool,
+    },
+    Command {
+        tick: u64,
+        agent: String,
+        action: Action,
+    },
+}
+
+impl Logged {
+    pub fn tick(&self) -> u64 {
+        match self {
+            Logged::Control { tick, .. } | Logged::Command { tick, .. } => *tick,
+        }
+    }
+}
+
+/// A replay read back: everything up to the first torn or unreadable record.
+#[derive(Debug, Clone)]
+pub struct Replay {
+    pub header: Value,
+    pub scenario: Scenario,
+    /// Frame lines, exactly as written, with their ticks.
+    pub frames: Vec<(u64, String)>,
+    pub log: Vec<Logged>,
+    pub footer: Option<Value>,
+    /// Why reading stopped early (a torn last record, or the line that did not parse).
+    pub problem: Option<String>,
+}
+
+impl Replay {
+    /// Whether the file ends with its footer and nothing is missing.
+    pub fn complete(&self) -> bool {
+        self.footer.is_some() && self.problem.is_none()
+    }
+
+    /// The hash of the frames read, as the footer computes it.
+    pub fn frames_hash(&self) -> String {
+        let mut hasher = Sha256::new();
+        for (_, line) in &self.frames {
+            hasher.update(line.as_bytes());
+            hasher.update(b"\n");
+        }
+        hex(&hasher.finalize())
+    }
+
+    /// The id of the match recorded.
+    pub fn match_id(&self) -> &str {
+        self.header["match"]["id"].as_str().unwrap_or_default()
+    }
+}
+
+#[derive(Debug, Error)]
+pub enum ReplayError {
+    #[error("cannot read {path}: {source}")]
+    Io { path: PathBuf, source: io::Error },
+    #[error("{path}: not a fieldhouse replay: {reason}")]
+    NotAReplay { path: PathBuf, reason: String },
+}
+
+/// Reads a replay file. Only a missing or unreadable header is an error: anything after
+/// it that does not read is where the readable prefix ends.
+pub fn read(path: &Path) -> Result<Replay, ReplayError> {
+    let bytes = std::fs::read(path).map_err(|source| ReplayError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse(&bytes).map_err(|reason| ReplayError::NotAReplay {
+        path: path.to_path_buf(),
+        reason,
+    })
+}
+
+/// The header and (if the file is complete) the footer, without reading the frames
+/// between them: for listing many large files.
+pub fn peek(path: &Path) -> Result<(Value, Option<Value>), String> {
+    use std::io::{BufRead, Read, Seek, SeekFrom};
+    let mut file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let mut first = String::new();
+    io::BufReader::new(&mut file)
+        .read_line(&mut first)
+        .map_err(|e| e.to_string())?;
+    let header: Value = serde_json::from_str(&first).map_err(|_| "no header record".to_string())?;
+    let len = file.metadata().map_err(|e| e.to_string())?.len();
+    file.seek(SeekFrom::Start(len.saturating_sub(64 * 1024)))
+        .map_err(|e| e.to_string())?;
+    let mut tail = Vec::new();
+    file.read_to_end(&mut tail).map_err(|e| e.to_string())?;
+    let footer = tail
+        .strip_suffix(b"\n")
+        .and_then(|t| t.rsplit(|&b| b == b'\n').next())
+        .and_then(|last| serde_json::from_slice::<Value>(last).ok())
+        .filter(|v| v["record"] == "footer");
+    Ok((header, footer))
+}
+
+/// Reads a replay from its bytes (see [`read`]).
+pub fn parse(bytes: &[u8]) -> Result<Replay, String> {
+    let mut lines = bytes.split_inclusive(|&b| b == b'\n');
+    let first = lines.next().ok_or("the file is empty")?;
+    let header: Value = std::str::from_utf8(first)
+        .ok()
+        .filter(|l| l.ends_with('\n'))
+        .and_then(|l| serde_json::from_str(l).ok())
+        .ok_or("the first line is not a complete header record")?;
+    if header["record"] != "header" {
+        return Err("the first record is not a header".into());
+    }
+    if header["format"].as_u64() != Some(u64::from(FORMAT)) {
+        return Err(format!(
+            "format {} (this build reads {FORMAT})",
+            header["format"]
+        ));
+    }
+    let scenario = Scenario::from_value(header["scenario"].clone())
+        .map_err(|e| format!("its scenario does not read: {e}"))?;
+    let mut replay = Replay {
+        header,
+        scenario,
+        frames: Vec::new(),
+        log: Vec::new(),
+        footer: None,
+        problem: None,
+    };
+    for (k, raw) in lines.enumerate() {
+        let number = k + 2;
+        let Some(line) = std::str::from_utf8(raw)
+            .ok()
+            .and_then(|l| l.strip_suffix('\n'))
+        else {
+            replay.problem = Some(format!(
+                "line {number} is torn (the file was cut mid-record)"
+            ));
+            break;
+        };
+        let record: Value = match serde_json::from_str(line) {
+            Ok(v) => v,
+            Err(e) => {
+                replay.problem = Some(format!("line {number} is not a record: {e}"));
+                break;
+            }
+        };
+        if replay.footer.is_some() {
+            replay.problem = Some(format!("line {number} follows the footer"));
+            break;
+        }
+        let tick = record["tick"].as_u64();
+        let agent = record["agent"].as_str().map(str::to_string);
+        match (record["type"].as_str(), record["record"].as_str(), tick) {
+            (Some("frame"), _, Some(t)) => replay.frames.push((t, line.to_string())),
+            (_, Some("command"), Some(tick)) => {
+                let action = serde_json::from_value(record["action"].clone());
+                match (agent, action) {
+                    (Some(agent), Ok(action)) => replay.log.push(Logged::Command {
+                        tick,
+                        agent,
+                        action,
+                    }),
+                    _ => {
+                        replay.problem = Some(format!(
+                            "line {number}: a command record without agent or action"
+                        ));
+                        break;
+                    }
+                }
+            }
+            (_, Some("control"), Some(tick)) => match (agent, record["bot"].as_bool()) {
+                (Some(agent), Some(bot)) => replay.log.push(Logged::Control { tick, agent, bot }),
+                _ => {
+                    replay.problem = Some(format!(
+                        "line {number}: a control record without agent or bot"
+                    ));
+                    break;
+                }
+            },
+            (_, Some("footer"), _) => replay.footer = Some(record),
+            _ => {
+                replay.problem = Some(format!(
+                    "line {number} is not a frame, command, control or footer record"
+                ));
+                break;
+            }
+        }
+    }
+    Ok(replay)
+}

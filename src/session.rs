@@ -1,0 +1,62 @@
+//! A match being played, whoever plays it: a [`World`] with its id and frame rate, which
+//! steps tick by tick and encodes a `frame` (once) whenever one is due. The server's
+//! match tasks, headless runs and replay verification all drive one, so a replay's
+//! frames and a live match's are the same bytes from the same code.
+
+use crate::protocol::{encode, Frame};
+use crate::sim::World;
+use serde_json::Value;
+
+pub struct Session {
+    pub world: World,
+    pub id: String,
+    frame_every: u64,
+    /// Events since the last frame.
+    events: Vec<Value>,
+    /// The tick of the last frame encoded.
+    framed: Option<u64>,
+}
+
+impl Session {
+    pub fn new(world: World, id: String, tick_hz: f64, frame_hz: f64) -> Session {
+        Session {
+            world,
+            id,
+            frame_every: ((tick_hz / frame_hz).round() as u64).max(1),
+            events: Vec::new(),
+            framed: None,
+        }
+    }
+
+    /// The frame of the world as it is now, with the events since the last one.
+    pub fn frame(&mut self) -> String {
+        let (ball, agents, score) = self.world.state();
+        let tick = self.world.tick();
+        let line = encode(&Frame {
+            kind: "frame",
+            match_id: &self.id,
+            tick,
+            time_s: self.world.time_s(),
+            ball: &ball,
+            agents: &agents,
+            score: &score,
+            events: &self.events,
+        });
+        self.events.clear();
+        self.framed = Some(tick);
+        line
+    }
+
+    /// Steps one tick; returns the frame if one is due (every `tick_hz / frame_hz` ticks,
+    /// and at the end of the match).
+    pub fn step(&mut self) -> Option<String> {
+        self.world.step(&mut self.events);
+        let tick = self.world.tick();
+        (tick.is_multiple_of(self.frame_every) || self.world.finished()).then(|| self.frame())
+    }
+
+    /// The last frame, when a match stops: only if something happened since the last one.
+    pub fn last_frame(&mut self) -> Option<String> {
+        (self.framed != Some(self.world.tick()) || !self.events.is_empty()).then(|| self.frame())
+    }
+}

@@ -1,0 +1,205 @@
+//! Headless runs and replay files through the binary: determinism, verification,
+//! truncation, bad scenarios; and replays the server records, lists and plays.
+
+mod common;
+
+use common::{failure, fieldhouse, json, mocap};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// A scratch directory under the test target directory, emptied first.
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("replay-{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const FIELDERS: &str = r#"
+name = "two fielders, scripted balls"
+sport = "baseball"
+seed = 5
+duration_s = 30.0
+[[agents]]
+id = "chapman"
+strategy = "chapman"
+position = [60.0, 55.0]
+[[agents]]
+id = "lot-optical"
+strategy = "lot-optical"
+position = [55.0, 60.0]
+limits = { max_speed_m_s = 7.0, max_accel_m_s2 = 4.0 }
+[options]
+pause_s = 1.0
+launches = [
+  { time_s = 0.5, speed_m_s = 36.0, elevation_deg = 45.0, azimuth_deg = 44.0, spin_rpm = 2000.0 },
+  { time_s = 8.0, speed_m_s = 30.0, elevation_deg = 55.0, azimuth_deg = 47.0 },
+  { time_s = 16.0, speed_m_s = 40.0, elevation_deg = 35.0, azimuth_deg = 40.0, spin_rpm = 1500.0 },
+]
+"#;
+
+fn run(dir: &Path, scenario: &str, out: &str) -> (PathBuf, Value) {
+    let file = dir.join("scenario.toml");
+    std::fs::write(&file, scenario).unwrap();
+    let replay = dir.join(out);
+    let doc = json(&format!(
+        "run {} --out {} --json --mocap {} --cache-dir {}",
+        file.display(),
+        replay.display(),
+        mocap().display(),
+        dir.join("cache").display()
+    ));
+    (replay, doc)
+}
+
+fn lines(path: &Path) -> Vec<String> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn the_same_scenario_twice_gives_the_same_frames_and_verifies() {
+    let dir = scratch("twice");
+    let (a, doc) = run(&dir, FIELDERS, "a.jsonl");
+    let (b, _) = run(&dir, FIELDERS, "b.jsonl");
+    assert_eq!(doc["result"]["balls"], 3, "three scripted balls: {doc}");
+    // Frames (and the footer's hash over them) are identical; only the header's wall
+    // clock differs.
+    let (la, lb) = (lines(&a), lines(&b));
+    assert_eq!(la.len(), lb.len());
+    assert_eq!(la[1..], lb[1..]);
+    let info = json(&format!("replay info {} --json", a.display()));
+    assert_eq!(info["complete"], true);
+    assert_eq!(info["frames"].as_u64().unwrap() as usize, la.len() - 2);
+    assert_eq!(info["hash_ok"], true);
+    let out = fieldhouse(&format!("replay verify {}", a.display()));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // Export: a header and one row per agent and ball per frame.
+    let csv = fieldhouse(&format!("replay export {} --csv", a.display()));
+    let text = String::from_utf8(csv.stdout).unwrap();
+    assert!(text.starts_with("tick,time_s,agent,x,y,z,heading\n"));
+    assert_eq!(text.lines().count(), 1 + 3 * (la.len() - 2));
+}
+
+#[test]
+fn verify_names_the_tick_of_an_altered_frame() {
+    let dir = scratch("altered");
+    let (file, _) = run(&dir, FIELDERS, "a.jsonl");
+    let mut all = lines(&file);
+    let k = all.len() / 2;
+    let frame: Value = serde_json::from_str(&all[k]).unwrap();
+    assert_eq!(frame["type"], "frame");
+    let tick = frame["tick"].as_u64().unwrap();
+    let mut altered = frame.clone();
+    let x = altered["agents"][0]["position"][0].as_f64().unwrap();
+    altered["agents"][0]["position"][0] = (x + 0.5).into();
+    all[k] = altered.to_string();
+    let bad = dir.join("bad.jsonl");
+    std::fs::write(&bad, all.join("\n") + "\n").unwrap();
+    let err = failure(&format!("replay verify {}", bad.display()));
+    assert!(
+        err.contains(&format!("tick {tick}")) && err.contains("agents[0].position[0]"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_file_cut_mid_record_reads_to_the_cut_and_is_incomplete() {
+    let dir = scratch("cut");
+    let (file, _) = run(&dir, FIELDERS, "a.jsonl");
+    let bytes = std::fs::read(&file).unwrap();
+    let cut = bytes.len() * 2 / 3;
+    let whole_lines_before = bytes[..cut].iter().filter(|&&b| b == b'\n').count();
+    let torn = dir.join("torn.jsonl");
+    std::fs::write(&torn, &bytes[..cut]).unwrap();
+    let info = json(&format!("replay info {} --json", torn.display()));
+    assert_eq!(info["complete"], false);
+    // Every complete line but the header is a frame here (no bots, no footer yet).
+    assert_eq!(
+        info["frames"].as_u64().unwrap() as usize,
+        whole_lines_before - 1
+    );
+    assert!(info["problem"].as_str().unwrap().contains("torn"), "{info}");
+    // The readable part still re-simulates exactly.
+    let out = fieldhouse(&format!("replay verify {}", torn.display()));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // A file that is not a replay at all is an error, not a panic.
+    let junk = dir.join("junk.jsonl");
+    std::fs::write(&junk, b"hello\n").unwrap();
+    assert!(failure(&format!("replay info {}", junk.display())).contains("not a fieldhouse replay"));
+}
+
+#[test]
+fn a_bad_scenario_fails_before_anything_runs_naming_the_field() {
+    let dir = scratch("bad");
+    let file = dir.join("bad.toml");
+    let cases = [
+        (
+            FIELDERS.replace("strategy = \"lot-optical\"", "strategy = \"lott\""),
+            "agents[1].strategy: unknown strategy \"lott\"",
+        ),
+        (
+            FIELDERS.replace("elevation_deg = 55.0", "elevation_deg = 95.0"),
+            "options.launches[1].elevation_deg",
+        ),
+        (FIELDERS.replace("seed = 5", "seed = \"five\""), "seed:"),
+        (
+            FIELDERS.replace("duration_s = 30.0", "duration_s = 30.0\ncolour = \"red\""),
+            "colour",
+        ),
+    ];
+    for (text, expected) in cases {
+        std::fs::write(&file, text).unwrap();
+        let out = dir.join("never.jsonl");
+        let err = failure(&format!("run {} --out {}", file.display(), out.display()));
+        assert!(err.contains(expected), "expected {expected:?} in {err}");
+        assert!(!out.exists(), "a bad scenario wrote a replay");
+    }
+}
+
+#[test]
+fn a_basketball_scenario_with_bots_runs_with_builtin_brains() {
+    let dir = scratch("hoops");
+    let scenario = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/basketball-bot.toml"),
+    )
+    .unwrap();
+    let file = dir.join("scenario.toml");
+    std::fs::write(&file, &scenario).unwrap();
+    let err = failure(&format!(
+        "run {} --out {}",
+        file.display(),
+        dir.join("x.jsonl").display()
+    ));
+    assert!(err.contains("--bots builtin"), "{err}");
+    let replay = dir.join("hoops.jsonl");
+    let source = format!(
+        "--mocap {} --cache-dir {}",
+        mocap().display(),
+        dir.join("cache").display()
+    );
+    let doc = json(&format!(
+        "run {} --bots builtin --out {} --json {source}",
+        file.display(),
+        replay.display()
+    ));
+    let possessions = doc["result"]["possession"].as_u64().unwrap();
+    assert!(possessions >= 1, "{doc}");
+    let out = fieldhouse(&format!("replay verify {} {source}", replay.display()));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
