@@ -487,7 +487,11 @@ async fn a_slow_spectator_does_not_slow_a_fast_one() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 #[allow(clippy::result_large_err)] // ureq's error carries the whole response
 async fn rest_errors_are_json_with_the_right_status() {
-    let server = Server::start(&["--no-demo"]);
+    // A small body limit (from a config file): an over-limit body is then small enough
+    // for the client to finish writing before the server answers 413.
+    let config = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("small-bodies.toml");
+    std::fs::write(&config, "max_body_bytes = 2048\n").unwrap();
+    let server = Server::start(&["--no-demo", "--config", config.to_str().unwrap()]);
     let error = |result: Result<ureq::Response, ureq::Error>| match result {
         Err(ureq::Error::Status(code, response)) => (code, response.into_json::<Value>().unwrap()),
         other => panic!("expected an error status, got {other:?}"),
@@ -541,7 +545,7 @@ async fn rest_errors_are_json_with_the_right_status() {
     // Errors the framework raises are JSON too.
     let (code, body) = error(post(
         Some(&admin),
-        &format!("{{\"name\": \"{}\"}}", "x".repeat(100_000)),
+        &format!("{{\"name\": \"{}\"}}", "x".repeat(4000)),
     ));
     assert_eq!(
         (code, body["error"]["code"].as_str()),
@@ -718,4 +722,227 @@ async fn the_reference_bot_plays_a_match_to_its_end() {
         .unwrap();
     assert!(!refused.status.success());
     assert!(String::from_utf8_lossy(&refused.stderr).contains("refused"));
+}
+
+fn replays_of(server: &Server) -> Vec<Value> {
+    server.get("/api/replays")["replays"]
+        .as_array()
+        .unwrap()
+        .clone()
+}
+
+/// Waits until the match's replay is listed complete; returns its id.
+async fn finished_replay(server: &Server, match_id: &str) -> String {
+    let deadline = Instant::now() + Duration::from_secs(20);
+    loop {
+        if let Some(r) = replays_of(server)
+            .into_iter()
+            .find(|r| r["match"] == match_id && r["complete"] == true)
+        {
+            return r["id"].as_str().unwrap().to_string();
+        }
+        assert!(
+            Instant::now() < deadline,
+            "no complete replay of {match_id}: {:?}",
+            replays_of(server)
+        );
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn recorded_matches_are_listed_downloaded_and_played_with_seek() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("server-replays");
+    let _ = std::fs::remove_dir_all(&dir);
+    let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
+    let (id, _) = server.create(json!({"sport": "cricket", "mode": "fast", "duration_s": 20.0}));
+    let replay = finished_replay(&server, &id).await;
+    // Downloaded, it is the file itself, and it re-simulates exactly.
+    let body = ureq::get(&server.http(&format!("/api/replays/{replay}")))
+        .call()
+        .unwrap()
+        .into_string()
+        .unwrap();
+    let file = dir.join("downloaded.jsonl.copy");
+    std::fs::write(&file, &body).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .arg("replay")
+        .arg("verify")
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // Ids cannot reach outside the replay directory.
+    for (path, status) in [
+        ("/api/replays/..%2F..%2Fetc%2Fpasswd", 400),
+        ("/api/replays/nope", 404),
+        ("/api/replays/a.b", 400),
+    ] {
+        match ureq::get(&server.http(path)).call() {
+            Err(ureq::Error::Status(code, _)) => assert_eq!(code, status, "{path}"),
+            other => panic!("{path}: {other:?}"),
+        }
+    }
+    let mut viewer = connect(&server.ws(&format!("/ws/replays/{replay}"))).await;
+    let hello = next(&mut viewer).await;
+    assert_eq!(
+        (
+            hello["role"].as_str(),
+            hello["replay"]["complete"].as_bool()
+        ),
+        (Some("replay"), Some(true))
+    );
+    assert_valid(&next_of(&mut viewer, "frame").await);
+    let control = |v: Value| Message::Text(v.to_string().into());
+    // Seeking lands on the requested tick (frames come every second tick).
+    for tick in [600u64, 100, 1000] {
+        viewer
+            .send(control(
+                json!({"type": "control", "action": "seek", "tick": tick}),
+            ))
+            .await
+            .unwrap();
+        // Frames sent before the seek may still be on the way: skip those.
+        let frame = loop {
+            let f = next_of(&mut viewer, "frame").await;
+            if (tick..=tick + 2).contains(&f["tick"].as_u64().unwrap()) {
+                break f;
+            }
+        };
+        assert_eq!(frame["tick"].as_u64(), Some(tick));
+    }
+    // Paused, nothing comes; speed outside 0.25–8 is an error.
+    viewer
+        .send(control(json!({"type": "control", "action": "pause"})))
+        .await
+        .unwrap();
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    while let Ok(Some(Ok(_))) =
+        tokio::time::timeout(Duration::from_millis(100), viewer.next()).await
+    {}
+    assert!(
+        tokio::time::timeout(Duration::from_millis(400), viewer.next())
+            .await
+            .is_err(),
+        "frames while paused"
+    );
+    viewer
+        .send(control(
+            json!({"type": "control", "action": "speed", "speed": 9.0}),
+        ))
+        .await
+        .unwrap();
+    assert_eq!(next_of(&mut viewer, "error").await["code"], "bad_control");
+    // At 8× from near the end, the end message follows the last frame.
+    viewer
+        .send(control(
+            json!({"type": "control", "action": "speed", "speed": 8.0}),
+        ))
+        .await
+        .unwrap();
+    viewer
+        .send(control(
+            json!({"type": "control", "action": "seek", "tick": 1150}),
+        ))
+        .await
+        .unwrap();
+    viewer
+        .send(control(json!({"type": "control", "action": "play"})))
+        .await
+        .unwrap();
+    let end = next_of(&mut viewer, "end").await;
+    assert_eq!(end["tick"].as_u64(), Some(1200));
+    assert_valid(&end);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_recorded_bot_match_verifies_with_its_command_log() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("server-bot-replays");
+    let _ = std::fs::remove_dir_all(&dir);
+    let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
+    let (id, tokens) = server.create(fielder_with_bot("realtime", 1000));
+    let token = tokens["cf"].as_str().unwrap();
+    let mut bot = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    next(&mut bot).await;
+    let started = Instant::now();
+    let mut k = 0.0;
+    while started.elapsed() < Duration::from_millis(1500) {
+        let p = next_of(&mut bot, "perception").await;
+        k += 0.05;
+        let command = json!({"type": "command", "tick": p["tick"], "action": {"kind": "run_to", "target": [60.0 - k, 50.0]}});
+        bot.send(Message::Text(command.to_string().into()))
+            .await
+            .unwrap();
+    }
+    drop(bot);
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    ureq::delete(&server.http(&format!("/api/matches/{id}")))
+        .set("Authorization", &format!("Bearer {ADMIN}"))
+        .call()
+        .unwrap();
+    let replay = finished_replay(&server, &id).await;
+    let file = dir.join(format!("{replay}.jsonl"));
+    let text = std::fs::read_to_string(&file).unwrap();
+    assert!(
+        text.contains("\"record\":\"command\""),
+        "commands are logged"
+    );
+    assert!(
+        text.contains("\"record\":\"control\""),
+        "the bot's arrival and departure are logged"
+    );
+    let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .arg("replay")
+        .arg("verify")
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_server_killed_mid_match_leaves_a_readable_replay() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("server-killed");
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
+    let (id, _) = server.create(json!({"sport": "baseball"}));
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    server.child.kill().unwrap(); // SIGKILL
+    server.child.wait().unwrap();
+    let file = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.to_string_lossy().contains(&id))
+        .unwrap();
+    let info: Value = serde_json::from_slice(
+        &Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+            .args(["replay", "info", "--json"])
+            .arg(&file)
+            .output()
+            .unwrap()
+            .stdout,
+    )
+    .unwrap();
+    assert_eq!(info["complete"], false);
+    assert!(info["frames"].as_u64().unwrap() >= 30, "{info}");
+    let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .arg("replay")
+        .arg("verify")
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }

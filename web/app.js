@@ -10,9 +10,13 @@ async function lobby() {
   const load = async () => {
     try {
       const { matches } = await (await fetch("/api/matches")).json();
+      const { replays } = await (await fetch("/api/replays")).json();
       $("matches").innerHTML = matches.map((m) =>
         `<tr><td><a href="#/matches/${m.id}">${m.name || m.id}</a></td><td>${m.sport}</td>` +
-        `<td>${m.status}</td><td>${m.tick}</td><td>${m.spectators}</td></tr>`).join("");
+        `<td>${m.status}</td><td>${m.tick}</td><td>${m.spectators}</td></tr>`).join("") +
+        replays.map((r) =>
+        `<tr><td><a href="#/replays/${r.id}">${r.name || r.id}</a> (<a href="/api/replays/${r.id}">file</a>)</td>` +
+        `<td>${r.sport}</td><td>replay${r.complete ? "" : ", incomplete"}</td><td></td><td></td></tr>`).join("");
       if (matches[0]) $("source").textContent = "motion: " + matches[0].motion_source;
     } catch (e) { $("matches").innerHTML = `<tr><td colspan="5">server unreachable</td></tr>`; }
   };
@@ -20,12 +24,12 @@ async function lobby() {
   lobbyTimer = setInterval(load, 2000);
 }
 
-function watch(id) {
+function watch(id, kind) {
   $("lobby").style.display = "none";
   $("view").style.display = "";
   let hello = null, frame = null, backoff = 500;
   const connect = () => {
-    const url = `${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws/matches/${id}`;
+    const url = `${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws/${kind}/${id}`;
     socket = new WebSocket(url);
     socket.onopen = () => { backoff = 500; };
     socket.onmessage = (m) => {
@@ -37,11 +41,11 @@ function watch(id) {
     };
     socket.onclose = () => {
       hud(hello, frame, WebSocket.CLOSED);
-      if (location.hash === `#/matches/${id}`) setTimeout(connect, backoff = Math.min(backoff * 2, 8000));
+      if (location.hash === `#/${kind}/${id}`) setTimeout(connect, backoff = Math.min(backoff * 2, 8000));
     };
   };
   connect();
-  const draw = () => { if (hello && frame) render(hello, frame); if (location.hash === `#/matches/${id}`) requestAnimationFrame(draw); };
+  const draw = () => { if (hello && frame) render(hello, frame); if (location.hash === `#/${kind}/${id}`) requestAnimationFrame(draw); };
   requestAnimationFrame(draw);
 }
 
@@ -100,8 +104,8 @@ function render(hello, frame) {
 function route() {
   if (socket) { socket.onclose = null; socket.close(); socket = null; }
   clearInterval(lobbyTimer);
-  const m = location.hash.match(/^#\/matches\/([\w-]+)/);
-  if (m) watch(m[1]); else lobby();
+  const m = location.hash.match(/^#\/(matches|replays)\/([\w-]+)/);
+  if (m) watch(m[2], m[1]); else lobby();
 }
 window.addEventListener("hashchange", route);
 route();
