@@ -472,7 +472,15 @@ impl Game {
         let basket = p.court.basket;
         let facing = |from: DVec2, to: DVec2| (to - from).y.atan2((to - from).x);
         let mut agents = Vec::with_capacity(p.offense_players + p.defenders);
-        let handler = DVec2::new(rng.gen_range(8.0..12.0), rng.gen_range(-5.0..5.0));
+        // A fixed start replaces the drawn one (drawn all the same, so the draws of the
+        // others do not change), and everything placed relative to a player uses where
+        // it really stands.
+        let starts = &self.starts;
+        let place = |k: usize, drawn: DVec2| starts[k].unwrap_or(drawn);
+        let handler = place(
+            0,
+            DVec2::new(rng.gen_range(8.0..12.0), rng.gen_range(-5.0..5.0)),
+        );
         agents.push(Agent::new(
             self.names[0].clone(),
             Team::Offense,
@@ -482,7 +490,8 @@ impl Game {
         let other_side = if handler.y >= 0.0 { -1.0 } else { 1.0 };
         for k in 1..p.offense_players {
             let side = if k % 2 == 1 { other_side } else { -other_side };
-            let at = DVec2::new(rng.gen_range(5.0..10.0), side * rng.gen_range(2.0..6.5));
+            let drawn = DVec2::new(rng.gen_range(5.0..10.0), side * rng.gen_range(2.0..6.5));
+            let at = place(k, drawn);
             agents.push(Agent::new(
                 self.names[k].clone(),
                 Team::Offense,
@@ -492,7 +501,8 @@ impl Game {
         }
         for k in 0..p.defenders {
             let mark = agents[k % p.offense_players].pose.position;
-            let at = mark + (basket - mark).normalize_or_zero() * DEFENDER_START_M;
+            let drawn = mark + (basket - mark).normalize_or_zero() * DEFENDER_START_M;
+            let at = place(p.offense_players + k, drawn);
             agents.push(Agent::new(
                 self.names[p.offense_players + k].clone(),
                 Team::Defense,
@@ -500,27 +510,8 @@ impl Game {
                 facing(at, mark),
             ));
         }
-        // Fixed starts replace the drawn ones (drawn all the same, so the others do not
-        // change): the offense faces the basket, a defender its mark.
-        for (k, start) in self.starts.iter().enumerate() {
-            if let Some(at) = *start {
-                agents[k].pose.position = at;
-            }
-        }
-        for k in 0..agents.len() {
-            let at = agents[k].pose.position;
-            let toward = match agents[k].team {
-                Team::Offense => basket,
-                Team::Defense => {
-                    agents[(k - p.offense_players) % p.offense_players]
-                        .pose
-                        .position
-                }
-            };
-            if self.starts[k].is_some() {
-                agents[k].pose.heading = facing(at, toward);
-            }
-            agents[k].next_plan_s = now;
+        for a in &mut agents {
+            a.next_plan_s = now;
         }
         self.last_decision = vec![None; agents.len()];
         self.orders = vec![None; agents.len()];

@@ -83,11 +83,8 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
         .scenario
         .file_stem()
         .map_or("match".to_string(), |s| s.to_string_lossy().into_owned());
-    let id = scenario
-        .name
-        .clone()
-        .filter(|n| !n.is_empty())
-        .map_or(stem.clone(), |_| stem.clone());
+    // The match is named after its file; the scenario's name stays in the header.
+    let id = stem.clone();
     let info = json!({
         "id": id,
         "name": scenario.name,

@@ -71,6 +71,7 @@ pub fn spawn(
     let controlled = vec![false; agent_ids.len()];
     let mut session = Session::new(world, id.clone(), scenario.tick_hz, scenario.frame_hz);
     let first = session.frame();
+    let creation_error = Mutex::new(None);
     let recorder = app.replay_dir.as_deref().and_then(|dir| {
         let started = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
@@ -80,6 +81,7 @@ pub fn spawn(
             .and_then(|mut r| r.frame(&first).map(|()| r));
         made.map_err(|e| {
             app.metrics.replay_errors.fetch_add(1, Relaxed);
+            *creation_error.lock().expect("not poisoned") = Some(format!("cannot create {}: {e}", path.display()));
             tracing::warn!(path = %path.display(), error = %e, "cannot record this match; it runs unrecorded");
         })
         .ok()
@@ -107,7 +109,7 @@ pub fn spawn(
         ended: AtomicBool::new(false),
         controlled: Mutex::new(controlled),
         replay,
-        replay_error: Mutex::new(None),
+        replay_error: creation_error,
     });
     app.metrics.matches_created.fetch_add(1, Relaxed);
     app.metrics.matches_running.fetch_add(1, Relaxed);
@@ -154,8 +156,22 @@ impl Ticker {
             if self.session.world.finished() {
                 break "finished";
             }
+            if mode == Mode::Fast {
+                // No timer at all (even a zero sleep costs a timer tick): take whatever
+                // the sockets and the API said, then tick.
+                if *self.shutdown.borrow() {
+                    break "shutdown";
+                }
+                if let Some(reason) = self.drain_controls() {
+                    break reason;
+                }
+                self.tick();
+                if self.session.world.tick().is_multiple_of(256) {
+                    tokio::task::yield_now().await;
+                }
+                continue;
+            }
             let wake = match (mode, waiting_until) {
-                (Mode::Fast, _) => Instant::now(),
                 (Mode::Lockstep, Some(until)) => until,
                 _ => next_tick,
             };
@@ -197,11 +213,21 @@ impl Ticker {
                     waiting_until = Some(Instant::now() + deadline);
                 }
             }
-            if mode == Mode::Fast && tick.is_multiple_of(256) {
-                tokio::task::yield_now().await;
-            }
         };
         self.end(reason);
+    }
+
+    /// Handles every control message waiting; the reason to stop, if one says so.
+    fn drain_controls(&mut self) -> Option<&'static str> {
+        loop {
+            match self.control.try_recv() {
+                Ok(Control::Stop) | Err(mpsc::error::TryRecvError::Disconnected) => {
+                    return Some("deleted")
+                }
+                Ok(message) => self.handle(message),
+                Err(mpsc::error::TryRecvError::Empty) => return None,
+            }
+        }
     }
 
     fn all_answered(&self) -> bool {

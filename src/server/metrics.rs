@@ -109,6 +109,12 @@ impl Metrics {
             self.closed_for_rate.load(Relaxed),
         );
         counter(
+            "fieldhouse_replay_errors_total",
+            "Replay files that could not be written (the matches went on).",
+            "counter",
+            self.replay_errors.load(Relaxed),
+        );
+        counter(
             "fieldhouse_slow_clients_dropped_total",
             "Spectators dropped for lagging too long.",
             "counter",

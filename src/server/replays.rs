@@ -4,6 +4,7 @@
 
 use super::api::ApiError;
 use super::state::AppState;
+use super::ws::{classify, shut, Read, GOING_AWAY, TOO_BIG};
 use crate::protocol::{encode, End, ErrorMessage};
 use crate::replay::{self, Replay};
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
@@ -127,12 +128,14 @@ pub async fn watch(
     let replay = match read {
         Ok(Ok(r)) => r,
         Ok(Err(e)) => {
-            return ApiError::new(
-                StatusCode::UNPROCESSABLE_ENTITY,
-                "bad_replay",
-                e.to_string(),
-            )
-            .into_response()
+            // Say what is wrong without showing where the server keeps its files.
+            let why = match e {
+                replay::ReplayError::NotAReplay { reason, .. } => reason,
+                replay::ReplayError::Io { source, .. } => source.to_string(),
+            };
+            let message = format!("replay \"{id}\": {why}");
+            return ApiError::new(StatusCode::UNPROCESSABLE_ENTITY, "bad_replay", message)
+                .into_response();
         }
         Err(e) => {
             return ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string())
@@ -157,6 +160,16 @@ enum Control {
     Pause {},
     Speed { speed: f64 },
     Seek { tick: u64 },
+}
+
+/// Reads a viewer's message: only objects are messages (serde would also read one from
+/// an array).
+fn control(text: &str) -> Result<Incoming, String> {
+    let value: Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
+    if !value.is_object() {
+        return Err("a control is a JSON object".into());
+    }
+    serde_json::from_value(value).map_err(|e| e.to_string())
 }
 
 const MIN_SPEED: f64 = 0.25;
@@ -195,6 +208,11 @@ async fn play(socket: WebSocket, replay: Replay, id: String, app: Arc<AppState>)
     {
         return;
     }
+    // A replay without frames has only its end to show.
+    if replay.frames.is_empty() && sink.send(Message::Text(end.clone().into())).await.is_err() {
+        return;
+    }
+    let mut stopping = app.shutdown.clone();
     let (mut next, mut playing, mut speed) = (0usize, true, 1.0f64);
     let mut due = Instant::now();
     loop {
@@ -221,13 +239,21 @@ async fn play(socket: WebSocket, replay: Replay, id: String, app: Arc<AppState>)
                     }
                 }
             }
+            _ = stopping.changed() => {
+                shut(&mut sink, &mut stream, GOING_AWAY, "server shutting down").await;
+                break;
+            }
             incoming = stream.next() => {
-                let text = match incoming {
-                    Some(Ok(Message::Text(t))) => t,
-                    Some(Ok(Message::Close(_))) | None | Some(Err(_)) => break,
-                    Some(Ok(_)) => continue,
+                let text = match classify(incoming) {
+                    Read::Text(t) => t,
+                    Read::Closed => break,
+                    Read::TooBig => {
+                        shut(&mut sink, &mut stream, TOO_BIG, "message too big").await;
+                        break;
+                    }
+                    Read::Binary | Read::Ignore => continue,
                 };
-                let reply = match serde_json::from_str::<Incoming>(&text) {
+                let reply = match control(&text) {
                     Ok(Incoming::Control(Control::Play {})) => {
                         playing = true;
                         due = Instant::now();
@@ -259,7 +285,7 @@ async fn play(socket: WebSocket, replay: Replay, id: String, app: Arc<AppState>)
                             None => Some(format!("tick {tick} is after the replay's last frame")),
                         }
                     }
-                    Err(e) => Some(e.to_string()),
+                    Err(e) => Some(e),
                 };
                 if let Some(message) = reply {
                     let error = encode(&ErrorMessage::new("bad_control", &message));

@@ -25,9 +25,9 @@ use std::time::{Duration, Instant};
 use tokio::sync::mpsc;
 
 /// Close codes (RFC 6455).
-const GOING_AWAY: u16 = 1001;
+pub(super) const GOING_AWAY: u16 = 1001;
 const POLICY: u16 = 1008;
-const TOO_BIG: u16 = 1009;
+pub(super) const TOO_BIG: u16 = 1009;
 const NORMAL: u16 = 1000;
 
 /// Sockets buffer little: frames are small and a slow reader should skip, not queue.
@@ -65,7 +65,7 @@ fn close(code: u16, reason: &str) -> Message {
 }
 
 /// Why reading a socket stopped, if it did.
-enum Read {
+pub(super) enum Read {
     Text(Utf8Bytes),
     Binary,
     Ignore,
@@ -73,7 +73,7 @@ enum Read {
     TooBig,
 }
 
-fn classify(incoming: Option<Result<Message, axum::Error>>) -> Read {
+pub(super) fn classify(incoming: Option<Result<Message, axum::Error>>) -> Read {
     match incoming {
         None | Some(Ok(Message::Close(_))) => Read::Closed,
         Some(Ok(Message::Text(t))) => Read::Text(t),
@@ -125,7 +125,7 @@ impl Sender<'_> {
 
 /// Sends a close frame, then reads on until the client answers it (or a second passes),
 /// so the client gets the close code rather than a connection reset.
-async fn shut(
+pub(super) async fn shut(
     sink: &mut SplitSink<WebSocket, Message>,
     stream: &mut SplitStream<WebSocket>,
     code: u16,

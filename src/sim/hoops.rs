@@ -40,6 +40,12 @@ impl HoopsWorld {
             defense = vec![("d1".to_string(), None)];
         }
         for (i, a) in s.agents.iter().enumerate() {
+            if a.limits.is_some() {
+                return Err(ScenarioError::at(
+                    format!("agents[{i}].limits"),
+                    "basketball players move with motion capture; limits are for fielders",
+                ));
+            }
             if let Some([x, z]) = a.position {
                 let p = glam::DVec2::new(x, z);
                 if !(p.is_finite() && params.court.contains(p)) {

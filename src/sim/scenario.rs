@@ -88,7 +88,7 @@ pub struct LimitsSpec {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LaunchSpec {
-    /// Match time to hit it, s (or as soon as the previous ball is dead).
+    /// Match time to hit it, s (or `pause_s` after the previous ball is dead, if later).
     pub time_s: f64,
     pub speed_m_s: f64,
     pub elevation_deg: f64,
