@@ -1,12 +1,13 @@
-//! fieldhouse: a multi-agent team sports simulation core.
+//! fieldhouse: a multi-agent team sports simulation server and its simulation core.
 //!
 //! # Layout
 //!
-//! The library is the deterministic simulation core: no clock, no threads of its own (a
-//! sweep may fan work out with rayon, but its results never depend on it), and no I/O
-//! except reading motion capture and the cost-map cache at start-up. The
-//! same inputs give the same bits on the same build, which keeps tests simple and
-//! results reproducible. Modules, in the order data flows:
+//! Everything but [`server`] and [`replay`]'s file handling is the deterministic
+//! simulation core: no clock, no threads of its own (a sweep may fan work out with
+//! rayon, but its results never depend on it), and no I/O except reading motion capture
+//! and the cost-map cache at start-up. The same inputs give the same bits on the same
+//! build, which keeps tests simple, results reproducible and replays verifiable.
+//! Modules, in the order data flows:
 //!
 //! * [`physics`]: ball flight. Gravity, Nathan's drag and Magnus lift, a fixed-step RK4
 //!   integrator, bounces and rolls; baseball and cricket presets.
@@ -32,12 +33,12 @@
 //!   hash over the frames), written append-only, read back to a torn record, verified by
 //!   re-simulation.
 //! * [`server`]: the I/O shell (tokio, axum, tower): match tasks that tick worlds,
-//!   WebSockets for spectators and bots, the REST API, metrics. The only module that
-//!   reads a clock or opens a socket.
+//!   WebSockets for spectators, bots and replay viewers, the REST API, metrics. The only
+//!   module that reads a clock or opens a socket.
 //! * [`names`]: the names users type for presets, and the error a wrong one gets.
 //!
 //! The `fieldhouse` binary (`src/main.rs`, `src/cli/`) is a thin shell: it parses the
-//! command line, runs the core, prints text or JSON and draws SVG plots.
+//! command line, runs the core or the server, prints text or JSON and draws pictures.
 
 pub mod basketball;
 pub mod costmap;
