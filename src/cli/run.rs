@@ -114,12 +114,23 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let end_tick = scenario
         .duration_s
         .map(|d| (d * scenario.tick_hz).round() as u64);
-    let bar = end_tick.filter(|&t| t >= 60 * 60 * 60).map(|t| {
-        ProgressBar::new(t).with_style(
-            ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ticks ({eta})")
-                .expect("template is valid"),
-        )
+    // Long runs show progress on stderr: by ticks when the scenario has a duration (an
+    // hour of play or more), else by possessions (500 or more).
+    let possessions = scenario.options.possessions;
+    let (total, unit) = match (end_tick, possessions) {
+        (Some(t), _) => (Some(t).filter(|&t| t >= 60 * 60 * 60), "ticks"),
+        (None, Some(p)) => (Some(p).filter(|&p| p >= 500), "possessions"),
+        (None, None) => (None, ""),
+    };
+    let bar = total.map(|t| {
+        let template = format!("[{{bar:30}}] {{pos}}/{{len}} {unit} ({{eta}})");
+        ProgressBar::new(t)
+            .with_style(ProgressStyle::with_template(&template).expect("template is valid"))
     });
+    let progress = |world: &World| match unit {
+        "ticks" => world.tick(),
+        _ => world.result()["possession"].as_u64().unwrap_or(0),
+    };
     let started = Instant::now();
     let mut frames = 1u64;
     while !session.world.finished() {
@@ -129,7 +140,7 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
         }
         if let Some(b) = &bar {
             if session.world.tick().is_multiple_of(600) {
-                b.set_position(session.world.tick());
+                b.set_position(progress(&session.world));
             }
         }
     }
