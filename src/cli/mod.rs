@@ -37,6 +37,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run the match server: demo matches, WebSockets for spectators and bots, REST API.
+    Serve(serve::ServeArgs),
     /// One fielder, one fly ball: did it catch it, and how did it run?
     Catch(catch::CatchArgs),
     /// Many fly balls, every strategy on the same balls: catch rates, efforts, path shapes.
@@ -49,8 +51,6 @@ enum Command {
     BasketballDecide(basketball::DecideArgs),
     /// The paper's experiment: points per possession of the simple and cost-map offenses.
     BasketballEval(basketball::EvalArgs),
-    /// Run the match server: demo matches, WebSockets for spectators and bots, REST API.
-    Serve(serve::ServeArgs),
     /// The reference bot: connect to a match and play one agent.
     Bot(bot::BotArgs),
     /// Play a scenario file headless, as fast as possible, into a replay file.
