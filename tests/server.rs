@@ -946,3 +946,46 @@ async fn a_server_killed_mid_match_leaves_a_readable_replay() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_basketball_agents_cost_map_is_served_at_its_pose() {
+    let server = Server::start(&[]);
+    // Let the demo run a little so agents have moved.
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let map = server.get("/api/matches/demo-basketball/costmap/o1");
+    let behaviour = map["behaviour"].as_str().unwrap();
+    assert!(["dribble", "run"].contains(&behaviour), "{behaviour}");
+    let rows = map["costs_s"].as_array().unwrap();
+    let (size, cell) = (
+        map["size_m"].as_f64().unwrap(),
+        map["cell_m"].as_f64().unwrap(),
+    );
+    assert_eq!(rows.len(), (size / cell).round() as usize);
+    assert_eq!(map["origin"], json!([-size / 2.0, -size / 2.0]));
+    assert!(map["pose"]["position"].is_array() && map["pose"]["heading"].is_number());
+    // In the agent's frame: 3 m ahead is cheaper than 3 m behind for a forward mover (the
+    // paper's point against distance-proportional cost), and the start costs nothing.
+    let at = |x: f64, z: f64| {
+        let (i, j) = (
+            ((z + size / 2.0) / cell) as usize,
+            ((x + size / 2.0) / cell) as usize,
+        );
+        rows[i][j].as_f64()
+    };
+    assert!(at(3.0, 0.0).unwrap() < at(-3.0, 0.0).unwrap_or(f64::INFINITY));
+    assert!(rows
+        .iter()
+        .flat_map(|r| r.as_array().unwrap())
+        .any(|c| c.as_f64() == Some(0.0)));
+    for (path, code) in [
+        ("/api/matches/demo-baseball/costmap/lf", "no_costmap"),
+        ("/api/matches/demo-basketball/costmap/zz", "not_found"),
+    ] {
+        match ureq::get(&server.http(path)).call() {
+            Err(ureq::Error::Status(404, r)) => {
+                assert_eq!(r.into_json::<Value>().unwrap()["error"]["code"], code)
+            }
+            other => panic!("{path}: {other:?}"),
+        }
+    }
+}

@@ -217,6 +217,16 @@ impl Capabilities {
         })
     }
 
+    /// The mover of a behaviour by name (`dribble`, `run`, `defense`).
+    pub fn by_behaviour(&self, behaviour: &str) -> Option<&Mover> {
+        match behaviour {
+            "dribble" => Some(&self.dribble),
+            "run" => Some(&self.run),
+            "defense" => Some(&self.defense),
+            _ => None,
+        }
+    }
+
     pub fn defender(&self, motion: DefenderMotion) -> &Mover {
         match motion {
             DefenderMotion::Defense => &self.defense,

@@ -201,6 +201,69 @@ pub async fn delete(
     Ok(Json(json!({"id": id, "status": "deleted"})))
 }
 
+/// A basketball agent's cost map as it moves now (the map of its current behaviour,
+/// placed at its pose in the newest frame), for drawing on the court: costs in seconds
+/// in the agent's own frame, with the pose that maps them onto the court.
+pub async fn costmap(
+    Path((id, agent)): Path<(String, String)>,
+    State(app): State<Arc<AppState>>,
+) -> Result<Json<Value>, ApiError> {
+    let entry = app.get(&id).ok_or_else(|| ApiError::not_found(&id))?;
+    if entry.info.sport != "basketball" {
+        return Err(ApiError::new(
+            StatusCode::NOT_FOUND,
+            "no_costmap",
+            format!(
+                "match \"{id}\" is {}; cost maps belong to basketball agents",
+                entry.info.sport
+            ),
+        ));
+    }
+    let frame: Value = serde_json::from_str(entry.published.borrow().frame.as_str())
+        .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string()))?;
+    let view = frame["agents"]
+        .as_array()
+        .and_then(|agents| agents.iter().find(|a| a["id"] == agent.as_str()))
+        .ok_or_else(|| {
+            ApiError::new(
+                StatusCode::NOT_FOUND,
+                "not_found",
+                format!("no agent \"{agent}\" in match \"{id}\""),
+            )
+        })?;
+    let behaviour = view["behaviour"].as_str().unwrap_or("run");
+    let mover = app.caps.by_behaviour(behaviour).ok_or_else(|| {
+        ApiError::new(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            "internal",
+            format!("no map for {behaviour}"),
+        )
+    })?;
+    let map = &mover.map;
+    let seconds: Vec<Vec<Option<f64>>> = map
+        .rows()
+        .iter()
+        .map(|row| {
+            row.iter()
+                .map(|c| c.map(|f| f64::from(f) / map.fps))
+                .collect()
+        })
+        .collect();
+    Ok(Json(json!({
+        "match": id,
+        "agent": agent,
+        "tick": frame["tick"],
+        "behaviour": behaviour,
+        "pose": {"position": view["position"], "heading": view["heading"]},
+        "cell_m": map.grid.cell_m,
+        "size_m": map.grid.size_m,
+        "origin": map.grid.origin().to_array(),
+        "horizon_s": mover.horizon_s(),
+        "costs_s": seconds,
+        "motion_source": app.caps.source.to_string(),
+    })))
+}
+
 pub async fn healthz() -> &'static str {
     "ok"
 }

@@ -81,6 +81,7 @@ pub fn router(app: Arc<AppState>) -> Router {
     let api = Router::new()
         .route("/api/matches", get(api::list).post(api::create))
         .route("/api/matches/{id}", get(api::show).delete(api::delete))
+        .route("/api/matches/{id}/costmap/{agent}", get(api::costmap))
         .route("/api/replays", get(replays::list))
         .route("/api/replays/{id}", get(replays::download))
         .route("/healthz", get(api::healthz))
