@@ -724,6 +724,27 @@ async fn the_reference_bot_plays_a_match_to_its_end() {
     assert!(String::from_utf8_lossy(&refused.stderr).contains("refused"));
 }
 
+/// A directory under the test target directory, gone before the test starts.
+fn empty_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// `fieldhouse replay verify FILE` must succeed.
+fn assert_verifies(file: &std::path::Path) {
+    let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args(["replay", "verify"])
+        .arg(file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn replays_of(server: &Server) -> Vec<Value> {
     server.get("/api/replays")["replays"]
         .as_array()
@@ -752,8 +773,7 @@ async fn finished_replay(server: &Server, match_id: &str) -> String {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn recorded_matches_are_listed_downloaded_and_played_with_seek() {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("server-replays");
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = empty_dir("server-replays");
     let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
     let (id, _) = server.create(json!({"sport": "cricket", "mode": "fast", "duration_s": 20.0}));
     let replay = finished_replay(&server, &id).await;
@@ -765,17 +785,7 @@ async fn recorded_matches_are_listed_downloaded_and_played_with_seek() {
         .unwrap();
     let file = dir.join("downloaded.jsonl.copy");
     std::fs::write(&file, &body).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
-        .arg("replay")
-        .arg("verify")
-        .arg(&file)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_verifies(&file);
     // Ids cannot reach outside the replay directory.
     for (path, status) in [
         ("/api/replays/..%2F..%2Fetc%2Fpasswd", 400),
@@ -861,8 +871,7 @@ async fn recorded_matches_are_listed_downloaded_and_played_with_seek() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_recorded_bot_match_verifies_with_its_command_log() {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("server-bot-replays");
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = empty_dir("server-bot-replays");
     let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
     let (id, tokens) = server.create(fielder_with_bot("realtime", 1000));
     let token = tokens["cf"].as_str().unwrap();
@@ -895,23 +904,12 @@ async fn a_recorded_bot_match_verifies_with_its_command_log() {
         text.contains("\"record\":\"control\""),
         "the bot's arrival and departure are logged"
     );
-    let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
-        .arg("replay")
-        .arg("verify")
-        .arg(&file)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_verifies(&file);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_server_killed_mid_match_leaves_a_readable_replay() {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("server-killed");
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = empty_dir("server-killed");
     let mut server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
     let (id, _) = server.create(json!({"sport": "baseball"}));
     tokio::time::sleep(Duration::from_millis(1500)).await;
@@ -934,17 +932,7 @@ async fn a_server_killed_mid_match_leaves_a_readable_replay() {
     .unwrap();
     assert_eq!(info["complete"], false);
     assert!(info["frames"].as_u64().unwrap() >= 30, "{info}");
-    let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
-        .arg("replay")
-        .arg("verify")
-        .arg(&file)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_verifies(&file);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -24,16 +24,9 @@ pub struct Stride {
 }
 
 impl Mover {
-    /// Seconds for an agent at `pose` to reach the world point `world`; `None` beyond the
-    /// map (farther than its horizon or its extent).
-    #[inline]
-    pub fn seconds_to(&self, pose: &AgentPose, world: DVec2) -> Option<f64> {
-        self.map
-            .cost_for(pose, world)
-            .map(|frames| f64::from(frames) / self.map.fps)
-    }
-
-    /// [`Mover::seconds_to`] in a frame prepared once ([`AgentPose::frame`]).
+    /// Seconds for an agent whose frame is `frame` ([`AgentPose::frame`], prepared once
+    /// for many look-ups) to reach the world point `world`; `None` beyond the map
+    /// (farther than its horizon or its extent).
     #[inline]
     pub fn seconds_in(&self, frame: &LocalFrame, world: DVec2) -> Option<f64> {
         self.map

@@ -64,20 +64,20 @@ impl Court {
         )
     }
 
-    /// The centres of every square of the court, row by row (z outer, x inner).
+    /// The centre of square `index`, counted row by row (z outer, x inner).
+    pub fn square_centre(&self, index: usize) -> DVec2 {
+        let (nx, nz) = self.squares_xz();
+        let (i, j) = (index / nx, index % nx);
+        DVec2::new(
+            (j as f64 + 0.5) * self.square_m,
+            (i as f64 + 0.5 - 0.5 * nz as f64) * self.square_m,
+        )
+    }
+
+    /// The centres of every square of the court, in index order.
     pub fn square_centres(&self) -> Vec<DVec2> {
         let (nx, nz) = self.squares_xz();
-        let z0 = -0.5 * nz as f64 * self.square_m;
-        (0..nz)
-            .flat_map(|i| {
-                (0..nx).map(move |j| {
-                    DVec2::new(
-                        (j as f64 + 0.5) * self.square_m,
-                        z0 + (i as f64 + 0.5) * self.square_m,
-                    )
-                })
-            })
-            .collect()
+        (0..nx * nz).map(|k| self.square_centre(k)).collect()
     }
 
     /// The index (into [`Court::square_centres`]) of the square holding `p`.

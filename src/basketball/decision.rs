@@ -112,6 +112,8 @@ impl Situation<'_> {
             .iter()
             .map(|(pose, mover)| (pose.frame(), *mover, mover.horizon_s()))
             .collect();
+        // Row by row, the centres of [`Court::square_centre`] without its per-square
+        // division: this loop is the decision's whole cost (measured: 29 µs against 55).
         for i in 0..nz {
             for j in 0..nx {
                 let square = i * nx + j;

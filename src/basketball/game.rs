@@ -183,11 +183,6 @@ impl Game {
         self.controlled[k]
     }
 
-    /// The agent index of the one holding the ball, if any.
-    pub fn ball_holder(&self) -> Option<usize> {
-        self.holder()
-    }
-
     /// Accepts a bot's order for agent `k`, or says why it is impossible now. The order
     /// is carried out on the next tick.
     pub fn order(&mut self, k: usize, order: Order) -> Result<(), String> {
@@ -240,7 +235,8 @@ impl Game {
         }
     }
 
-    pub(super) fn holder(&self) -> Option<usize> {
+    /// The agent index of the one holding the ball, if any.
+    pub fn holder(&self) -> Option<usize> {
         match self.ball {
             Ball::Held { by } => Some(by),
             _ => None,
@@ -255,8 +251,9 @@ impl Game {
         }
     }
 
-    pub(super) fn defenders(&self) -> impl Iterator<Item = usize> + '_ {
-        (0..self.agents.len()).filter(|&k| self.agents[k].team == Team::Defense)
+    /// Defenders' agent indices: agents are offense first, then defense.
+    pub(super) fn defenders(&self) -> std::ops::Range<usize> {
+        self.params.offense_players..self.agents.len()
     }
 
     /// Advances one tick, appending what happened to `events`.
@@ -321,7 +318,7 @@ impl Game {
             blocked,
             points,
         };
-        for d in self.defenders().collect::<Vec<_>>() {
+        for d in self.defenders() {
             let bit = 1u64 << d.min(63);
             if self.blocks_tried & bit == 0
                 && self.agents[d].pose.position.distance(at) <= self.params.defender.reach_m
@@ -380,7 +377,7 @@ impl Game {
             return false;
         }
         let at = at + gap / gap.length() * travel;
-        for d in self.defenders().collect::<Vec<_>>() {
+        for d in self.defenders() {
             let bit = 1u64 << d.min(63);
             if tried & bit == 0
                 && self.agents[d].pose.position.distance(at) <= self.params.defender.reach_m
@@ -412,7 +409,7 @@ impl Game {
             return false; // a shot being taken can be blocked, not stolen
         }
         let at = self.agents[holder].pose.position;
-        for d in self.defenders().collect::<Vec<_>>() {
+        for d in self.defenders() {
             let defender = &mut self.agents[d];
             if now >= defender.not_before_s
                 && defender.pose.position.distance(at) <= self.params.defender.reach_m

@@ -100,11 +100,9 @@ fn hoops(p: &Value) -> Value {
     };
     let (pos, team) = (at(&mine["position"]), mine["team"].clone());
     let basket = at(&p["basket"]);
-    let ball = at(&[
-        p["ball"]["position"][0].clone(),
-        p["ball"]["position"][2].clone(),
-    ]
-    .into());
+    // The ball is [x, y, z]; on the ground it is at (x, z).
+    let b = &p["ball"]["position"];
+    let ball = DVec2::new(b[0].as_f64().unwrap_or(0.0), b[2].as_f64().unwrap_or(0.0));
     if team == "defense" {
         return json!({"kind": "move_to", "target": ball.to_array()});
     }

@@ -47,24 +47,16 @@ pub fn spawn(
         agents: world.agents_info(),
         motion_source: app.caps.source.to_string(),
     };
-    let bot_ids: Vec<String> = if scenario.agents.is_empty() {
-        Vec::new()
-    } else {
-        scenario
-            .agents
-            .iter()
-            .filter(|a| a.bot)
-            .map(|a| a.id.clone())
-            .collect()
-    };
-    let tokens = bot_ids
-        .into_iter()
+    let tokens = scenario
+        .agents
+        .iter()
+        .filter(|a| a.bot)
         .map(|a| {
             let k = agent_ids
                 .iter()
-                .position(|x| *x == a)
+                .position(|x| *x == a.id)
                 .expect("scenario agents are in the world");
-            (k, a, new_token())
+            (k, a.id.clone(), new_token())
         })
         .collect::<Vec<_>>();
     // Agents play their built-in brains until a bot connects.

@@ -245,16 +245,8 @@ impl FlyWorld {
         self.tick
     }
 
-    pub fn dt(&self) -> f64 {
-        self.dt
-    }
-
     pub fn agent_ids(&self) -> impl Iterator<Item = &str> {
         self.fielders.iter().map(|f| f.id.as_str())
-    }
-
-    pub fn by_bot(&self, k: usize) -> bool {
-        self.fielders[k].by_bot
     }
 
     pub fn set_controlled(&mut self, k: usize, by_bot: bool) {
@@ -513,10 +505,6 @@ impl FlyWorld {
                 .script
                 .as_ref()
                 .is_some_and(|s| self.scripted >= s.len())
-    }
-
-    pub fn score(&self) -> &Score {
-        &self.score
     }
 }
 

@@ -4,13 +4,35 @@ use super::scenario::{Scenario, ScenarioError};
 use crate::basketball::{
     Brain, Capabilities, DefenderMotion, Event, Game, GameParams, Order, Team,
 };
+use crate::names::UnknownName;
 use serde_json::{json, Value};
+use std::str::FromStr;
 use std::sync::Arc;
 
 pub struct HoopsWorld {
     pub game: Game,
     /// Possessions to play; none: for ever.
     pub possessions: Option<u64>,
+}
+
+/// Reads agent `i`'s strategy as its team's choice of `T`: every agent of a team that
+/// names one must name the same (`clash` says what else agent j chose).
+fn team_choice<T: FromStr<Err = UnknownName> + PartialEq + Copy>(
+    i: usize,
+    name: Option<&str>,
+    chosen: &mut Option<(usize, T)>,
+    clash: impl Fn(usize, T) -> String,
+) -> Result<(), ScenarioError> {
+    let Some(name) = name else { return Ok(()) };
+    let path = format!("agents[{i}].strategy");
+    let choice: T = name
+        .parse()
+        .map_err(|e: UnknownName| ScenarioError::at(path.clone(), e.to_string()))?;
+    if let Some((j, other)) = chosen.filter(|(_, c)| *c != choice) {
+        return Err(ScenarioError::at(path, clash(j, other)));
+    }
+    *chosen = Some((i, choice));
+    Ok(())
 }
 
 impl HoopsWorld {
@@ -58,35 +80,15 @@ impl HoopsWorld {
             let strategy = a.strategy.as_deref();
             match a.team.as_deref() {
                 Some("offense") => {
-                    if let Some(name) = strategy {
-                        let brain: Brain =
-                            name.parse().map_err(|e: crate::names::UnknownName| {
-                                ScenarioError::at(format!("agents[{i}].strategy"), e.to_string())
-                            })?;
-                        if let Some((j, other)) = offense_brain.filter(|(_, b)| *b != brain) {
-                            return Err(ScenarioError::at(
-                                format!("agents[{i}].strategy"),
-                                format!("a team has one brain; agents[{j}] uses {}", other.name()),
-                            ));
-                        }
-                        offense_brain = Some((i, brain));
-                    }
+                    team_choice(i, strategy, &mut offense_brain, |j, other: Brain| {
+                        format!("a team has one brain; agents[{j}] uses {}", other.name())
+                    })?;
                     offense.push((a.id.clone(), a.position));
                 }
                 Some("defense") => {
-                    if let Some(name) = strategy {
-                        let motion: DefenderMotion =
-                            name.parse().map_err(|e: crate::names::UnknownName| {
-                                ScenarioError::at(format!("agents[{i}].strategy"), e.to_string())
-                            })?;
-                        if let Some((j, _)) = defender_motion.filter(|(_, m)| *m != motion) {
-                            return Err(ScenarioError::at(
-                                format!("agents[{i}].strategy"),
-                                format!("defenders move alike; agents[{j}] differs"),
-                            ));
-                        }
-                        defender_motion = Some((i, motion));
-                    }
+                    team_choice(i, strategy, &mut defender_motion, |j, _: DefenderMotion| {
+                        format!("defenders move alike; agents[{j}] differs")
+                    })?;
                     defense.push((a.id.clone(), a.position));
                 }
                 Some(other) => {
@@ -211,7 +213,7 @@ impl HoopsWorld {
         json!({
             "self": snap.agents[k].id,
             "team": snap.agents[k].team,
-            "has_ball": self.game.ball_holder() == Some(k),
+            "has_ball": self.game.holder() == Some(k),
             "agents": snap.agents.iter().map(|a| json!({"id": a.id, "team": a.team, "position": a.position, "heading": a.heading, "action": a.action})).collect::<Vec<_>>(),
             "ball": snap.ball,
             "shot_clock_s": snap.shot_clock_s,

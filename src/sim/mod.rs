@@ -129,10 +129,6 @@ impl World {
         }
     }
 
-    pub fn agent_index(&self, id: &str) -> Option<usize> {
-        self.agent_ids().iter().position(|a| a == id)
-    }
-
     /// The static description of the field.
     pub fn field(&self) -> Value {
         match &self.inner {
