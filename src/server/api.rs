@@ -90,6 +90,12 @@ pub fn summary(entry: &MatchEntry) -> Value {
             })
         })
         .collect();
+    // The lobby shows the score; it lives in the newest frame, which is parsed here
+    // rather than kept apart on the tick path, where it would cost every match a copy
+    // per frame for a page that asks every few seconds.
+    let score = serde_json::from_str::<Value>(entry.published.borrow().frame.as_str())
+        .map(|mut frame| frame["score"].take())
+        .unwrap_or(Value::Null);
     json!({
         "id": entry.info.id,
         "name": entry.info.name,
@@ -98,6 +104,7 @@ pub fn summary(entry: &MatchEntry) -> Value {
         "status": if entry.ended.load(Relaxed) { "ended" } else { "running" },
         "tick": entry.tick.load(Relaxed),
         "tick_hz": entry.info.tick_hz,
+        "score": score,
         "agents": agents,
         "spectators": entry.spectators.load(Relaxed),
         "motion_source": entry.info.motion_source,
@@ -201,6 +208,17 @@ pub async fn delete(
     Ok(Json(json!({"id": id, "status": "deleted"})))
 }
 
+/// A behaviour's cost map in the agent's own frame (the agent at the origin facing +x),
+/// with the seconds to reach each cell. Because a map without obstacles is the same at
+/// every pose, one download per behaviour lets a client draw any agent's map at any tick,
+/// live or in a replay, by placing it at the agent's pose in the frame it shows.
+pub async fn behaviour_costmap(
+    Path(behaviour): Path<String>,
+    State(app): State<Arc<AppState>>,
+) -> Result<Json<Value>, ApiError> {
+    Ok(Json(map_json(&app, &behaviour)?))
+}
+
 /// A basketball agent's cost map as it moves now (the map of its current behaviour,
 /// placed at its pose in the newest frame), for drawing on the court: costs in seconds
 /// in the agent's own frame, with the pose that maps them onto the court.
@@ -231,12 +249,21 @@ pub async fn costmap(
                 format!("no agent \"{agent}\" in match \"{id}\""),
             )
         })?;
-    let behaviour = view["behaviour"].as_str().unwrap_or("run");
+    let mut doc = map_json(&app, view["behaviour"].as_str().unwrap_or("run"))?;
+    doc["match"] = json!(id);
+    doc["agent"] = json!(agent);
+    doc["tick"] = frame["tick"].clone();
+    doc["pose"] = json!({"position": view["position"], "heading": view["heading"]});
+    Ok(Json(doc))
+}
+
+/// The JSON both cost-map endpoints share: the map of `behaviour` in seconds.
+fn map_json(app: &AppState, behaviour: &str) -> Result<Value, ApiError> {
     let mover = app.caps.by_behaviour(behaviour).ok_or_else(|| {
         ApiError::new(
-            StatusCode::INTERNAL_SERVER_ERROR,
-            "internal",
-            format!("no map for {behaviour}"),
+            StatusCode::NOT_FOUND,
+            "no_costmap",
+            format!("no cost map for behaviour \"{behaviour}\" (there are dribble, run and defense)"),
         )
     })?;
     let map = &mover.map;
@@ -249,19 +276,15 @@ pub async fn costmap(
                 .collect()
         })
         .collect();
-    Ok(Json(json!({
-        "match": id,
-        "agent": agent,
-        "tick": frame["tick"],
+    Ok(json!({
         "behaviour": behaviour,
-        "pose": {"position": view["position"], "heading": view["heading"]},
         "cell_m": map.grid.cell_m,
         "size_m": map.grid.size_m,
         "origin": map.grid.origin().to_array(),
         "horizon_s": mover.horizon_s(),
         "costs_s": seconds,
         "motion_source": app.caps.source.to_string(),
-    })))
+    }))
 }
 
 pub async fn healthz() -> &'static str {

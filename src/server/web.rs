@@ -1,14 +1,56 @@
-//! The spectator page, embedded in the binary so the server works anywhere.
+//! The spectator page: plain HTML, CSS and JavaScript modules from `web/`, embedded in the
+//! binary so the single file serves everywhere, with no build step between the sources
+//! and what the browser runs.
 
-use axum::response::{Html, IntoResponse};
+use super::api::ApiError;
+use axum::extract::Path;
+use axum::http::{header, StatusCode};
+use axum::response::{IntoResponse, Response};
 
-pub async fn index() -> Html<&'static str> {
-    Html(include_str!("../../web/index.html"))
+/// Every file of the page: its name under `/web/` and its media type. The page's modules
+/// import each other by relative paths, so they all live side by side.
+const ASSETS: &[(&str, &str, &str)] = &[
+    ("index.html", "text/html; charset=utf-8", include_str!("../../web/index.html")),
+    ("style.css", "text/css; charset=utf-8", include_str!("../../web/style.css")),
+    ("app.js", JS, include_str!("../../web/app.js")),
+    ("lobby.js", JS, include_str!("../../web/lobby.js")),
+    ("view.js", JS, include_str!("../../web/view.js")),
+    ("stream.js", JS, include_str!("../../web/stream.js")),
+    ("timeline.js", JS, include_str!("../../web/timeline.js")),
+    ("draw.js", JS, include_str!("../../web/draw.js")),
+    ("fly.js", JS, include_str!("../../web/fly.js")),
+    ("eye.js", JS, include_str!("../../web/eye.js")),
+    ("court.js", JS, include_str!("../../web/court.js")),
+    ("player.js", JS, include_str!("../../web/player.js")),
+];
+
+const JS: &str = "text/javascript; charset=utf-8";
+
+pub async fn index() -> Response {
+    asset("index.html")
 }
 
-pub async fn script() -> impl IntoResponse {
-    (
-        [("content-type", "text/javascript; charset=utf-8")],
-        include_str!("../../web/app.js"),
-    )
+pub async fn file(Path(name): Path<String>) -> Response {
+    asset(&name)
+}
+
+fn asset(name: &str) -> Response {
+    match ASSETS.iter().find(|(n, _, _)| *n == name) {
+        // `no-cache`: the browser revalidates, so a new binary's page is never mixed
+        // with an old one's modules.
+        Some((_, media_type, body)) => (
+            [
+                (header::CONTENT_TYPE, *media_type),
+                (header::CACHE_CONTROL, "no-cache"),
+            ],
+            *body,
+        )
+            .into_response(),
+        None => ApiError::new(
+            StatusCode::NOT_FOUND,
+            "not_found",
+            format!("no page file \"{name}\""),
+        )
+        .into_response(),
+    }
 }

@@ -5,7 +5,7 @@
 
 use super::scenario::{range, LaunchSpec, Scenario, ScenarioError, Sport};
 use crate::fielding::{forecast, Body, CatchZone, Fielder, FielderConfig, Limits, StrategyKind};
-use crate::perception::Sighting;
+use crate::perception::{PerceptionConfig, Sighting};
 use crate::physics::{AirModel, BallSpec, BallState, Flight, Launch, NATHAN_AIR_DENSITY};
 use glam::DVec2;
 use rand::{Rng, SeedableRng};
@@ -426,13 +426,19 @@ impl FlyWorld {
     }
 
     /// The field as a client draws it.
+    /// `eye_height_m` lets a spectator draw what a fielder sees (tan ψ, the image path)
+    /// from the frames, with the eye the fielders perceive from.
     pub fn field(&self) -> Value {
+        let eye = self.fielders.first().map_or(
+            PerceptionConfig::default().eye_height_m,
+            |f| f.config.perception.eye_height_m,
+        );
         match self.sport {
             Sport::Cricket => {
-                json!({"kind": "cricket", "batter": [0.0, 0.0], "boundary_m": 65.0, "inner_ring_m": 27.4, "pitch_length_m": 20.12})
+                json!({"kind": "cricket", "batter": [0.0, 0.0], "boundary_m": 65.0, "inner_ring_m": 27.4, "pitch_length_m": 20.12, "eye_height_m": eye})
             }
             _ => {
-                json!({"kind": "baseball", "home": [0.0, 0.0], "base_path_m": 27.43, "fence_m": 110.0, "foul_lines_deg": [0.0, 90.0]})
+                json!({"kind": "baseball", "home": [0.0, 0.0], "base_path_m": 27.43, "fence_m": 110.0, "foul_lines_deg": [0.0, 90.0], "eye_height_m": eye})
             }
         }
     }

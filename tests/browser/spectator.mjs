@@ -1,0 +1,238 @@
+// The spectator page end to end: the real `fieldhouse serve` on a loopback port, Debian's
+// chromium (headless) driven by playwright-core. Run by tests/browser.rs, which passes:
+//   FIELDHOUSE_BIN       the binary
+//   FIELDHOUSE_MOCAP_DIR motion capture for basketball
+//   FIELDHOUSE_CACHE_DIR cost-map cache shared with the other tests
+//   ARTIFACTS            where screenshots go
+//   CHROMIUM             the browser (default /usr/bin/chromium)
+// Each check throws with what it saw; the process exits 1 on the first failure, and
+// stops by itself within DEADLINE_MS whatever happens.
+import { chromium } from "playwright-core";
+import { spawn } from "node:child_process";
+import { mkdirSync, mkdtempSync, rmSync } from "node:fs";
+import { createServer } from "node:net";
+import { tmpdir } from "node:os";
+import { join } from "node:path";
+
+const DEADLINE_MS = 240_000;
+const env = (name, fallback) => {
+  const v = process.env[name] ?? fallback;
+  if (v === undefined) throw new Error(`${name} is not set (tests/browser.rs sets it)`);
+  return v;
+};
+const BIN = env("FIELDHOUSE_BIN");
+const MOCAP = env("FIELDHOUSE_MOCAP_DIR");
+const CACHE = env("FIELDHOUSE_CACHE_DIR");
+const ARTIFACTS = env("ARTIFACTS");
+const CHROMIUM = env("CHROMIUM", "/usr/bin/chromium");
+mkdirSync(ARTIFACTS, { recursive: true });
+
+const deadline = setTimeout(() => { console.error(`FAIL: no result in ${DEADLINE_MS / 1000} s`); cleanup(); process.exit(1); }, DEADLINE_MS);
+let server = null, browser = null, page = null;
+const replayDir = mkdtempSync(join(tmpdir(), "fieldhouse-replays-"));
+
+function cleanup() {
+  server?.kill("SIGKILL");
+  rmSync(replayDir, { recursive: true, force: true });
+}
+
+function check(ok, what) {
+  if (!ok) throw new Error(what);
+  console.log(`ok: ${what.split(":")[0]}`);
+}
+
+async function freePort() {
+  return new Promise((resolve) => {
+    const s = createServer().listen(0, "127.0.0.1", () => { const { port } = s.address(); s.close(() => resolve(port)); });
+  });
+}
+
+/** Starts the server on `port` and resolves once it listens. */
+function startServer(port) {
+  return new Promise((resolve, reject) => {
+    const child = spawn(BIN, ["serve", "--addr", `127.0.0.1:${port}`, "--mocap", MOCAP, "--cache-dir", CACHE, "--replay-dir", replayDir], {
+      env: { ...process.env, FIELDHOUSE_ADMIN_TOKEN: "browser-test-admin-token", FIELDHOUSE_LOG: "info" },
+      stdio: ["ignore", "ignore", "pipe"],
+    });
+    let said = "";
+    child.stderr.on("data", (chunk) => {
+      said += chunk;
+      if (said.includes("listening")) resolve(child);
+    });
+    child.on("exit", (code) => reject(new Error(`the server exited (${code}) before listening:\n${said}`)));
+  });
+}
+
+async function main() {
+  const port = await freePort();
+  const base = `http://127.0.0.1:${port}`;
+  server = await startServer(port);
+  browser = await chromium.launch({
+    executablePath: CHROMIUM,
+    // Root in a container has no sandbox; the rest keeps chromium off the closed network.
+    args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking",
+      "--disable-component-update", "--disable-sync"],
+  });
+  console.log(`browser: chromium ${browser.version()}`);
+  const context = await browser.newContext({ viewport: { width: 1280, height: 900 } });
+  page = await context.newPage();
+  const errors = [];
+  page.on("console", (m) => { if (m.type() === "error") errors.push(`console: ${m.text()}`); });
+  page.on("pageerror", (e) => errors.push(`page: ${e.message}`));
+  const shot = (name) => page.screenshot({ path: join(ARTIFACTS, `${name}.png`) });
+
+  // The lobby lists the demo matches as links to their views, and the recorded replays.
+  await page.goto(`${base}/`);
+  for (const id of ["demo-baseball", "demo-cricket", "demo-basketball"]) {
+    await page.locator(`#matches a[href="#/matches/${id}"]`).waitFor({ timeout: 10_000 });
+  }
+  check(true, "lobby: lists the three demo matches as links");
+  await page.locator(`#replays a[href^="#/replays/demo-baseball-"]`).waitFor({ timeout: 10_000 });
+  check(true, "lobby: lists the demo matches' replays");
+  const scoreText = await page.locator(`#matches tr:has(a[href="#/matches/demo-basketball"])`).textContent();
+  check(/pts in \d+ possessions/.test(scoreText), `lobby: shows the basketball score: ${scoreText}`);
+  await shot("lobby");
+
+  // A live match: the HUD's tick rises and the canvas changes.
+  await page.click(`#matches a[href="#/matches/demo-baseball"]`);
+  check(page.url().endsWith("#/matches/demo-baseball"), `live: the view has its own URL: ${page.url()}`);
+  const tick = async () => Number(await page.locator("#hud-tick").textContent());
+  await page.locator("#hud-tick").waitFor({ timeout: 10_000 });
+  const state = await page.locator("#hud .state").getAttribute("data-state");
+  check(state === "live", `live: the HUD says the connection is live: ${state}`);
+  const t1 = await tick();
+  const pixels1 = await page.locator("#field").screenshot();
+  await page.waitForTimeout(1000);
+  const t2 = await tick();
+  const pixels2 = await page.locator("#field").screenshot();
+  check(t2 > t1 + 30, `live: the HUD tick rises at 60 Hz (${t1} then ${t2} a second later)`);
+  check(!pixels1.equals(pixels2), "live: the canvas changes between two screenshots");
+
+  // The fielder's-eye panel once a ball is in the air (the demo launches every few seconds).
+  await page.waitForFunction(() => document.getElementById("eye-text").textContent.includes("tan ψ rises"), null, { timeout: 30_000 });
+  await page.waitForTimeout(1500);
+  const eyeInk = await inked(page, "eye");
+  check(eyeInk > 2000, `eye: the fielder's-eye panel is drawn (${eyeInk} pixels inked)`);
+  check(await inked(page, "side") > 1000, "eye: the side view is drawn");
+  const eyeText = await page.locator("#eye-text").textContent();
+  check(/lf \(chapman\): tan ψ rises [\d.]+\/s, straightness R² [\d.]+/.test(eyeText), `eye: explains tan ψ for the selected fielder: ${eyeText}`);
+  await shot("baseball");
+
+  // Picking another fielder from the list re-labels the panel.
+  await page.selectOption("#agent", "cf");
+  await page.waitForFunction(() => document.getElementById("eye-text").textContent.includes("cf (lot-optical)"), null, { timeout: 5_000 });
+  check(true, "eye: picking cf shows its view");
+
+  // Reloading the URL comes back to the same view.
+  await page.reload();
+  await page.locator("#hud-tick").waitFor({ timeout: 10_000 });
+  check((await page.locator("#title").textContent()).includes("chapman, lot-optical and predictive"), "live: a reload shows the same match");
+
+  await page.goto(`${base}/#/matches/demo-cricket`);
+  await page.locator("#hud-tick").waitFor({ timeout: 10_000 });
+  await page.waitForTimeout(1500);
+  await shot("cricket");
+
+  // Basketball: the cost-map overlay and the decisions.
+  await page.goto(`${base}/#/matches/demo-basketball`);
+  await page.locator("#hud-tick").waitFor({ timeout: 10_000 });
+  await page.waitForFunction(() => document.getElementById("costmap-text").textContent.includes("moves with"), null, { timeout: 10_000 });
+  await page.waitForTimeout(500);
+  const overlay = await page.evaluate(() => {
+    // The floor is wood (red over green over blue) and the surround dark grey: the
+    // overlay's greens and blues (squares two seconds away and more) appear nowhere
+    // else but on the offense's small markers.
+    const c = document.getElementById("field");
+    const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+    let cool = 0;
+    for (let i = 0; i < d.length; i += 4) if (Math.max(d[i + 1], d[i + 2]) > d[i] + 30) cool++;
+    return cool / (c.width * c.height);
+  });
+  check(overlay > 0.1, `court: the cost-map overlay covers the court (${(100 * overlay).toFixed(1)} % of pixels green or blue)`);
+  await page.waitForFunction(() => document.getElementById("decision").textContent.includes("safe square"), null, { timeout: 30_000 });
+  const decision = await page.locator("#decision").textContent();
+  check(/^o\d /.test(decision) && /safe square/.test(decision), `court: the ball holder's decision is explained: ${decision}`);
+  await shot("basketball");
+
+  // A phone-sized window: everything fits the width.
+  await page.setViewportSize({ width: 390, height: 844 });
+  await page.waitForTimeout(500);
+  const overflow = await page.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
+  check(overflow <= 0, `phone: no sideways scrolling (${overflow} px too wide)`);
+  await shot("basketball-phone");
+  await page.setViewportSize({ width: 1280, height: 900 });
+
+  // A replay: opens, plays, seeks, pauses, steps one tick.
+  await page.goto(`${base}/#/`);
+  const link = page.locator(`#replays a[href^="#/replays/demo-baseball-"]`).first();
+  await link.waitFor({ timeout: 10_000 });
+  const replayHref = await link.getAttribute("href");
+  await link.click();
+  await page.locator("#hud-tick").waitFor({ timeout: 10_000 });
+  check(!(await page.locator("#player").isHidden()), "replay: the player controls show");
+  const last = Number(await page.locator("#seek").getAttribute("max"));
+  check(last > 300, `replay: the seek bar spans the recording (last tick ${last})`);
+  const target = Math.floor(last / 2);
+  await page.locator("#seek").evaluate((el, t) => { el.value = t; el.dispatchEvent(new Event("change")); }, target);
+  await page.waitForFunction((t) => Math.abs(Number(document.getElementById("hud-tick")?.textContent) - t) < 40, target, { timeout: 5_000 });
+  check(true, `replay: seeking to tick ${target} shows that moment`);
+  await page.click("#play");
+  await page.waitForFunction(() => document.getElementById("hud-playback")?.textContent.startsWith("paused"), null, { timeout: 2_000 });
+  const paused = await tick();
+  await page.waitForTimeout(800);
+  check(await tick() === paused, `replay: paused, the tick stays at ${paused}`);
+  await page.keyboard.press("ArrowRight");
+  await page.waitForFunction((t) => Number(document.getElementById("hud-tick")?.textContent) > t, paused, { timeout: 3_000 });
+  const stepped = await tick();
+  check(stepped - paused <= 2, `replay: → steps to the next frame (${paused} to ${stepped})`);
+  await page.keyboard.press("+");
+  check((await page.locator("#hud-playback").textContent()).includes("2×"), "replay: + doubles the speed");
+  const download = await page.locator("#download").getAttribute("href");
+  const file = await page.request.get(`${base}${download}`);
+  check(file.ok() && (await file.text()).startsWith(`{"fieldhouse":`), `replay: the download link serves the file (${download})`);
+  await shot("replay");
+
+  // The server goes away: the page says so and reconnects when it is back.
+  await page.goto(`${base}/#/matches/demo-baseball`);
+  await page.locator("#hud-tick").waitFor({ timeout: 10_000 });
+  server.kill("SIGTERM");
+  await page.waitForFunction(() => document.querySelector("#hud .state").dataset.state === "retrying", null, { timeout: 10_000 });
+  check(true, "reconnect: the HUD shows the server gone");
+  await shot("disconnected");
+  server = await startServer(port);
+  await page.waitForFunction(() => document.querySelector("#hud .state").dataset.state === "live", null, { timeout: 20_000 });
+  check(true, "reconnect: the page reconnects by itself when the server is back");
+
+  // A replay link still works after the restart (same replay directory).
+  await page.goto(`${base}/${replayHref}`);
+  await page.locator("#hud-tick").waitFor({ timeout: 10_000 });
+
+  // Connection failures while the server was down are expected; nothing else may be.
+  const unexpected = errors.filter((e) => !/WebSocket connection to .* failed|ERR_CONNECTION_REFUSED/.test(e));
+  check(unexpected.length === 0, `console: no errors:\n${unexpected.join("\n")}`);
+}
+
+/** How many pixels of a canvas are not blank. */
+function inked(page, id) {
+  return page.evaluate((id) => {
+    const c = document.getElementById(id);
+    const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let i = 3; i < d.length; i += 4) if (d[i] > 0) n++;
+    return n;
+  }, id);
+}
+
+try {
+  await main();
+  console.log(`all checks passed; screenshots in ${ARTIFACTS}`);
+} catch (e) {
+  console.error(`FAIL: ${e.message}`);
+  await page?.screenshot({ path: join(ARTIFACTS, "failure.png") }).catch(() => {});
+  console.error(`the page at the failure: ${join(ARTIFACTS, "failure.png")}`);
+  process.exitCode = 1;
+} finally {
+  await browser?.close();
+  cleanup();
+  clearTimeout(deadline);
+}

@@ -1,0 +1,242 @@
+// Basketball: the half court, the players as oriented markers with the motion they move
+// with, the ball; the selected player's cost map (its physical capability from motion
+// capture: seconds to reach each square) laid on the court at its pose; and its latest
+// decision in words and graphics, the safe squares outlined.
+import { $, FieldMap, costColour, escapeHtml, fitCanvas, marker } from "./draw.js";
+import { nearest } from "./fly.js";
+
+const TEAM_COLOURS = { offense: "#3d6fe0", defense: "#e0483d" };
+const OVERLAY_ALPHA = 0.42;
+
+export class CourtView {
+  constructor(hello) {
+    this.field = hello.match.field;
+    this.court = this.field.court;
+    this.agents = hello.match.agents;
+    /** Cost maps by behaviour: fetched once each; a map is the same at every pose. */
+    this.costmaps = new Map();
+    this.reset();
+  }
+
+  reset() {
+    this.decisions = new Map();
+    this.shot = null;
+  }
+
+  apply(frame) {
+    for (const e of frame.events) {
+      if (e.kind === "decision") this.decisions.set(e.agent, { ...e, time_s: frame.time_s });
+      if (e.kind === "shot") this.shot = { ...e, time_s: frame.time_s };
+    }
+  }
+
+  describe(e) {
+    switch (e.kind) {
+      case "decision": return `${e.agent}: ${e.reason}`;
+      case "pass": return `${e.from} passes to ${e.to}`;
+      case "pass_caught": return `${e.by} catches the pass`;
+      case "shot": {
+        const result = e.blocked ? "blocked" : e.made ? `made, ${e.points} points` : "missed";
+        return `${e.by} shoots from ${e.distance_m.toFixed(1)} m (${(100 * e.success).toFixed(0)} % chance): ${result}`;
+      }
+      case "possession_ended":
+        return `possession ${e.possession}: ${e.outcome.replace("_", " ")}, ${e.points} points, ` +
+          `${e.duration_s.toFixed(1)} s, ${e.passes} passes`;
+      default: return null;
+    }
+  }
+
+  costmap(behaviour) {
+    if (!this.costmaps.has(behaviour)) {
+      const entry = { map: null, error: null };
+      this.costmaps.set(behaviour, entry);
+      fetch(`/api/costmaps/${encodeURIComponent(behaviour)}`)
+        .then(async (r) => {
+          const body = await r.json();
+          if (!r.ok) throw new Error(body.error?.message ?? `HTTP ${r.status}`);
+          entry.map = body;
+        })
+        .catch((e) => {
+          entry.error = e.message;
+          // Ask again later: the server may have been away.
+          setTimeout(() => this.costmaps.delete(behaviour), 5000);
+        });
+    }
+    return this.costmaps.get(behaviour);
+  }
+
+  draw(canvas, sample, selected) {
+    const { g, width, height } = fitCanvas(canvas);
+    const c = this.court;
+    const map = (this.lastMap = new FieldMap(width, height, [-0.6, c.length_m + 0.6, -c.width_m / 2 - 0.4, c.width_m / 2 + 0.4]));
+    g.fillStyle = "#2b2b2b";
+    g.fillRect(0, 0, width, height);
+    const [x0, z0] = map.px(0, -c.width_m / 2);
+    const [x1, z1] = map.px(c.length_m, c.width_m / 2);
+    g.fillStyle = "#d9a865";
+    g.fillRect(x0, z0, x1 - x0, z1 - z0);
+
+    const agent = sample.agents.find((a) => a.id === selected);
+    if (agent) {
+      g.save();
+      g.beginPath(); g.rect(x0, z0, x1 - x0, z1 - z0); g.clip();
+      this.drawCostmap(g, map, agent);
+      g.restore();
+    }
+    this.drawLines(g, map);
+    const decision = this.decisions.get(selected);
+    if (decision && agent) this.drawDecision(g, map, agent, decision);
+
+    for (const a of sample.agents) {
+      marker(g, map, a.position, a.heading, {
+        fill: TEAM_COLOURS[a.team] ?? "#fff",
+        label: `${a.id} · ${a.behaviour} · ${a.action.replaceAll("_", " ")}${a.controller === "bot" ? " (bot)" : ""}`,
+        selected: a.id === selected,
+      });
+    }
+    this.drawBall(g, map, sample);
+  }
+
+  drawLines(g, map) {
+    const c = this.court, [bx, bz] = c.basket, half = c.width_m / 2;
+    g.strokeStyle = "#fff";
+    g.lineWidth = 2;
+    const line = (...points) => {
+      g.beginPath();
+      points.forEach((p, i) => (i ? g.lineTo(...map.px(...p)) : g.moveTo(...map.px(...p))));
+      g.stroke();
+    };
+    line([0, -half], [c.length_m, -half], [c.length_m, half], [0, half], [0, -half]);
+    // The key (4.9 m wide, 5.8 m to the free-throw line) and its circle.
+    line([0, -2.45], [5.8, -2.45], [5.8, 2.45], [0, 2.45]);
+    const [fx, fz] = map.px(5.8, 0);
+    g.beginPath(); g.arc(fx, fz, 1.8 * map.scale, 0, 2 * Math.PI); g.stroke();
+    // The three-point line: straight 0.9 m inside each sideline, then the arc.
+    const r = c.three_point_m, side = half - 0.9;
+    const corner = bx + Math.sqrt(Math.max(0, r * r - side * side));
+    line([0, -side], [corner, -side]);
+    line([0, side], [corner, side]);
+    const [px, pz] = map.px(bx, bz);
+    const a = Math.asin(Math.min(1, side / r));
+    g.beginPath(); g.arc(px, pz, r * map.scale, -a, a); g.stroke();
+    // Backboard and ring.
+    line([1.2, -0.9], [1.2, 0.9]);
+    g.strokeStyle = "#ff6a00"; g.lineWidth = 2.5;
+    g.beginPath(); g.arc(px, pz, 0.23 * map.scale, 0, 2 * Math.PI); g.stroke();
+    // Half-court line's circle.
+    g.strokeStyle = "#fff"; g.lineWidth = 2;
+    const [hx, hz] = map.px(c.length_m, 0);
+    g.beginPath(); g.arc(hx, hz, 1.8 * map.scale, Math.PI / 2, 1.5 * Math.PI); g.stroke();
+  }
+
+  /** The selected agent's cost map, drawn in its own frame at its pose. */
+  drawCostmap(g, map, agent) {
+    const entry = this.costmap(agent.behaviour);
+    if (!entry.map) return;
+    const m = entry.map;
+    const [ax, ay] = map.px(...agent.position);
+    g.save();
+    g.translate(ax, ay);
+    g.rotate(map.angle(agent.heading));
+    g.scale(map.scale, map.scale);
+    m.costs_s.forEach((row, i) => row.forEach((seconds, j) => {
+      if (seconds === null) return;
+      g.fillStyle = costColour(seconds, m.horizon_s, OVERLAY_ALPHA);
+      // A hair over a cell, so neighbours meet without seams.
+      g.fillRect(m.origin[0] + j * m.cell_m, m.origin[1] + i * m.cell_m, m.cell_m * 1.02, m.cell_m * 1.02);
+    }));
+    g.restore();
+  }
+
+  /** The safe squares of the agent's latest decision outlined, the chosen one bold. */
+  drawDecision(g, map, agent, decision) {
+    const half = this.court.square_m / 2;
+    const square = (cell) => {
+      const [x, y] = map.px(cell[0] - half, cell[1] - half);
+      const s = 2 * half * map.scale;
+      g.strokeRect(x, y, s, s);
+    };
+    g.strokeStyle = "rgba(255,255,255,.9)";
+    g.lineWidth = 1;
+    for (const c of decision.candidates ?? []) square(c.cell);
+    if (decision.chosen) {
+      g.strokeStyle = "#ffd400";
+      g.lineWidth = 3;
+      square(decision.chosen.cell);
+      g.setLineDash([5, 4]);
+      g.lineWidth = 1.5;
+      g.beginPath();
+      g.moveTo(...map.px(...agent.position));
+      g.lineTo(...map.px(...decision.chosen.cell));
+      g.stroke();
+      g.setLineDash([]);
+    }
+  }
+
+  drawBall(g, map, sample) {
+    const ball = sample.ball;
+    let [x, y, z] = ball.position;
+    const holder = ball.holder && sample.agents.find((a) => a.id === ball.holder);
+    // A held ball is drawn at its holder's side, so it moves with the interpolated player.
+    if (holder) {
+      x = holder.position[0] + 0.35 * Math.cos(holder.heading + 0.8);
+      z = holder.position[1] + 0.35 * Math.sin(holder.heading + 0.8);
+      y = 1;
+    }
+    const [sx, sy] = map.px(x, z);
+    const lift = ball.state === "held" ? 0 : Math.min(y * map.scale * 0.35, 60);
+    g.fillStyle = "rgba(0,0,0,.3)";
+    g.beginPath(); g.ellipse(sx, sy, 6, 4, 0, 0, 2 * Math.PI); g.fill();
+    g.fillStyle = "#f07c1e"; g.strokeStyle = "#402000"; g.lineWidth = 1.5;
+    g.beginPath(); g.arc(sx, sy - lift, 6, 0, 2 * Math.PI); g.fill(); g.stroke();
+  }
+
+  pick(px, py, sample) {
+    return nearest(this.lastMap, px, py, sample);
+  }
+
+  drawPanels(sample, selected) {
+    const agent = sample.agents.find((a) => a.id === selected);
+    const decision = this.decisions.get(selected);
+    $("decision").innerHTML = decision
+      ? explain(decision, sample.time_s)
+      : `${escapeHtml(selected ?? "")}: no decision yet.`;
+    const entry = agent && this.costmap(agent.behaviour);
+    const horizon = entry?.map?.horizon_s ?? 8;
+    $("costmap-text").textContent = !agent
+      ? ""
+      : entry.error
+        ? `cost map unavailable: ${entry.error}`
+        : `${agent.id} moves with "${agent.behaviour}": colour is the time a real person (motion capture) ` +
+          `needs to reach each square from this pose; blank is beyond ${horizon} s.`;
+    drawScale(fitCanvas($("scale")), horizon);
+  }
+}
+
+/** A decision in words, with the numbers of the rule C_o > C_d + T_s + ε. */
+function explain(d, now) {
+  const age = Math.max(0, now - d.time_s);
+  let text = `<b>${escapeHtml(d.agent)}</b> ${escapeHtml(d.reason)}`;
+  const c = d.chosen;
+  if (c) {
+    const margin = c.c_o - (c.c_d + c.t_s + c.epsilon);
+    text += `<br>C<sub>o</sub> ${c.c_o.toFixed(1)} s ${margin > 0 ? "&gt;" : "≤"} C<sub>d</sub> ${c.c_d.toFixed(1)} s + ` +
+      `T<sub>s</sub> ${c.t_s.toFixed(1)} s + ε ${c.epsilon.toFixed(1)} s; shot success ${(100 * c.success).toFixed(0)} %`;
+  }
+  const n = d.candidates?.length ?? 0;
+  text += `<br><span class="muted">${n} safe square${n === 1 ? "" : "s"} outlined; decided ${age.toFixed(1)} s ago.</span>`;
+  return text;
+}
+
+function drawScale({ g, width, height }, horizon) {
+  g.clearRect(0, 0, width, height);
+  const bar = width - 60;
+  for (let i = 0; i < bar; i++) {
+    g.fillStyle = costColour((i / bar) * horizon, horizon);
+    g.fillRect(30 + i, 0, 1, height - 10);
+  }
+  g.fillStyle = "#444";
+  g.font = "10px system-ui, sans-serif";
+  g.fillText("0 s", 0, height - 12);
+  g.fillText(`${horizon} s`, width - 28, height - 12);
+}

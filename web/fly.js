@@ -1,0 +1,256 @@
+// Fly balls (baseball and cricket): the field from above with the ball, its shadow and
+// height, the fielders with their trails and strategies, caught and missed balls
+// marked; a side view of the flight; and the selected fielder's eye (eye.js).
+import { $, FieldMap, fitCanvas, marker, plotFrame } from "./draw.js";
+import { drawEye, opticalSamples } from "./eye.js";
+
+/** How long a catch or a miss stays marked on the field, in match seconds. */
+const MARK_S = 8;
+/** The eye height fielders had before `hello` said it (replays recorded earlier). */
+const DEFAULT_EYE_M = 1.7;
+const FIELDER_COLOURS = ["#f4f4f4", "#ffd28a", "#b8e1ff", "#ffc2d4", "#d7f5b0", "#e2ccff"];
+
+export class FlyView {
+  constructor(hello) {
+    this.field = hello.match.field;
+    this.eye = this.field.eye_height_m ?? DEFAULT_EYE_M;
+    this.agents = hello.match.agents;
+    this.colours = new Map(this.agents.map((a, i) => [a.id, FIELDER_COLOURS[i % FIELDER_COLOURS.length]]));
+    this.reset();
+  }
+
+  /** Forgets everything seen (a seek, a reconnection). */
+  reset() {
+    this.flight = [];
+    this.marks = [];
+    this.landing = null;
+    this.outcome = null;
+  }
+
+  /** Takes a frame whose moment has come: its events, and the flight so far. */
+  apply(frame) {
+    for (const e of frame.events) {
+      if (e.kind === "launch") {
+        this.flight = [];
+        this.landing = e.landing;
+        this.outcome = null;
+      } else if (e.kind === "caught") {
+        this.marks.push({ at: e.at, caught: true, label: `caught by ${e.by}`, t: frame.time_s });
+        this.outcome = `Caught by ${e.by} after ${e.flight_time_s.toFixed(1)} s`;
+        this.landing = null;
+      } else if (e.kind === "landed") {
+        this.marks.push({ at: e.at, caught: false, label: `missed by ${e.miss_m.toFixed(1)} m`, t: frame.time_s });
+        this.outcome = `Landed ${e.miss_m.toFixed(1)} m from ${e.nearest}`;
+        this.landing = null;
+      }
+    }
+    if (frame.ball.state === "flight") {
+      this.flight.push({
+        t: frame.time_s,
+        ball: frame.ball.position,
+        agents: Object.fromEntries(frame.agents.map((a) => [a.id, a.position])),
+      });
+    }
+    this.marks = this.marks.filter((m) => frame.time_s - m.t < MARK_S);
+  }
+
+  describe(e) {
+    const xz = (p) => `(${p[0].toFixed(1)}, ${p[1].toFixed(1)})`;
+    switch (e.kind) {
+      case "launch": {
+        const l = e.launch;
+        return `ball ${e.ball}: hit at ${l.speed_m_s.toFixed(1)} m/s, ${l.elevation_deg.toFixed(0)}° up, ` +
+          `azimuth ${l.azimuth_deg.toFixed(0)}°; would land at ${xz(e.landing)}`;
+      }
+      case "caught": return `ball ${e.ball}: caught by ${e.by} at ${xz(e.at)} after ${e.flight_time_s.toFixed(2)} s`;
+      case "landed": return `ball ${e.ball}: landed at ${xz(e.at)}, ${e.miss_m.toFixed(1)} m from ${e.nearest}`;
+      default: return null;
+    }
+  }
+
+  map(width, height) {
+    if (this.field.kind === "cricket") {
+      const r = this.field.boundary_m + 4;
+      return new FieldMap(width, height, [-r, r, -r, r]);
+    }
+    // Baseball: turn the field so centre field (azimuth 45°) points up.
+    const r = this.field.fence_m;
+    return new FieldMap(width, height, [-0.75 * r, 0.75 * r, -1.04 * r, 0.08 * r], -0.75 * Math.PI);
+  }
+
+  draw(canvas, sample, selected) {
+    const { g, width, height } = fitCanvas(canvas);
+    const map = (this.lastMap = this.map(width, height));
+    g.fillStyle = "#3f7d3a";
+    g.fillRect(0, 0, width, height);
+    if (this.field.kind === "cricket") this.drawOval(g, map);
+    else this.drawDiamond(g, map);
+
+    // Where the ball would land if nobody caught it (from the launch event).
+    if (this.landing) {
+      const [x, y] = map.px(...this.landing);
+      g.setLineDash([4, 4]);
+      g.strokeStyle = "rgba(255,255,255,.7)";
+      g.lineWidth = 1.5;
+      g.beginPath(); g.arc(x, y, 9, 0, 2 * Math.PI); g.stroke();
+      g.setLineDash([]);
+    }
+    for (const m of this.marks) this.drawMark(g, map, m);
+
+    // Trails: each fielder's run since the launch.
+    for (const a of this.agents) {
+      const points = this.flight.map((s) => s.agents[a.id]).filter(Boolean);
+      if (points.length < 2) continue;
+      g.strokeStyle = a.id === selected ? "#ffd400" : "rgba(255,255,255,.55)";
+      g.lineWidth = a.id === selected ? 2.5 : 1.5;
+      g.beginPath();
+      g.moveTo(...map.px(...points[0]));
+      for (const p of points) g.lineTo(...map.px(...p));
+      g.stroke();
+    }
+    for (const a of sample.agents) {
+      marker(g, map, a.position, a.heading, {
+        fill: this.colours.get(a.id) ?? "#fff",
+        label: `${a.id} · ${a.strategy}${a.controller === "bot" ? " (bot)" : ""}`,
+        selected: a.id === selected,
+      });
+    }
+    this.drawBall(g, map, sample.ball);
+  }
+
+  drawDiamond(g, map) {
+    const f = this.field, r = f.fence_m, b = f.base_path_m;
+    const poly = (points, fill, stroke) => {
+      g.beginPath();
+      points.forEach((p, i) => (i ? g.lineTo(...map.px(...p)) : g.moveTo(...map.px(...p))));
+      g.closePath();
+      if (fill) { g.fillStyle = fill; g.fill(); }
+      if (stroke) { g.strokeStyle = stroke; g.stroke(); }
+    };
+    const arc = (radius, steps = 48) =>
+      Array.from({ length: steps + 1 }, (_, i) => {
+        const a = (i / steps) * (Math.PI / 2);
+        return [radius * Math.cos(a), radius * Math.sin(a)];
+      });
+    poly([[0, 0], ...arc(r)], "#4c9a45", null);
+    poly([[0, 0], ...arc(1.1 * b)], "#b98b55", null);
+    poly([[0, 0], [b, 0], [b, b], [0, b]], "#4c9a45", "#fff");
+    g.lineWidth = 3;
+    g.strokeStyle = "#f0e6c8";
+    g.beginPath();
+    arc(r).forEach((p, i) => (i ? g.lineTo(...map.px(...p)) : g.moveTo(...map.px(...p))));
+    g.stroke();
+    g.lineWidth = 1.5;
+    g.strokeStyle = "#fff";
+    for (const end of [[r, 0], [0, r]]) {
+      g.beginPath(); g.moveTo(...map.px(0, 0)); g.lineTo(...map.px(...end)); g.stroke();
+    }
+    g.fillStyle = "#fff";
+    for (const base of [[0, 0], [b, 0], [b, b], [0, b]]) {
+      const [x, y] = map.px(...base);
+      g.fillRect(x - 3, y - 3, 6, 6);
+    }
+  }
+
+  drawOval(g, map) {
+    const f = this.field;
+    const [cx, cy] = map.px(0, 0);
+    g.fillStyle = "#4c9a45";
+    g.beginPath(); g.arc(cx, cy, f.boundary_m * map.scale, 0, 2 * Math.PI); g.fill();
+    g.strokeStyle = "#fff"; g.lineWidth = 3; g.stroke();
+    g.setLineDash([6, 6]); g.lineWidth = 1.5;
+    g.beginPath(); g.arc(cx, cy, f.inner_ring_m * map.scale, 0, 2 * Math.PI); g.stroke();
+    g.setLineDash([]);
+    // The pitch runs from the batter's stumps to the bowler's, 3.05 m wide.
+    const w = 1.525;
+    g.fillStyle = "#d9c38f";
+    g.beginPath();
+    [[0, -w], [-f.pitch_length_m, -w], [-f.pitch_length_m, w], [0, w]]
+      .forEach((p, i) => (i ? g.lineTo(...map.px(...p)) : g.moveTo(...map.px(...p))));
+    g.closePath(); g.fill();
+  }
+
+  drawMark(g, map, m) {
+    const [x, y] = map.px(...m.at);
+    g.lineWidth = 3;
+    g.strokeStyle = m.caught ? "#27c93f" : "#ff4d4d";
+    g.beginPath();
+    if (m.caught) g.arc(x, y, 11, 0, 2 * Math.PI);
+    else { g.moveTo(x - 8, y - 8); g.lineTo(x + 8, y + 8); g.moveTo(x + 8, y - 8); g.lineTo(x - 8, y + 8); }
+    g.stroke();
+    g.font = "bold 12px system-ui, sans-serif";
+    g.fillStyle = g.strokeStyle;
+    g.fillText(m.label, x + 13, y + 16);
+  }
+
+  /** The ball's shadow on the ground, and the ball above it by its height. */
+  drawBall(g, map, ball) {
+    if (ball.state !== "flight") return;
+    const [x, y, z] = ball.position;
+    const [sx, sy] = map.px(x, z);
+    const lift = Math.min(y * map.scale * 0.6, 120);
+    g.fillStyle = "rgba(0,0,0,.35)";
+    g.beginPath(); g.ellipse(sx, sy, 5, 3, 0, 0, 2 * Math.PI); g.fill();
+    g.strokeStyle = "rgba(255,255,255,.5)"; g.lineWidth = 1;
+    g.beginPath(); g.moveTo(sx, sy); g.lineTo(sx, sy - lift); g.stroke();
+    g.fillStyle = "#fff"; g.strokeStyle = "#c00"; g.lineWidth = 1.5;
+    g.beginPath(); g.arc(sx, sy - lift, 5, 0, 2 * Math.PI); g.fill(); g.stroke();
+    g.font = "11px system-ui, sans-serif"; g.fillStyle = "#fff";
+    g.fillText(`${y.toFixed(1)} m`, sx + 8, sy - lift + 4);
+  }
+
+  /** The agent under a canvas point, if one is within reach of a finger. */
+  pick(px, py, sample) {
+    return nearest(this.lastMap, px, py, sample);
+  }
+
+  drawPanels(sample, selected) {
+    const agent = this.agents.find((a) => a.id === selected);
+    const eye = fitCanvas($("eye"));
+    $("eye-text").textContent = drawEye(eye.g, eye.width, eye.height, {
+      samples: opticalSamples(this.flight, selected, this.eye),
+      strategy: agent?.strategy ?? "",
+      fielder: selected,
+      outcome: this.outcome,
+    });
+    this.drawSide(fitCanvas($("side")), sample, selected);
+  }
+
+  /** The flight from the side: height against distance from home, the fielders below. */
+  drawSide({ g, width, height }, sample, selected) {
+    g.clearRect(0, 0, width, height);
+    const reach = this.field.fence_m ?? this.field.boundary_m;
+    const top = Math.max(20, ...this.flight.map((s) => s.ball[1] * 1.1));
+    const at = plotFrame(g, width, height, {
+      x: [0, reach * 1.05], y: [0, top], xLabel: "distance from home (m)", yLabel: "height (m)",
+    });
+    g.strokeStyle = "#f0e6c8"; g.lineWidth = 3;
+    g.beginPath(); g.moveTo(...at(reach, 0)); g.lineTo(...at(reach, Math.min(top, 3))); g.stroke();
+    if (this.flight.length > 1) {
+      g.strokeStyle = "#c00"; g.lineWidth = 2;
+      g.beginPath();
+      this.flight.forEach((s, i) => {
+        const p = at(Math.hypot(s.ball[0], s.ball[2]), s.ball[1]);
+        if (i) g.lineTo(...p); else g.moveTo(...p);
+      });
+      g.stroke();
+    }
+    for (const a of sample.agents) {
+      const [x, y] = at(Math.hypot(...a.position), 0);
+      g.fillStyle = a.id === selected ? "#d4a000" : "#555";
+      g.fillRect(x - 2, y - (a.id === selected ? 18 : 12), 4, a.id === selected ? 18 : 12);
+    }
+  }
+}
+
+/** The agent nearest a canvas point, within 24 px. */
+export function nearest(map, px, py, sample) {
+  if (!map || !sample) return null;
+  let best = null, bestD = 24;
+  for (const a of sample.agents) {
+    const [x, y] = map.px(a.position[0], a.position[1]);
+    const d = Math.hypot(x - px, y - py);
+    if (d < bestD) { best = a.id; bestD = d; }
+  }
+  return best;
+}

@@ -1,0 +1,55 @@
+// The lobby: live matches and recorded replays, refreshed every two seconds. Entries
+// are real links to their views' URLs.
+import { $, escapeHtml, formatScore } from "./draw.js";
+
+const REFRESH_MS = 2000;
+
+export function showLobby() {
+  $("lobby").hidden = false;
+  $("view").hidden = true;
+  document.title = "fieldhouse";
+  let timer = null;
+  let stopped = false;
+  const load = async () => {
+    try {
+      const [live, recorded] = await Promise.all([getJson("/api/matches"), getJson("/api/replays")]);
+      if (stopped) return;
+      $("matches").innerHTML = live.matches.length
+        ? live.matches.map(matchRow).join("")
+        : `<tr><td colspan="5" class="muted">no matches</td></tr>`;
+      $("replays").innerHTML = recorded.replays.length
+        ? recorded.replays.map(replayRow).join("")
+        : `<tr><td colspan="5" class="muted">no replays (start the server with --replay-dir DIR to record matches)</td></tr>`;
+      if (live.matches[0]) $("source").textContent = `motion: ${live.matches[0].motion_source}`;
+      $("lobby-state").textContent = `updated ${new Date().toLocaleTimeString()}`;
+    } catch (e) {
+      if (!stopped) $("lobby-state").textContent = `server unreachable (${e.message}); retrying…`;
+    }
+    if (!stopped) timer = setTimeout(load, REFRESH_MS);
+  };
+  load();
+  return () => { stopped = true; clearTimeout(timer); };
+}
+
+async function getJson(path) {
+  const response = await fetch(path, { cache: "no-store" });
+  if (!response.ok) throw new Error(`${path}: HTTP ${response.status}`);
+  return response.json();
+}
+
+function matchRow(m) {
+  const name = escapeHtml(m.name || m.id);
+  return `<tr><td><a href="#/matches/${encodeURIComponent(m.id)}">${name}</a></td>` +
+    `<td>${m.sport}</td><td>${m.status}, tick ${m.tick}</td>` +
+    `<td>${escapeHtml(formatScore(m.sport, m.score))}</td><td>${m.spectators}</td></tr>`;
+}
+
+function replayRow(r) {
+  const file = `<a href="/api/replays/${encodeURIComponent(r.id)}" download>${(r.bytes / 1e6).toFixed(1)} MB</a>`;
+  if (r.error) return `<tr><td>${escapeHtml(r.id)}</td><td></td><td>unreadable: ${escapeHtml(r.error)}</td><td></td><td>${file}</td></tr>`;
+  const name = escapeHtml(r.name || r.match || r.id);
+  const started = r.started_unix_ms ? ` <span class="muted">${new Date(r.started_unix_ms).toLocaleString()}</span>` : "";
+  return `<tr><td><a href="#/replays/${encodeURIComponent(r.id)}">${name}</a>${started}</td>` +
+    `<td>${r.sport}</td><td>${r.complete ? "complete" : "recording or cut short"}</td>` +
+    `<td>${escapeHtml(formatScore(r.sport, r.result))}</td><td>${file}</td></tr>`;
+}

@@ -1,0 +1,165 @@
+// One match or replay on screen: the socket (stream.js), the frames and the clock that
+// interpolates them (timeline.js), the sport's drawing (fly.js or court.js), the HUD,
+// the event log, the agent picker, and for replays the player (player.js).
+import { $, clock, escapeHtml, formatScore } from "./draw.js";
+import { CourtView } from "./court.js";
+import { FlyView } from "./fly.js";
+import { Player } from "./player.js";
+import { Stream } from "./stream.js";
+import { Timeline } from "./timeline.js";
+
+const LOG_LINES = 300;
+/** The agent picker's choice that follows whoever has the ball. */
+const FOLLOW_BALL = "@ball";
+
+/** Shows `/#/{kind}/{id}` (kind `matches` or `replays`); returns what closes it. */
+export function showView(kind, id) {
+  $("lobby").hidden = true;
+  $("view").hidden = false;
+  $("title").textContent = id;
+  $("log").replaceChildren();
+  $("player").hidden = true;
+  document.title = `${id} · fieldhouse`;
+
+  const replay = kind === "replays";
+  const timeline = new Timeline();
+  let hello = null, sport = null, player = null, selected = null, ended = null, holder = null;
+  let connection = { state: "connecting", detail: "" };
+  let shownHud = "";
+  let shown = null;
+
+  const onHello = (msg) => {
+    hello = msg;
+    timeline.clear();
+    shown = null;
+    ended = null;
+    const basketball = msg.match.field.kind === "basketball";
+    sport = basketball ? new CourtView(msg) : new FlyView(msg);
+    $("title").textContent = `${msg.match.name || msg.match.id} · ${msg.match.sport}${replay ? " (replay)" : ""}`;
+    $("source").textContent = `motion: ${msg.match.motion_source}`;
+    $("fly-panels").hidden = basketball;
+    $("court-panels").hidden = !basketball;
+    const picker = $("agent");
+    // In basketball the story follows the ball: by default the panels show whoever
+    // holds it (or last held it).
+    picker.innerHTML = (basketball ? `<option value="${FOLLOW_BALL}">the ball holder</option>` : "") +
+      msg.match.agents
+        .map((a) => `<option value="${escapeHtml(a.id)}">${escapeHtml(a.id)} · ${escapeHtml(a.strategy)}</option>`)
+        .join("");
+    const choices = [...picker.options].map((o) => o.value);
+    if (!choices.includes(selected)) selected = choices[0] ?? null;
+    picker.value = selected;
+    holder = null;
+    if (replay) {
+      player?.close();
+      const ticksPerFrame = Math.max(1, Math.round(msg.match.tick_hz / msg.match.frame_hz));
+      player = new Player(msg.replay, ticksPerFrame, {
+        send: (control) => stream.send(control),
+        onSeek: () => { timeline.clear(); sport.reset(); },
+      });
+    }
+  };
+
+  const stream = new Stream(`/ws/${kind}/${encodeURIComponent(id)}`, {
+    endIsFinal: !replay,
+    onMessage: (msg) => {
+      if (msg.type === "hello") onHello(msg);
+      else if (msg.type === "frame" && hello) { timeline.push(msg); player?.frame(msg.tick); }
+      else if (msg.type === "end") {
+        ended = msg;
+        player?.ended();
+        log(`end: ${msg.reason}${msg.result ? `; ${formatScore(hello?.match.sport, msg.result)}` : ""}`, "end");
+      } else if (msg.type === "error") log(`server: ${msg.code}: ${msg.message}`, "error");
+    },
+    onState: (s) => {
+      connection = s;
+      // A live match the server no longer has will not come back: say so and stop.
+      if (s.state === "retrying" && !replay) {
+        fetch(`/api/matches/${encodeURIComponent(id)}`).then((r) => {
+          if (r.status === 404) {
+            stream.close();
+            connection = { state: "gone", detail: `the server has no match "${id}"` };
+          }
+        }, () => {});
+      }
+    },
+  });
+
+  const onPick = () => { selected = $("agent").value; };
+  const onClick = (e) => {
+    const rect = $("field").getBoundingClientRect();
+    const picked = sport?.pick(e.clientX - rect.left, e.clientY - rect.top, timeline.sample());
+    if (picked) { selected = picked; $("agent").value = picked; }
+  };
+  $("agent").addEventListener("change", onPick);
+  $("field").addEventListener("click", onClick);
+
+  let last = performance.now(), frameId = 0;
+  const draw = (now) => {
+    const dt = Math.min(0.25, (now - last) / 1000);
+    last = now;
+    if (hello && sport) {
+      // Live: real time, a little behind the newest frame. A replay plays at its speed;
+      // paused, it shows the frame it stopped on.
+      const playing = !player || player.playing;
+      const due = timeline.advance(dt, playing ? (player?.speed ?? 1) : 0, playing ? undefined : 0);
+      for (const frame of due) {
+        sport.apply(frame);
+        for (const e of frame.events) {
+          const text = sport.describe(e);
+          if (text) log(text, e.kind);
+        }
+      }
+      // Between a seek and the frame it brings, the last picture stays up.
+      const sample = (shown = timeline.sample() ?? shown);
+      if (sample) {
+        holder = sample.ball.holder ?? holder ?? sample.agents[0]?.id;
+        const agent = selected === FOLLOW_BALL ? holder : selected;
+        sport.draw($("field"), sample, agent);
+        sport.drawPanels(sample, agent);
+      }
+      hud(sample);
+    } else hud(null);
+    frameId = requestAnimationFrame(draw);
+  };
+  frameId = requestAnimationFrame(draw);
+
+  function hud(sample) {
+    const words = {
+      connecting: ["state-wait", "connecting"],
+      live: ["state-live", replay ? "connected" : "live"],
+      ended: ["state-gone", "ended"],
+      retrying: ["state-gone", "disconnected"],
+      gone: ["state-gone", "gone"],
+    }[connection.state];
+    const state = ended && connection.state === "live" ? ["state-gone", replay ? "at the end" : "ended"] : words;
+    const parts = [`<span class="state ${state[0]}" data-state="${connection.state}">${state[1]}</span>`];
+    if (connection.detail) parts.push(`<span>${escapeHtml(connection.detail)}</span>`);
+    if (sample) {
+      parts.push(`<span>tick <b id="hud-tick">${sample.tick}</b></span>`, `<span>${clock(sample.time_s)}</span>`);
+      parts.push(`<span>${escapeHtml(formatScore(hello.match.sport, sample.score))}</span>`);
+      if (sample.score.shot_clock_s !== undefined) parts.push(`<span>shot clock ${sample.score.shot_clock_s.toFixed(1)}</span>`);
+    }
+    if (player) parts.push(`<span id="hud-playback">${player.status()}</span>`);
+    if (ended) parts.push(`<span>${escapeHtml(ended.reason)}</span>`);
+    const html = parts.join("");
+    if (html !== shownHud) $("hud").innerHTML = shownHud = html;
+  }
+
+  function log(text, kind) {
+    const line = document.createElement("div");
+    line.className = kind;
+    line.textContent = text;
+    const box = $("log");
+    box.prepend(line);
+    while (box.childElementCount > LOG_LINES) box.lastChild.remove();
+  }
+
+  return () => {
+    cancelAnimationFrame(frameId);
+    stream.close();
+    player?.close();
+    $("agent").removeEventListener("change", onPick);
+    $("field").removeEventListener("click", onClick);
+  };
+}
