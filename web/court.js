@@ -200,7 +200,7 @@ export class CourtView {
     const decision = this.decisions.get(selected);
     $("decision").innerHTML = decision
       ? explain(decision, sample.time_s)
-      : `${escapeHtml(selected ?? "")}: no decision yet.`;
+      : `${escapeHtml(selected ?? "")} has made no decision since you started watching.`;
     const entry = agent && this.costmap(agent.behaviour);
     const horizon = entry?.map?.horizon_s ?? 8;
     $("costmap-text").textContent = !agent

@@ -17,8 +17,9 @@ export function showLobby() {
       $("matches").innerHTML = live.matches.length
         ? live.matches.map(matchRow).join("")
         : `<tr><td colspan="5" class="muted">no matches</td></tr>`;
+      const recording = new Set(live.matches.filter((m) => m.status === "running").map((m) => m.replay));
       $("replays").innerHTML = recorded.replays.length
-        ? recorded.replays.map(replayRow).join("")
+        ? recorded.replays.map((r) => replayRow(r, recording.has(r.id))).join("")
         : `<tr><td colspan="5" class="muted">no replays (start the server with --replay-dir DIR to record matches)</td></tr>`;
       if (live.matches[0]) $("source").textContent = `motion: ${live.matches[0].motion_source}`;
       $("lobby-state").textContent = `updated ${new Date().toLocaleTimeString()}`;
@@ -44,12 +45,17 @@ function matchRow(m) {
     `<td>${escapeHtml(formatScore(m.sport, m.score))}</td><td>${m.spectators}</td></tr>`;
 }
 
-function replayRow(r) {
-  const file = `<a href="/api/replays/${encodeURIComponent(r.id)}" download>${(r.bytes / 1e6).toFixed(1)} MB</a>`;
+/** A replay; `recording`: its match is still running and writing it. */
+function replayRow(r, recording) {
+  const file = `<a href="/api/replays/${encodeURIComponent(r.id)}" download>${size(r.bytes)}</a>`;
   if (r.error) return `<tr><td>${escapeHtml(r.id)}</td><td></td><td>unreadable: ${escapeHtml(r.error)}</td><td></td><td>${file}</td></tr>`;
   const name = escapeHtml(r.name || r.match || r.id);
   const started = r.started_unix_ms ? ` <span class="muted">${new Date(r.started_unix_ms).toLocaleString()}</span>` : "";
   return `<tr><td><a href="#/replays/${encodeURIComponent(r.id)}">${name}</a>${started}</td>` +
-    `<td>${r.sport}</td><td>${r.complete ? "complete" : "recording or cut short"}</td>` +
+    `<td>${r.sport}</td><td>${r.complete ? "complete" : recording ? "recording (match live)" : "cut short"}</td>` +
     `<td>${escapeHtml(formatScore(r.sport, r.result))}</td><td>${file}</td></tr>`;
+}
+
+function size(bytes) {
+  return bytes >= 1e6 ? `${(bytes / 1e6).toFixed(1)} MB` : `${Math.max(1, Math.round(bytes / 1e3))} kB`;
 }

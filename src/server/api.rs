@@ -263,7 +263,9 @@ fn map_json(app: &AppState, behaviour: &str) -> Result<Value, ApiError> {
         ApiError::new(
             StatusCode::NOT_FOUND,
             "no_costmap",
-            format!("no cost map for behaviour \"{behaviour}\" (there are dribble, run and defense)"),
+            format!(
+                "no cost map for behaviour \"{behaviour}\" (there are dribble, run and defense)"
+            ),
         )
     })?;
     let map = &mover.map;

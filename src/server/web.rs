@@ -10,8 +10,16 @@ use axum::response::{IntoResponse, Response};
 /// Every file of the page: its name under `/web/` and its media type. The page's modules
 /// import each other by relative paths, so they all live side by side.
 const ASSETS: &[(&str, &str, &str)] = &[
-    ("index.html", "text/html; charset=utf-8", include_str!("../../web/index.html")),
-    ("style.css", "text/css; charset=utf-8", include_str!("../../web/style.css")),
+    (
+        "index.html",
+        "text/html; charset=utf-8",
+        include_str!("../../web/index.html"),
+    ),
+    (
+        "style.css",
+        "text/css; charset=utf-8",
+        include_str!("../../web/style.css"),
+    ),
     ("app.js", JS, include_str!("../../web/app.js")),
     ("lobby.js", JS, include_str!("../../web/lobby.js")),
     ("view.js", JS, include_str!("../../web/view.js")),

@@ -429,10 +429,12 @@ impl FlyWorld {
     /// `eye_height_m` lets a spectator draw what a fielder sees (tan ψ, the image path)
     /// from the frames, with the eye the fielders perceive from.
     pub fn field(&self) -> Value {
-        let eye = self.fielders.first().map_or(
-            PerceptionConfig::default().eye_height_m,
-            |f| f.config.perception.eye_height_m,
-        );
+        let eye = self
+            .fielders
+            .first()
+            .map_or(PerceptionConfig::default().eye_height_m, |f| {
+                f.config.perception.eye_height_m
+            });
         match self.sport {
             Sport::Cricket => {
                 json!({"kind": "cricket", "batter": [0.0, 0.0], "boundary_m": 65.0, "inner_ring_m": 27.4, "pitch_length_m": 20.12, "eye_height_m": eye})

@@ -108,14 +108,15 @@ async function main() {
   check(t2 > t1 + 30, `live: the HUD tick rises at 60 Hz (${t1} then ${t2} a second later)`);
   check(!pixels1.equals(pixels2), "live: the canvas changes between two screenshots");
 
-  // The fielder's-eye panel once a ball is in the air (the demo launches every few seconds).
-  await page.waitForFunction(() => document.getElementById("eye-text").textContent.includes("tan ψ rises"), null, { timeout: 30_000 });
-  await page.waitForTimeout(1500);
-  const eyeInk = await inked(page, "eye");
-  check(eyeInk > 2000, `eye: the fielder's-eye panel is drawn (${eyeInk} pixels inked)`);
-  check(await inked(page, "side") > 1000, "eye: the side view is drawn");
-  const eyeText = await page.locator("#eye-text").textContent();
-  check(/lf \(chapman\): tan ψ rises [\d.]+\/s, straightness R² [\d.]+/.test(eyeText), `eye: explains tan ψ for the selected fielder: ${eyeText}`);
+  // The fielder's-eye panel once a ball is well in the air (the demo launches every
+  // few seconds; a new launch starts the panel afresh, so every look is one poll).
+  const eye = await until(async () => {
+    const text = await page.locator("#eye-text").textContent();
+    const ink = await inked(page, "eye"), side = await inked(page, "side");
+    return /lf \(chapman\): tan ψ rises [\d.]+\/s, straightness R² [\d.]+/.test(text) && ink > 4000 && side > 1000 &&
+      { text, ink, side };
+  }, 30_000, "eye: the fielder's-eye panel explains tan ψ and both plots are drawn");
+  check(true, `eye: the fielder's-eye panel is drawn (${eye.ink} pixels inked) and explained: ${eye.text}`);
   await shot("baseball");
 
   // Picking another fielder from the list re-labels the panel.
@@ -149,8 +150,11 @@ async function main() {
     return cool / (c.width * c.height);
   });
   check(overlay > 0.1, `court: the cost-map overlay covers the court (${(100 * overlay).toFixed(1)} % of pixels green or blue)`);
-  await page.waitForFunction(() => document.getElementById("decision").textContent.includes("safe square"), null, { timeout: 30_000 });
-  const decision = await page.locator("#decision").textContent();
+  // The holder changes with passes: read the text in the same look that finds it.
+  const decision = await (await page.waitForFunction(() => {
+    const text = document.getElementById("decision").textContent;
+    return text.includes("safe square") && text;
+  }, null, { timeout: 30_000 })).jsonValue();
   check(/^o\d /.test(decision) && /safe square/.test(decision), `court: the ball holder's decision is explained: ${decision}`);
   await shot("basketball");
 
@@ -186,7 +190,8 @@ async function main() {
   const stepped = await tick();
   check(stepped - paused <= 2, `replay: → steps to the next frame (${paused} to ${stepped})`);
   await page.keyboard.press("+");
-  check((await page.locator("#hud-playback").textContent()).includes("2×"), "replay: + doubles the speed");
+  await page.waitForFunction(() => document.getElementById("hud-playback")?.textContent.includes("2×"), null, { timeout: 2_000 });
+  check(await page.locator("#speed").inputValue() === "2", "replay: + doubles the speed");
   const download = await page.locator("#download").getAttribute("href");
   const file = await page.request.get(`${base}${download}`);
   check(file.ok() && (await file.text()).startsWith(`{"fieldhouse":`), `replay: the download link serves the file (${download})`);
@@ -210,6 +215,17 @@ async function main() {
   // Connection failures while the server was down are expected; nothing else may be.
   const unexpected = errors.filter((e) => !/WebSocket connection to .* failed|ERR_CONNECTION_REFUSED/.test(e));
   check(unexpected.length === 0, `console: no errors:\n${unexpected.join("\n")}`);
+}
+
+/** Polls `look` every 200 ms until it returns something truthy; fails after `ms`. */
+async function until(look, ms, what) {
+  const end = Date.now() + ms;
+  for (;;) {
+    const seen = await look();
+    if (seen) return seen;
+    if (Date.now() > end) throw new Error(`${what}: not within ${ms / 1000} s`);
+    await new Promise((r) => setTimeout(r, 200));
+  }
 }
 
 /** How many pixels of a canvas are not blank. */
