@@ -10,6 +10,24 @@
 
 mod common;
 
+/// The page's pure modules (optics, fits, interpolation) against analytic oracles, in
+/// Node: `node --test tests/browser/modules.test.mjs`.
+#[test]
+fn page_modules_match_their_analytic_oracles() {
+    let driver = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/browser");
+    let out = Command::new("node")
+        .args(["--test", "modules.test.mjs"])
+        .current_dir(&driver)
+        .output()
+        .expect("node runs (is Node.js installed?)");
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 use std::path::Path;
 use std::process::Command;
 

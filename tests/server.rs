@@ -169,6 +169,14 @@ async fn demo_matches_are_listed_and_stream_schema_valid_frames() {
     }
     for m in list["matches"].as_array().unwrap() {
         let id = m["id"].as_str().unwrap();
+        // The lobby's score is the newest frame's.
+        let score_keys: Vec<&String> = m["score"].as_object().unwrap().keys().collect();
+        let expected = if m["sport"] == "basketball" {
+            ["points", "possession", "shot_clock_s"].as_slice()
+        } else {
+            ["balls", "caught", "dropped"].as_slice()
+        };
+        assert_eq!(score_keys, expected, "{m}");
         let mut socket = connect(&server.ws(&format!("/ws/matches/{id}"))).await;
         let hello = next(&mut socket).await;
         assert_eq!(hello["type"], "hello");
@@ -182,6 +190,9 @@ async fn demo_matches_are_listed_and_stream_schema_valid_frames() {
             .unwrap()
             .contains("mocap"));
         assert_valid(&hello);
+        if m["sport"] != "basketball" {
+            assert_eq!(hello["match"]["field"]["eye_height_m"], 1.7);
+        }
         let mut last = None;
         for _ in 0..8 {
             let frame = next(&mut socket).await;
@@ -965,9 +976,16 @@ async fn a_basketball_agents_cost_map_is_served_at_its_pose() {
         .iter()
         .flat_map(|r| r.as_array().unwrap())
         .any(|c| c.as_f64() == Some(0.0)));
+    // The same map by behaviour, without a pose: what the spectator page downloads once
+    // and places at any agent's pose, live or in a replay.
+    let by_behaviour = server.get(&format!("/api/costmaps/{behaviour}"));
+    assert_eq!(by_behaviour["costs_s"], map["costs_s"]);
+    assert_eq!(by_behaviour["origin"], map["origin"]);
+    assert!(by_behaviour.get("pose").is_none());
     for (path, code) in [
         ("/api/matches/demo-baseball/costmap/lf", "no_costmap"),
         ("/api/matches/demo-basketball/costmap/zz", "not_found"),
+        ("/api/costmaps/swimming", "no_costmap"),
     ] {
         match ureq::get(&server.http(path)).call() {
             Err(ureq::Error::Status(404, r)) => {

@@ -69,13 +69,15 @@ export function drawEye(g, width, height, { samples, strategy, fielder, outcome 
   const image = samples.filter((s) => s.u !== undefined).map((s) => [s.u, s.v]);
   const tanPsi = samples.map((s) => [s.t, s.tanPsi]);
 
-  // The image path, u to the right and v up, on equal scales so a line looks straight.
+  // The image path, u to the right and v up; the u range is at least as wide as the v
+  // range, so a path that hardly moves sideways looks as upright as it is.
   g.save();
   const us = image.map((p) => p[0]), vs = image.map((p) => p[1]);
-  const span = Math.max(0.1, Math.max(...us) - Math.min(...us), Math.max(...vs) - Math.min(...vs));
-  const uMid = (Math.max(...us, 0) + Math.min(...us, 0)) / 2;
+  const vTop = Math.max(0.1, ...vs) * 1.05;
+  const uLow = Math.min(0, ...us), uHigh = Math.max(0, ...us);
+  const uPad = Math.max(0, vTop - (uHigh - uLow)) / 2 + 0.02;
   const at = plotFrame(g, width, half, {
-    x: [uMid - span / 2 - 0.02, uMid + span / 2 + 0.02], y: [0, Math.max(...vs, 0.1) * 1.05],
+    x: [uLow - uPad, uHigh + uPad], y: [0, vTop],
     xLabel: "image u (lateral / depth)", yLabel: "image v",
   });
   path(g, image.map(([u, v]) => at(u, v)), "#1849a9");

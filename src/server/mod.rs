@@ -11,6 +11,7 @@
 //! * [`auth`]: tokens, compared in constant time.
 //! * [`metrics`]: Prometheus counters.
 //! * [`demo`]: the built-in demo matches.
+//! * [`web`]: the spectator page from `web/`, embedded in the binary.
 
 pub mod api;
 pub mod auth;

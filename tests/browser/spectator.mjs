@@ -25,6 +25,8 @@ const MOCAP = env("FIELDHOUSE_MOCAP_DIR");
 const CACHE = env("FIELDHOUSE_CACHE_DIR");
 const ARTIFACTS = env("ARTIFACTS");
 const CHROMIUM = env("CHROMIUM", "/usr/bin/chromium");
+// Screenshots of this run only: an old failure.png must not outlive its failure.
+rmSync(ARTIFACTS, { recursive: true, force: true });
 mkdirSync(ARTIFACTS, { recursive: true });
 
 const deadline = setTimeout(() => { console.error(`FAIL: no result in ${DEADLINE_MS / 1000} s`); cleanup(); process.exit(1); }, DEADLINE_MS);
@@ -117,6 +119,15 @@ async function main() {
       { text, ink, side };
   }, 30_000, "eye: the fielder's-eye panel explains tan ψ and both plots are drawn");
   check(true, `eye: the fielder's-eye panel is drawn (${eye.ink} pixels inked) and explained: ${eye.text}`);
+  await page.waitForTimeout(1500);
+  await shot("baseball-flight");
+  // The flight ends caught or on the ground, and the panel and the log say which.
+  const outcome = await until(async () => {
+    const text = await page.locator("#eye-text").textContent();
+    return /Caught by \w+|Landed [\d.]+ m from \w+/.exec(text)?.[0];
+  }, 30_000, "eye: the end of the flight is marked");
+  const logged = await page.locator("#log").textContent();
+  check(/caught by \w+ at|landed at/.test(logged), `eye: the end of the flight is marked (${outcome}) and logged`);
   await shot("baseball");
 
   // Picking another fielder from the list re-labels the panel.
@@ -138,17 +149,20 @@ async function main() {
   await page.goto(`${base}/#/matches/demo-basketball`);
   await page.locator("#hud-tick").waitFor({ timeout: 10_000 });
   await page.waitForFunction(() => document.getElementById("costmap-text").textContent.includes("moves with"), null, { timeout: 10_000 });
-  await page.waitForTimeout(500);
-  const overlay = await page.evaluate(() => {
-    // The floor is wood (red over green over blue) and the surround dark grey: the
-    // overlay's greens and blues (squares two seconds away and more) appear nowhere
-    // else but on the offense's small markers.
-    const c = document.getElementById("field");
-    const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
-    let cool = 0;
-    for (let i = 0; i < d.length; i += 4) if (Math.max(d[i + 1], d[i + 2]) > d[i] + 30) cool++;
-    return cool / (c.width * c.height);
-  });
+  // The map arrives by its own request: poll until it is drawn.
+  const overlay = await until(async () => {
+    const share = await page.evaluate(() => {
+      // The floor is wood (red over green over blue) and the surround dark grey: the
+      // overlay's greens and blues (squares two seconds away and more) appear nowhere
+      // else but on the offense's small markers.
+      const c = document.getElementById("field");
+      const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+      let cool = 0;
+      for (let i = 0; i < d.length; i += 4) if (Math.max(d[i + 1], d[i + 2]) > d[i] + 30) cool++;
+      return cool / (c.width * c.height);
+    });
+    return share > 0.1 && share;
+  }, 10_000, "court: the cost-map overlay covers the court (green or blue pixels)");
   check(overlay > 0.1, `court: the cost-map overlay covers the court (${(100 * overlay).toFixed(1)} % of pixels green or blue)`);
   // The holder changes with passes: read the text in the same look that finds it.
   const decision = await (await page.waitForFunction(() => {
@@ -192,6 +206,15 @@ async function main() {
   await page.keyboard.press("+");
   await page.waitForFunction(() => document.getElementById("hud-playback")?.textContent.includes("2×"), null, { timeout: 2_000 });
   check(await page.locator("#speed").inputValue() === "2", "replay: + doubles the speed");
+  // Space plays (at 2× now) and pauses again.
+  const before = await tick();
+  await page.keyboard.press(" ");
+  await page.waitForFunction(() => document.getElementById("hud-playback")?.textContent.startsWith("playing"), null, { timeout: 2_000 });
+  await page.waitForTimeout(2000);
+  await page.keyboard.press(" ");
+  await page.waitForFunction(() => document.getElementById("hud-playback")?.textContent.startsWith("paused"), null, { timeout: 2_000 });
+  const after = await tick();
+  check(after - before > 90, `replay: space plays at 2× and pauses (${before} to ${after} in about 2 s)`);
   const download = await page.locator("#download").getAttribute("href");
   const file = await page.request.get(`${base}${download}`);
   check(file.ok() && (await file.text()).startsWith(`{"fieldhouse":`), `replay: the download link serves the file (${download})`);

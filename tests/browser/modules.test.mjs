@@ -1,0 +1,112 @@
+// The page's pure modules against analytic oracles, in Node (no browser needed):
+// the fielder's-eye optics (eye.js), line fits (draw.js) and frame interpolation
+// (timeline.js). Run by tests/browser.rs with `node --test`.
+import assert from "node:assert/strict";
+import { test } from "node:test";
+import { fitLine } from "../../web/draw.js";
+import { opticalSamples, straightness } from "../../web/eye.js";
+import { Timeline } from "../../web/timeline.js";
+
+const EYE = 1.7;
+
+/**
+ * A flight built so that, seen from a fielder at (60, 0) looking at home (0, 0), tan ψ
+ * is exactly k·t (Chapman's constant rate) and the image point's lateral coordinate is
+ * c times its vertical one (a straight image path, McBeath's LOT): the ball comes in
+ * along the home line, depth(t) = 50 − 5t, height eye + k·t·depth, and sideways
+ * c·k·t·depth. (Its ground distance is not its depth when c ≠ 0, so tan ψ uses the
+ * ground distance: the oracle below accounts for it.)
+ */
+function flight({ k, c, steps = 60 }) {
+  const samples = [];
+  for (let i = 1; i <= steps; i++) {
+    const t = i / 30;
+    const depth = 50 - 5 * t;
+    const rise = k * t * depth;
+    samples.push({ t, ball: [60 - depth, EYE + rise, c * rise], agents: { cf: [60, 0] } });
+  }
+  return samples;
+}
+
+test("tan ψ is height over ground distance, and rises at exactly k with R² 1 on a line", () => {
+  const k = 0.23;
+  const seen = opticalSamples(flight({ k, c: 0 }), "cf", EYE);
+  assert.ok(seen.length > 50);
+  for (const s of seen) assert.ok(Math.abs(s.tanPsi - k * s.t) < 1e-12, `${s.tanPsi} at ${s.t}`);
+  const fit = fitLine(seen.map((s) => [s.t, s.tanPsi]));
+  assert.ok(Math.abs(fit.b - k) < 1e-9 && Math.abs(fit.a) < 1e-9 && fit.r2 > 1 - 1e-12, JSON.stringify(fit));
+});
+
+test("the image point is (lateral, height above the eye) over depth toward home", () => {
+  const seen = opticalSamples(flight({ k: 0.2, c: 0.5 }), "cf", EYE);
+  for (const s of seen) {
+    // v = k t exactly (height over depth), u = −c v: u counts to the right of a
+    // fielder facing home, and facing −x, +z (where the ball drifts) is its left.
+    assert.ok(Math.abs(s.v - 0.2 * s.t) < 1e-12);
+    assert.ok(Math.abs(s.u + 0.5 * s.v) < 1e-12);
+  }
+  assert.ok(straightness(seen.map((s) => [s.u, s.v])) > 1 - 1e-12);
+});
+
+test("a curved image path is measurably less straight than a line", () => {
+  // u = v² over v in 0..1: the principal-axis ratio of a parabola arc is below 1.
+  const points = Array.from({ length: 50 }, (_, i) => [(i / 49) ** 2, i / 49]);
+  const s = straightness(points);
+  assert.ok(s < 0.999 && s > 0.9, `${s}`);
+});
+
+test("balls below the eye or within 2 m are not counted, as in the sweep", () => {
+  const samples = [
+    { t: 0, ball: [0, EYE - 0.5, 0], agents: { cf: [30, 0] } },
+    { t: 1, ball: [29, 10, 0], agents: { cf: [30, 0] } },
+    { t: 2, ball: [20, EYE + 0.1, 0], agents: { cf: [30, 0] } },
+  ];
+  assert.deepEqual(opticalSamples(samples, "cf", EYE), []);
+});
+
+function frame(tick, x, heading, state = "flight") {
+  return {
+    tick, time_s: tick / 60, score: {}, events: [],
+    ball: { state, position: [x, 1, 0] },
+    agents: [{ id: "a", position: [x, 2 * x], heading }],
+  };
+}
+
+test("between two frames the world is interpolated linearly, headings the short way round", () => {
+  const t = new Timeline();
+  t.push(frame(0, 0, 3.1));
+  t.push(frame(2, 1, -3.1));
+  t.clock = 1 / 60; // halfway
+  const s = t.sample();
+  assert.ok(Math.abs(s.agents[0].position[0] - 0.5) < 1e-12);
+  assert.ok(Math.abs(s.agents[0].position[1] - 1.0) < 1e-12);
+  // 3.1 to −3.1 is 0.083 rad through π, not 6.2 rad through 0.
+  const h = s.agents[0].heading;
+  assert.ok(Math.abs(Math.cos(h) - Math.cos(Math.PI)) < 1e-3, `${h}`);
+  assert.ok(Math.abs(s.ball.position[0] - 0.5) < 1e-12);
+});
+
+test("a ball that changes state jumps rather than gliding", () => {
+  const t = new Timeline();
+  t.push(frame(0, 50, 0, "flight"));
+  t.push(frame(2, 0, 0, "dead"));
+  t.clock = 1 / 60;
+  assert.equal(t.sample().ball.position[0], 50);
+});
+
+test("the clock plays behind the newest frame at the given rate, and hands over due frames once", () => {
+  const t = new Timeline();
+  for (let tick = 0; tick <= 60; tick += 2) t.push(frame(tick, tick, 0));
+  let due = t.advance(0, 1, 0.1);
+  assert.ok(Math.abs(t.clock - (1 - 0.1)) < 1e-12, `${t.clock}`);
+  assert.equal(due[due.length - 1].tick, 54);
+  due = t.advance(0.05, 1, 0.1);
+  assert.ok(t.clock <= 1 + 1e-12);
+  assert.ok(due.every((f) => f.tick > 54), "each frame's events are handed over once");
+  // Paused (rate 0): exactly the newest frame.
+  t.advance(0.5, 0, 0);
+  assert.equal(t.sample().tick, 60);
+  // A frame from the past (a seek backwards) starts again.
+  t.push(frame(10, 10, 0));
+  assert.equal(t.frames.length, 1);
+});
