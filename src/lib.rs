@@ -35,6 +35,8 @@
 //! * [`server`]: the I/O shell (tokio, axum, tower): match tasks that tick worlds,
 //!   WebSockets for spectators, bots and replay viewers, the REST API, metrics. The only
 //!   module that reads a clock or opens a socket.
+//! * [`loadgen`]: a load generator for the server (and a peer, Colyseus) on loopback:
+//!   a client of the protocol, not part of the core.
 //! * [`names`]: the names users type for presets, and the error a wrong one gets.
 //!
 //! The `fieldhouse` binary (`src/main.rs`, `src/cli/`) is a thin shell: it parses the
@@ -43,6 +45,7 @@
 pub mod basketball;
 pub mod costmap;
 pub mod fielding;
+pub mod loadgen;
 pub mod motion;
 pub mod names;
 pub mod perception;

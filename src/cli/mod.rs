@@ -8,6 +8,7 @@ mod canvas;
 mod catch;
 mod costmap;
 mod heatmap;
+mod loadgen;
 mod motion;
 mod plots;
 mod replay;
@@ -57,6 +58,8 @@ enum Command {
     Run(run::RunArgs),
     /// Inspect, verify or export a replay file.
     Replay(replay::ReplayArgs),
+    /// Spectator load on fieldhouse (and a peer, e.g. Colyseus) on loopback: delivery, latency, CPU, memory.
+    Loadgen(loadgen::LoadgenArgs),
 }
 
 pub fn main() -> ExitCode {
@@ -82,6 +85,7 @@ pub fn main() -> ExitCode {
         Command::Bot(args) => bot::run(args, &mut out),
         Command::Run(args) => run::run(args, &mut out),
         Command::Replay(args) => replay::run(args, &mut out),
+        Command::Loadgen(args) => loadgen::run(args, &mut out),
     }
     .and_then(|()| Ok(out.flush()?));
     match result {

@@ -24,6 +24,10 @@ pub struct ServeArgs {
     /// `GET /api/replays` lists them and `/ws/replays/{id}` plays them.
     #[arg(long, value_name = "DIR", env = "FIELDHOUSE_REPLAY_DIR")]
     replay_dir: Option<PathBuf>,
+    /// Put each frame's send time (`"sent_us"`, µs since the Unix epoch) into the
+    /// frames sent live, for measuring latency on the same host (`fieldhouse loadgen`).
+    #[arg(long)]
+    stamp_frames: bool,
     /// A TOML file of server settings (addr, max_matches, max_message_bytes,
     /// bot_messages_per_second, bot_burst, send_timeout_ms, ...); flags override it.
     #[arg(long, value_name = "FILE")]
@@ -42,6 +46,9 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
     }
     if args.no_demo {
         config.demo = false;
+    }
+    if args.stamp_frames {
+        config.stamp_frames = true;
     }
     if let Some(dir) = args.replay_dir {
         config.replay_dir = Some(dir);

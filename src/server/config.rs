@@ -28,6 +28,11 @@ pub struct ServerConfig {
     pub max_body_bytes: usize,
     /// Where every match is recorded as a replay (none: matches are not recorded).
     pub replay_dir: Option<std::path::PathBuf>,
+    /// Put the wall-clock time each frame is published, `"sent_us"` (µs since the Unix
+    /// epoch), into the frames sent live, so a client on the same host can measure
+    /// frame latency (`fieldhouse loadgen` does). Replays keep the frames without it:
+    /// a clock reading is no part of what a match computes.
+    pub stamp_frames: bool,
 }
 
 impl Default for ServerConfig {
@@ -43,6 +48,7 @@ impl Default for ServerConfig {
             request_timeout_ms: 10_000,
             max_body_bytes: 64 * 1024,
             replay_dir: None,
+            stamp_frames: false,
         }
     }
 }

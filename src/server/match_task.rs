@@ -116,6 +116,7 @@ pub fn spawn(
         bots: (0..agent_ids.len()).map(|_| None).collect(),
         agent_ids,
         seq: 0,
+        stamp_frames: app.config.stamp_frames,
     };
     tokio::spawn(task.run());
     Ok(entry)
@@ -132,6 +133,7 @@ struct Ticker {
     bots: Vec<Option<Bot>>,
     agent_ids: Vec<String>,
     seq: u64,
+    stamp_frames: bool,
 }
 
 impl Ticker {
@@ -243,6 +245,11 @@ impl Ticker {
     fn publish_frame(&mut self, frame: String) {
         self.record(|r| r.frame(&frame));
         self.seq += 1;
+        let frame = if self.stamp_frames {
+            stamped(&frame)
+        } else {
+            frame
+        };
         let (seq, bytes) = (self.seq, Utf8Bytes::from(frame));
         self.publish.send_modify(|p| {
             p.seq = seq;
@@ -379,5 +386,32 @@ impl Ticker {
         self.publish.send_modify(|p| p.end = Some(end));
         self.metrics.matches_running.fetch_sub(1, Relaxed);
         tracing::info!(id = %self.entry.info.id, reason, tick, "match ended");
+    }
+}
+
+/// `frame` with `"sent_us"` (now, µs since the Unix epoch) as its second field, right
+/// after `"type":"frame"`, where a load generator finds it without parsing the frame.
+fn stamped(frame: &str) -> String {
+    const HEAD: &str = r#"{"type":"frame","#;
+    let sent_us = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_micros());
+    match frame.strip_prefix(HEAD) {
+        Some(rest) => format!(r#"{HEAD}"sent_us":{sent_us},{rest}"#),
+        None => frame.to_owned(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::stamped;
+
+    #[test]
+    fn a_stamp_is_the_second_field_and_keeps_the_frame_valid() {
+        let frame = r#"{"type":"frame","match":"m","tick":2}"#;
+        let out: serde_json::Value = serde_json::from_str(&stamped(frame)).unwrap();
+        assert!(out["sent_us"].as_u64().unwrap() > 1_700_000_000_000_000);
+        assert_eq!(out["tick"], 2);
+        assert!(stamped(frame).starts_with(r#"{"type":"frame","sent_us":"#));
     }
 }

@@ -1,0 +1,75 @@
+//! `fieldhouse loadgen`: spectator load on fieldhouse and a peer, side by side.
+
+use clap::{Args, ValueEnum};
+use fieldhouse::loadgen::{self, Peer, Plan};
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+#[command(
+    after_help = "Starts `fieldhouse serve --no-demo --stamp-frames` (this binary) and, with \
+    --peer colyseus, the Colyseus server in bench/peers (run `npm ci --prefix bench/peers` once), \
+    each on a free loopback port; connects the spectators to one 60 Hz match (30 frames a second); \
+    measures a window; stops everything. Needs a file-descriptor limit above the spectator count \
+    (`ulimit -n`).\n\
+    Example: fieldhouse loadgen --spectators 1000,5000 --seconds 10 --peer colyseus"
+)]
+pub struct LoadgenArgs {
+    /// Spectator counts, comma-separated: one round per count (at most 20,000 each).
+    #[arg(long, value_delimiter = ',', default_value = "1000", value_parser = clap::value_parser!(u32).range(1..=20_000))]
+    spectators: Vec<u32>,
+    /// fieldhouse matches to spread the spectators over (the peer always has one room).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    matches: u32,
+    /// The measured window of each round, seconds (1 to 600).
+    #[arg(long, default_value_t = 10.0, value_parser = seconds)]
+    seconds: f64,
+    /// Seconds between the last connection and the window.
+    #[arg(long, default_value_t = 2.0, value_parser = seconds)]
+    settle: f64,
+    /// A peer to run under the same load, after fieldhouse, in the same run.
+    #[arg(long, value_enum, default_value_t = PeerKind::None)]
+    peer: PeerKind,
+    /// Where the peer lives (its package.json and server script).
+    #[arg(long, value_name = "DIR", default_value = "bench/peers")]
+    peer_dir: PathBuf,
+    /// Print the rounds as JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum PeerKind {
+    None,
+    Colyseus,
+}
+
+fn seconds(text: &str) -> Result<f64, String> {
+    let s: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    if (0.0..=600.0).contains(&s) && s.is_finite() {
+        Ok(s)
+    } else {
+        Err(format!("{s} is outside 0 to 600 seconds"))
+    }
+}
+
+pub fn run(args: LoadgenArgs, out: &mut impl Write) -> anyhow::Result<()> {
+    let plan = Plan {
+        spectators: args.spectators.iter().map(|&n| n as usize).collect(),
+        matches: args.matches as usize,
+        seconds: args.seconds.max(1.0),
+        settle_s: args.settle,
+        fieldhouse: std::env::current_exe()?,
+        peer: match args.peer {
+            PeerKind::None => None,
+            PeerKind::Colyseus => Some(Peer::Colyseus { dir: args.peer_dir }),
+        },
+    };
+    let rounds = loadgen::run(&plan)?;
+    if args.json {
+        writeln!(out, "{}", serde_json::to_string_pretty(&rounds)?)?;
+    } else {
+        write!(out, "{}", loadgen::table(&rounds))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,321 @@
+//! `fieldhouse loadgen`: spectator load against fieldhouse and, in the same run, against
+//! a peer (a Colyseus 0.18 server holding an equivalent state), both started here on
+//! loopback, so a team choosing a game server can compare them on one machine.
+//!
+//! For each spectator count, each server in turn: start it, connect the spectators (at
+//! most [`CONNECTING_AT_ONCE`] handshakes at a time), let them settle, then measure a
+//! window of `seconds`. Reported per server:
+//!
+//! * delivered share: messages received ÷ (spectators × messages published in the
+//!   window), a message counting as published when any spectator received it (a
+//!   fieldhouse frame is known by its tick, a Colyseus patch by its bytes);
+//! * the frame rate held: the median and lowest per-spectator rate in the window;
+//! * latency: fieldhouse frames carry their publish time (`serve --stamp-frames`), so
+//!   its latency is arrival − publish on the same clock. Colyseus patches carry none, so
+//!   for both servers the *fan-out spread* is reported as well: a message's arrival at
+//!   each spectator minus its first arrival at any, which is what a large audience adds;
+//! * bytes per message; the server's CPU time (utime + stime from /proc) per delivered
+//!   message and its resident memory (VmRSS, VmHWM), which are the load generator's
+//!   own costs excluded; fieldhouse's tick overruns (from /metrics).
+//!
+//! Everything is bounded: the counts and the window are arguments, each phase has a
+//! deadline, and the servers started here are killed at the end.
+
+mod client;
+mod procfs;
+mod servers;
+
+pub use servers::Peer;
+
+use anyhow::Context;
+use serde::Serialize;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+/// Handshakes in flight at once while connecting spectators: enough to connect 5,000
+/// in a few seconds, few enough that neither side's accept queue overflows.
+pub const CONNECTING_AT_ONCE: usize = 100;
+
+/// The longest a round waits for its spectators to connect.
+const CONNECT_WITHIN: Duration = Duration::from_secs(120);
+
+/// What to run.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// Spectator counts, each run as its own round.
+    pub spectators: Vec<usize>,
+    /// fieldhouse matches the spectators are spread over (the peer has one room).
+    pub matches: usize,
+    /// The measured window per round, seconds.
+    pub seconds: f64,
+    /// Time between the last spectator connecting and the window, seconds.
+    pub settle_s: f64,
+    /// The fieldhouse binary to start (`serve --no-demo --stamp-frames`).
+    pub fieldhouse: std::path::PathBuf,
+    /// The peer to run under the same load, if any.
+    pub peer: Option<Peer>,
+}
+
+/// One server under one load.
+#[derive(Debug, Clone, Serialize)]
+pub struct Round {
+    pub server: &'static str,
+    pub matches: usize,
+    pub spectators: usize,
+    pub connected: usize,
+    pub window_s: f64,
+    /// Messages the server published in the window, per spectator.
+    pub published: u64,
+    pub delivered: u64,
+    pub delivered_share: f64,
+    pub rate_median_hz: f64,
+    pub rate_min_hz: f64,
+    /// Publish-to-arrival, ms (fieldhouse only: its frames carry their send time).
+    pub latency_ms: Option<Percentiles>,
+    /// Arrival minus the first arrival of the same message at any spectator, ms.
+    pub spread_ms: Percentiles,
+    pub bytes_per_message: f64,
+    pub server_cpu_s: f64,
+    /// The part of the server's CPU time spent in the kernel (on loopback, sending
+    /// includes delivering to the receiving socket).
+    pub server_kernel_share: f64,
+    pub server_cpu_us_per_message: f64,
+    pub server_rss_mb: f64,
+    pub server_peak_rss_mb: f64,
+    pub loadgen_cpu_s: f64,
+    /// fieldhouse's tick overruns in the window (None for the peer).
+    pub tick_overruns: Option<u64>,
+}
+
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Percentiles {
+    pub p50: f64,
+    pub p99: f64,
+    pub max: f64,
+}
+
+impl Percentiles {
+    /// From samples in µs, reported in ms.
+    fn of(mut us: Vec<u64>) -> Percentiles {
+        if us.is_empty() {
+            return Percentiles {
+                p50: f64::NAN,
+                p99: f64::NAN,
+                max: f64::NAN,
+            };
+        }
+        us.sort_unstable();
+        let at = |q: f64| us[((us.len() - 1) as f64 * q).round() as usize] as f64 / 1000.0;
+        Percentiles {
+            p50: at(0.5),
+            p99: at(0.99),
+            max: at(1.0),
+        }
+    }
+}
+
+/// Runs every round of the plan, fieldhouse then the peer at each count.
+pub fn run(plan: &Plan) -> anyhow::Result<Vec<Round>> {
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .context("starting the async runtime")?;
+    let mut rounds = Vec::new();
+    for &n in &plan.spectators {
+        let server = servers::Running::fieldhouse(&plan.fieldhouse, plan.matches)?;
+        rounds.push(runtime.block_on(round(plan, &server, n))?);
+        drop(server);
+        if let Some(peer) = &plan.peer {
+            let server = servers::Running::peer(peer)?;
+            rounds.push(runtime.block_on(round(plan, &server, n))?);
+        }
+    }
+    Ok(rounds)
+}
+
+async fn round(plan: &Plan, server: &servers::Running, n: usize) -> anyhow::Result<Round> {
+    tracing::info!(server = server.name, spectators = n, "connecting");
+    let shared = client::Round {
+        gate: Arc::new(tokio::sync::Semaphore::new(CONNECTING_AT_ONCE)),
+        settled: Arc::new(AtomicUsize::new(0)),
+        measuring: Arc::new(AtomicBool::new(false)),
+        stop: Arc::new(AtomicBool::new(false)),
+    };
+    let tasks: Vec<_> = (0..n)
+        .map(|i| {
+            let target = server.targets[i % server.targets.len()].clone();
+            tokio::spawn(client::spectate(target, shared.clone()))
+        })
+        .collect();
+    // Every handshake done (within a bound), then a moment to settle.
+    let deadline = std::time::Instant::now() + CONNECT_WITHIN;
+    while shared.settled.load(Ordering::SeqCst) < n && std::time::Instant::now() < deadline {
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    tokio::time::sleep(Duration::from_secs_f64(plan.settle_s)).await;
+
+    let overruns_before = server.tick_overruns();
+    let cpu_before = procfs::cpu(server.pid())?;
+    let self_before = procfs::cpu(std::process::id())?;
+    shared.measuring.store(true, Ordering::SeqCst);
+    let started = std::time::Instant::now();
+    tokio::time::sleep(Duration::from_secs_f64(plan.seconds)).await;
+    shared.measuring.store(false, Ordering::SeqCst);
+    let window_s = started.elapsed().as_secs_f64();
+    let server_cpu = procfs::cpu(server.pid())? - cpu_before;
+    let loadgen_cpu_s = (procfs::cpu(std::process::id())? - self_before).total_s();
+    let memory = procfs::memory(server.pid())?;
+    let tick_overruns = match (overruns_before, server.tick_overruns()) {
+        (Some(a), Some(b)) => Some(b - a),
+        _ => None,
+    };
+    shared.stop.store(true, Ordering::SeqCst);
+
+    let mut seen = Vec::with_capacity(n);
+    for task in tasks {
+        if let Ok(Some(log)) = task.await {
+            seen.push(log);
+        }
+    }
+    Ok(summarise(
+        server.name,
+        server.targets.len(),
+        n,
+        window_s,
+        &seen,
+        server_cpu,
+        loadgen_cpu_s,
+        memory,
+        tick_overruns,
+    ))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn summarise(
+    server: &'static str,
+    matches: usize,
+    n: usize,
+    window_s: f64,
+    seen: &[client::Log],
+    server_cpu: procfs::Cpu,
+    loadgen_cpu_s: f64,
+    memory: procfs::Memory,
+    tick_overruns: Option<u64>,
+) -> Round {
+    let delivered: u64 = seen.iter().map(|l| l.arrivals.len() as u64).sum();
+    let bytes: u64 = seen.iter().map(|l| l.bytes).sum();
+    let mut rates: Vec<f64> = seen
+        .iter()
+        .map(|l| l.arrivals.len() as f64 / window_s)
+        .collect();
+    rates.sort_by(f64::total_cmp);
+    // The first arrival of each message anywhere, by its key.
+    let mut first = std::collections::HashMap::<u64, u64>::new();
+    for a in seen.iter().flat_map(|l| &l.arrivals) {
+        first
+            .entry(a.key)
+            .and_modify(|t| *t = (*t).min(a.at_us))
+            .or_insert(a.at_us);
+    }
+    // Published in the window, per match: every message some spectator received. (With
+    // thousands of spectators a message none of them got is not a realistic gap to
+    // miss.)
+    let published = first.len() as u64 / matches as u64;
+    let spread = seen
+        .iter()
+        .flat_map(|l| &l.arrivals)
+        .map(|a| a.at_us - first[&a.key])
+        .collect();
+    let latencies: Vec<u64> = seen
+        .iter()
+        .flat_map(|l| &l.arrivals)
+        .filter_map(|a| a.sent_us.map(|s| a.at_us.saturating_sub(s)))
+        .collect();
+    Round {
+        server,
+        matches,
+        spectators: n,
+        connected: seen.len(),
+        window_s,
+        published,
+        delivered,
+        delivered_share: delivered as f64 / (n as f64 * published.max(1) as f64),
+        rate_median_hz: rates.get(rates.len() / 2).copied().unwrap_or(0.0),
+        rate_min_hz: rates.first().copied().unwrap_or(0.0),
+        latency_ms: (!latencies.is_empty()).then(|| Percentiles::of(latencies)),
+        spread_ms: Percentiles::of(spread),
+        bytes_per_message: bytes as f64 / delivered.max(1) as f64,
+        server_cpu_s: server_cpu.total_s(),
+        server_kernel_share: server_cpu.system_s / server_cpu.total_s().max(1e-9),
+        server_cpu_us_per_message: server_cpu.total_s() * 1e6 / delivered.max(1) as f64,
+        server_rss_mb: memory.rss_mb,
+        server_peak_rss_mb: memory.peak_rss_mb,
+        loadgen_cpu_s,
+        tick_overruns,
+    }
+}
+
+/// The rounds as a table, each peer round followed by its ratio to fieldhouse's.
+pub fn table(rounds: &[Round]) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "{:<11} {:>7} {:>6} {:>6} {:>9} {:>7} {:>7} {:>24} {:>24} {:>7} {:>9} {:>7} {:>8} {:>8} {:>8}",
+        "server",
+        "matches",
+        "specs",
+        "conn",
+        "delivered",
+        "rate",
+        "min",
+        "latency p50/p99/max ms",
+        "spread p50/p99/max ms",
+        "B/msg",
+        "µs/msg",
+        "kernel",
+        "RSS MB",
+        "peak MB",
+        "overruns"
+    );
+    let ms = |p: &Percentiles| format!("{:.1}/{:.1}/{:.1}", p.p50, p.p99, p.max);
+    for r in rounds {
+        let _ = writeln!(
+            out,
+            "{:<11} {:>7} {:>6} {:>6} {:>8.2}% {:>7.1} {:>7.1} {:>24} {:>24} {:>7.0} {:>9.2} {:>6.0}% {:>8.1} {:>8.1} {:>8}",
+            r.server,
+            r.matches,
+            r.spectators,
+            r.connected,
+            100.0 * r.delivered_share,
+            r.rate_median_hz,
+            r.rate_min_hz,
+            r.latency_ms.as_ref().map_or("-".into(), ms),
+            ms(&r.spread_ms),
+            r.bytes_per_message,
+            r.server_cpu_us_per_message,
+            100.0 * r.server_kernel_share,
+            r.server_rss_mb,
+            r.server_peak_rss_mb,
+            r.tick_overruns.map_or("-".into(), |o| o.to_string()),
+        );
+    }
+    for pair in rounds.windows(2) {
+        if let [ours, peer] = pair {
+            if ours.server == "fieldhouse" && peer.server != "fieldhouse" {
+                let _ = writeln!(
+                    out,
+                    "at {} spectators, fieldhouse ÷ {}: server CPU per message {:.2}, delivered share {:.3}, RSS {:.2}, bytes per message {:.2}",
+                    ours.spectators,
+                    peer.server,
+                    ours.server_cpu_us_per_message / peer.server_cpu_us_per_message,
+                    ours.delivered_share / peer.delivered_share,
+                    ours.server_rss_mb / peer.server_rss_mb,
+                    ours.bytes_per_message / peer.bytes_per_message,
+                );
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,173 @@
+//! The servers a load run starts on loopback, and stops (killed when dropped).
+
+use super::client::Target;
+use anyhow::{bail, Context};
+use std::io::{BufRead, BufReader};
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+/// The peer run under the same load.
+#[derive(Debug, Clone)]
+pub enum Peer {
+    /// Colyseus 0.18 from `DIR` (bench/peers: `npm ci` there installs it and the Node 22
+    /// it needs): `DIR/node_modules/.bin/node DIR/colyseus-server.mjs PORT`.
+    Colyseus { dir: PathBuf },
+}
+
+/// How long a server may take to say it listens.
+const START_WITHIN: Duration = Duration::from_secs(120);
+
+pub struct Running {
+    pub name: &'static str,
+    /// Where spectators go: spectator i to `targets[i % len]`.
+    pub targets: Vec<Target>,
+    child: Child,
+    /// fieldhouse's HTTP base, for /metrics.
+    http: Option<String>,
+}
+
+impl Running {
+    /// `fieldhouse serve` on a free port (no demos, frames stamped, room for `matches`)
+    /// with `matches` baseball matches (the default three outfielders, 60 Hz ticks,
+    /// 30 Hz frames).
+    pub fn fieldhouse(binary: &std::path::Path, matches: usize) -> anyhow::Result<Running> {
+        const ADMIN: &str = "loadgen-admin-token-0123456789";
+        let config =
+            std::env::temp_dir().join(format!("fieldhouse-loadgen-{}.toml", std::process::id()));
+        std::fs::write(
+            &config,
+            format!(
+                "demo = false\nstamp_frames = true\nmax_matches = {}\n",
+                matches.max(1)
+            ),
+        )
+        .with_context(|| format!("writing {}", config.display()))?;
+        let mut child = Command::new(binary)
+            .args(["serve", "--addr", "127.0.0.1:0", "--config"])
+            .arg(&config)
+            .env("FIELDHOUSE_ADMIN_TOKEN", ADMIN)
+            .env("FIELDHOUSE_LOG", "info")
+            .env_remove("FIELDHOUSE_ADDR")
+            .env_remove("FIELDHOUSE_REPLAY_DIR")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .with_context(|| format!("starting {}", binary.display()))?;
+        let line = first_line_with(&mut child, "http://", Stream::Stderr)?;
+        let at = line.find("http://").expect("found") + 7;
+        let addr: String = line[at..].chars().take_while(|c| *c != '/').collect();
+        let _ = std::fs::remove_file(&config);
+        let http = format!("http://{addr}");
+        let targets = (0..matches.max(1))
+            .map(|seed| {
+                let created: serde_json::Value = ureq::post(&format!("{http}/api/matches"))
+                    .set("authorization", &format!("Bearer {ADMIN}"))
+                    .send_json(
+                        serde_json::json!({"name": "loadgen", "sport": "baseball", "seed": seed}),
+                    )
+                    .context("creating a load match")?
+                    .into_json()?;
+                let id = created["id"].as_str().context("no match id")?;
+                Ok(Target::Fieldhouse {
+                    url: format!("ws://{addr}/ws/matches/{id}"),
+                    index: seed as u64,
+                })
+            })
+            .collect::<anyhow::Result<_>>()?;
+        Ok(Running {
+            name: "fieldhouse",
+            targets,
+            child,
+            http: Some(http),
+        })
+    }
+
+    pub fn peer(peer: &Peer) -> anyhow::Result<Running> {
+        let Peer::Colyseus { dir } = peer;
+        let node = dir.join("node_modules/.bin/node");
+        if !node.exists() {
+            bail!(
+                "no Node 22 at {}: run `npm ci --prefix {}` first",
+                node.display(),
+                dir.display()
+            );
+        }
+        let port = free_port()?;
+        let mut child = Command::new(&node)
+            .arg(dir.join("colyseus-server.mjs"))
+            .arg(port.to_string())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .with_context(|| format!("starting {}", node.display()))?;
+        first_line_with(&mut child, "listening", Stream::Stdout)?;
+        Ok(Running {
+            name: "colyseus",
+            targets: vec![Target::Colyseus {
+                http: format!("http://127.0.0.1:{port}"),
+                ws: format!("ws://127.0.0.1:{port}"),
+            }],
+            child,
+            http: None,
+        })
+    }
+
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// fieldhouse's `fieldhouse_tick_overruns_total`; None for the peer.
+    pub fn tick_overruns(&self) -> Option<u64> {
+        let metrics = ureq::get(&format!("{}/metrics", self.http.as_ref()?))
+            .call()
+            .ok()?
+            .into_string()
+            .ok()?;
+        metrics
+            .lines()
+            .find_map(|l| l.strip_prefix("fieldhouse_tick_overruns_total "))
+            .and_then(|v| v.trim().parse().ok())
+    }
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+enum Stream {
+    Stdout,
+    Stderr,
+}
+
+/// Reads the child's output until a line containing `needle` (then keeps draining it
+/// on a thread, so the child never blocks on a full pipe).
+fn first_line_with(child: &mut Child, needle: &str, stream: Stream) -> anyhow::Result<String> {
+    let reader: Box<dyn std::io::Read + Send> = match stream {
+        Stream::Stdout => Box::new(child.stdout.take().context("no stdout")?),
+        Stream::Stderr => Box::new(child.stderr.take().context("no stderr")?),
+    };
+    let (tx, rx) = std::sync::mpsc::channel();
+    let needle = needle.to_owned();
+    std::thread::spawn(move || {
+        let mut tx = Some(tx);
+        for line in BufReader::new(reader).lines().map_while(Result::ok) {
+            if line.contains(&needle) {
+                if let Some(tx) = tx.take() {
+                    let _ = tx.send(line);
+                }
+            }
+        }
+    });
+    rx.recv_timeout(START_WITHIN)
+        .context("the server did not say it was listening")
+}
+
+fn free_port() -> anyhow::Result<u16> {
+    Ok(std::net::TcpListener::bind("127.0.0.1:0")?
+        .local_addr()?
+        .port())
+}

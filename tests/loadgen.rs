@@ -1,0 +1,69 @@
+//! `fieldhouse loadgen` as a user runs it: it starts the real server on loopback, fills
+//! it with spectators, and reports. Only what must hold whatever the machine's speed is
+//! checked (timings belong in BENCHMARKS.md): every spectator connects, frames arrive
+//! and the figures are consistent.
+
+mod common;
+
+use common::fieldhouse;
+
+#[test]
+fn loadgen_reports_a_small_round() {
+    // The server loadgen starts inherits the motion data and the cost-map cache the
+    // server tests use, so it starts without building maps.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args("loadgen --spectators 20 --matches 2 --seconds 1 --settle 0.5 --json".split(' '))
+        .env("FIELDHOUSE_MOCAP_DIR", common::mocap())
+        .env(
+            "FIELDHOUSE_CACHE_DIR",
+            std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("server-cache"),
+        )
+        .env_remove("FIELDHOUSE_LOG")
+        .output()
+        .expect("the binary runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rounds: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let round = &rounds[0];
+    assert_eq!(round["server"], "fieldhouse");
+    assert_eq!(round["matches"], 2);
+    assert_eq!(round["connected"], 20);
+    // About 30 frames a second reach each of them in the one-second window.
+    let delivered = round["delivered"].as_u64().unwrap();
+    assert!(delivered >= 20 * 10, "{round}");
+    let share = round["delivered_share"].as_f64().unwrap();
+    assert!(share > 0.5 && share <= 1.1, "{round}");
+    // Frames are stamped, so latency is measured; a fly-ball frame is small.
+    assert!(round["latency_ms"]["p50"].as_f64().unwrap() >= 0.0);
+    assert!(
+        round["bytes_per_message"].as_f64().unwrap() < 1024.0,
+        "{round}"
+    );
+    assert!(round["server_rss_mb"].as_f64().unwrap() > 1.0);
+    assert!(round["tick_overruns"].as_u64().is_some(), "{round}");
+}
+
+#[test]
+fn loadgen_refuses_bad_arguments_and_a_missing_peer() {
+    for args in [
+        "loadgen --spectators 0",
+        "loadgen --spectators 1,x",
+        "loadgen --seconds -1",
+        "loadgen --peer nobody",
+    ] {
+        let out = fieldhouse(args);
+        assert_eq!(out.status.code(), Some(2), "{args}");
+        assert!(out.stdout.is_empty(), "{args}");
+    }
+    let out =
+        fieldhouse("loadgen --spectators 1 --seconds 1 --peer colyseus --peer-dir /nonexistent");
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("npm ci --prefix /nonexistent"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
