@@ -52,6 +52,8 @@ fn loadgen_refuses_bad_arguments_and_a_missing_peer() {
         "loadgen --spectators 0",
         "loadgen --spectators 1,x",
         "loadgen --seconds -1",
+        "loadgen --seconds 0.5",
+        "loadgen --settle 61",
         "loadgen --peer nobody",
     ] {
         let out = fieldhouse(args);

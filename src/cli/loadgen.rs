@@ -9,7 +9,8 @@ use std::path::PathBuf;
 #[command(
     after_help = "Starts `fieldhouse serve --no-demo --stamp-frames` (this binary) and, with \
     --peer colyseus, the Colyseus server in bench/peers (run `npm ci --prefix bench/peers` once), \
-    each on a free loopback port; connects the spectators to one 60 Hz match (30 frames a second); \
+    each on a free loopback port; spreads the spectators over --matches 60 Hz matches (30 frames a \
+    second; the peer has one room); \
     measures a window; stops everything. Needs a file-descriptor limit above the spectator count \
     (`ulimit -n`).\n\
     Example: fieldhouse loadgen --spectators 1000,5000 --seconds 10 --peer colyseus"
@@ -22,10 +23,10 @@ pub struct LoadgenArgs {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
     matches: u32,
     /// The measured window of each round, seconds (1 to 600).
-    #[arg(long, default_value_t = 10.0, value_parser = seconds)]
+    #[arg(long, default_value_t = 10.0, value_parser = window)]
     seconds: f64,
-    /// Seconds between the last connection and the window.
-    #[arg(long, default_value_t = 2.0, value_parser = seconds)]
+    /// Seconds between the last connection and the window (0 to 60).
+    #[arg(long, default_value_t = 2.0, value_parser = settle)]
     settle: f64,
     /// A peer to run under the same load, after fieldhouse, in the same run.
     #[arg(long, value_enum, default_value_t = PeerKind::None)]
@@ -44,12 +45,20 @@ enum PeerKind {
     Colyseus,
 }
 
-fn seconds(text: &str) -> Result<f64, String> {
+fn window(text: &str) -> Result<f64, String> {
+    seconds_within(text, 1.0, 600.0)
+}
+
+fn settle(text: &str) -> Result<f64, String> {
+    seconds_within(text, 0.0, 60.0)
+}
+
+fn seconds_within(text: &str, low: f64, high: f64) -> Result<f64, String> {
     let s: f64 = text.parse().map_err(|e| format!("{e}"))?;
-    if (0.0..=600.0).contains(&s) && s.is_finite() {
+    if (low..=high).contains(&s) {
         Ok(s)
     } else {
-        Err(format!("{s} is outside 0 to 600 seconds"))
+        Err(format!("{s} is outside {low} to {high} seconds"))
     }
 }
 
@@ -57,7 +66,7 @@ pub fn run(args: LoadgenArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let plan = Plan {
         spectators: args.spectators.iter().map(|&n| n as usize).collect(),
         matches: args.matches as usize,
-        seconds: args.seconds.max(1.0),
+        seconds: args.seconds,
         settle_s: args.settle,
         fieldhouse: std::env::current_exe()?,
         peer: match args.peer {

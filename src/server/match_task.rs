@@ -118,7 +118,7 @@ pub fn spawn(
         seq: 0,
         stamp_frames: app.config.stamp_frames,
     };
-    tokio::spawn(task.run());
+    app.ticking.spawn(task.run());
     Ok(entry)
 }
 

@@ -51,7 +51,16 @@ pub async fn serve(
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
     let (stop_tx, stop_rx) = watch::channel(false);
+    // Matches tick on a runtime of their own, apart from the one serving sockets: there
+    // a tick waited in the same queue as the fan-out of the previous frame to every
+    // spectator, and at 1,000 spectators sometimes started a whole period late.
+    let ticking = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(1)
+        .thread_name("fieldhouse-ticks")
+        .enable_all()
+        .build()?;
     let app = Arc::new(AppState {
+        ticking: ticking.handle().clone(),
         config: config.clone(),
         admin_token,
         caps,
@@ -72,9 +81,13 @@ pub async fn serve(
         // Give sockets a moment to send their close frames.
         tokio::time::sleep(Duration::from_millis(200)).await;
     };
-    axum::serve(listener, router)
+    let served = axum::serve(listener, router)
         .with_graceful_shutdown(graceful)
-        .await
+        .await;
+    // The matches have ended by now: the graceful shutdown gave them 200 ms after the
+    // stop, and a match ends at the next tick.
+    ticking.shutdown_background();
+    served
 }
 
 pub fn router(app: Arc<AppState>) -> Router {

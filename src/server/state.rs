@@ -62,6 +62,8 @@ pub struct MatchEntry {
 }
 
 pub struct AppState {
+    /// Where match tasks run: a runtime apart from the sockets' (see `serve`).
+    pub ticking: tokio::runtime::Handle,
     pub config: ServerConfig,
     pub admin_token: String,
     pub caps: Arc<Capabilities>,
