@@ -1,5 +1,6 @@
 //! The server: the I/O shell around the simulation core (tokio, axum, tower). Matches
-//! are tasks that tick their worlds; sockets and REST requests talk to them through
+//! are tasks that tick their worlds, on a runtime of their own so that a match's clock
+//! never waits behind the sockets; sockets and REST requests talk to them through
 //! channels and a shared table. Nothing here changes what a world computes.
 //!
 //! * [`config`]: settings, defaults and the TOML file.
