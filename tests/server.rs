@@ -85,6 +85,15 @@ impl Server {
         )
     }
 
+    /// A match whose fielder "cf" is a bot slot, and a bot connected to it (its
+    /// `hello` not yet read): the match id, the bot token and the socket.
+    async fn play_cf(&self, mode: &str, deadline_ms: u64) -> (String, String, Socket) {
+        let (id, tokens) = self.create(fielder_with_bot(mode, deadline_ms));
+        let token = tokens["cf"].as_str().unwrap().to_string();
+        let bot = connect(&self.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+        (id, token, bot)
+    }
+
     fn tick(&self, id: &str) -> u64 {
         self.get(&format!("/api/matches/{id}"))["tick"]
             .as_u64()
@@ -240,9 +249,7 @@ fn agent<'a>(frame: &'a Value, id: &str) -> &'a Value {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_bots_commands_move_its_agent_and_a_disconnect_hands_it_back() {
     let server = Server::start(&["--no-demo"]);
-    let (id, tokens) = server.create(fielder_with_bot("realtime", 1000));
-    let token = tokens["cf"].as_str().unwrap();
-    let mut bot = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    let (id, token, mut bot) = server.play_cf("realtime", 1000).await;
     let hello = next(&mut bot).await;
     assert_eq!(
         (hello["role"].as_str(), hello["agent"].as_str()),
@@ -315,9 +322,7 @@ async fn a_bots_commands_move_its_agent_and_a_disconnect_hands_it_back() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn lockstep_advances_only_when_the_bot_answers_or_at_the_deadline() {
     let server = Server::start(&["--no-demo"]);
-    let (id, tokens) = server.create(fielder_with_bot("lockstep", 400));
-    let token = tokens["cf"].as_str().unwrap();
-    let mut bot = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    let (id, _, mut bot) = server.play_cf("lockstep", 400).await;
     next(&mut bot).await;
     // Answering at once: the match runs as fast as the bot (far faster than 60 Hz).
     let started = Instant::now();
@@ -393,9 +398,7 @@ async fn a_wrong_or_missing_token_is_refused_before_the_upgrade() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn malformed_input_gets_an_error_and_the_match_keeps_ticking() {
     let server = Server::start(&["--no-demo"]);
-    let (id, tokens) = server.create(fielder_with_bot("realtime", 1000));
-    let token = tokens["cf"].as_str().unwrap();
-    let mut bot = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    let (id, _, mut bot) = server.play_cf("realtime", 1000).await;
     next(&mut bot).await;
     let before = server.tick(&id);
     for (sent, code) in [
@@ -654,9 +657,7 @@ fn every_example_scenario_is_a_valid_body() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn flooding_is_rate_limited_then_closed_with_1008() {
     let server = Server::start(&["--no-demo"]);
-    let (id, tokens) = server.create(fielder_with_bot("realtime", 1000));
-    let token = tokens["cf"].as_str().unwrap();
-    let mut bot = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    let (id, _, mut bot) = server.play_cf("realtime", 1000).await;
     next(&mut bot).await;
     let stand = json!({"type": "command", "tick": 0, "action": {"kind": "stand"}}).to_string();
     let (mut sink, mut stream) = bot.split();
@@ -884,9 +885,7 @@ async fn recorded_matches_are_listed_downloaded_and_played_with_seek() {
 async fn a_recorded_bot_match_verifies_with_its_command_log() {
     let dir = empty_dir("server-bot-replays");
     let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
-    let (id, tokens) = server.create(fielder_with_bot("realtime", 1000));
-    let token = tokens["cf"].as_str().unwrap();
-    let mut bot = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    let (id, _, mut bot) = server.play_cf("realtime", 1000).await;
     next(&mut bot).await;
     let started = Instant::now();
     let mut k = 0.0;

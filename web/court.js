@@ -2,8 +2,7 @@
 // with, the ball; the selected player's cost map (its physical capability from motion
 // capture: seconds to reach each square) laid on the court at its pose; and its latest
 // decision in words and graphics, the safe squares outlined.
-import { $, FieldMap, costColour, escapeHtml, fitCanvas, marker } from "./draw.js";
-import { nearest } from "./fly.js";
+import { $, FieldMap, costColour, escapeHtml, fitCanvas, marker, nearest, trace } from "./draw.js";
 
 const TEAM_COLOURS = { offense: "#3d6fe0", defense: "#e0483d" };
 const OVERLAY_ALPHA = 0.42;
@@ -48,13 +47,14 @@ export class CourtView {
 
   costmap(behaviour) {
     if (!this.costmaps.has(behaviour)) {
-      const entry = { map: null, error: null };
+      const entry = { map: null, image: null, error: null };
       this.costmaps.set(behaviour, entry);
       fetch(`/api/costmaps/${encodeURIComponent(behaviour)}`)
         .then(async (r) => {
           const body = await r.json();
           if (!r.ok) throw new Error(body.error?.message ?? `HTTP ${r.status}`);
           entry.map = body;
+          entry.image = costImage(body);
         })
         .catch((e) => {
           entry.error = e.message;
@@ -102,8 +102,7 @@ export class CourtView {
     g.strokeStyle = "#fff";
     g.lineWidth = 2;
     const line = (...points) => {
-      g.beginPath();
-      points.forEach((p, i) => (i ? g.lineTo(...map.px(...p)) : g.moveTo(...map.px(...p))));
+      trace(g, map, points);
       g.stroke();
     };
     line([0, -half], [c.length_m, -half], [c.length_m, half], [0, half], [0, -half]);
@@ -132,19 +131,16 @@ export class CourtView {
   /** The selected agent's cost map, drawn in its own frame at its pose. */
   drawCostmap(g, map, agent) {
     const entry = this.costmap(agent.behaviour);
-    if (!entry.map) return;
-    const m = entry.map;
+    if (!entry.image) return;
+    const m = entry.map, image = entry.image;
     const [ax, ay] = map.px(...agent.position);
     g.save();
     g.translate(ax, ay);
     g.rotate(map.angle(agent.heading));
     g.scale(map.scale, map.scale);
-    m.costs_s.forEach((row, i) => row.forEach((seconds, j) => {
-      if (seconds === null) return;
-      g.fillStyle = costColour(seconds, m.horizon_s, OVERLAY_ALPHA);
-      // A hair over a cell, so neighbours meet without seams.
-      g.fillRect(m.origin[0] + j * m.cell_m, m.origin[1] + i * m.cell_m, m.cell_m * 1.02, m.cell_m * 1.02);
-    }));
+    // Square cells, not a blur between them.
+    g.imageSmoothingEnabled = false;
+    g.drawImage(image, m.origin[0], m.origin[1], image.width * m.cell_m, image.height * m.cell_m);
     g.restore();
   }
 
@@ -165,9 +161,7 @@ export class CourtView {
       square(decision.chosen.cell);
       g.setLineDash([5, 4]);
       g.lineWidth = 1.5;
-      g.beginPath();
-      g.moveTo(...map.px(...agent.position));
-      g.lineTo(...map.px(...decision.chosen.cell));
+      trace(g, map, [agent.position, decision.chosen.cell]);
       g.stroke();
       g.setLineDash([]);
     }
@@ -211,6 +205,23 @@ export class CourtView {
           `needs to reach each square from this pose; blank is beyond ${horizon} s.`;
     drawScale(fitCanvas($("scale")), horizon);
   }
+}
+
+/**
+ * A cost map as an image, one pixel a cell, coloured once when it arrives: the map is
+ * the same at every pose, so each animation frame only places it (one drawImage).
+ */
+function costImage(m) {
+  const image = document.createElement("canvas");
+  image.width = m.costs_s[0]?.length ?? 0;
+  image.height = m.costs_s.length;
+  const g = image.getContext("2d");
+  m.costs_s.forEach((row, i) => row.forEach((seconds, j) => {
+    if (seconds === null) return;
+    g.fillStyle = costColour(seconds, m.horizon_s, OVERLAY_ALPHA);
+    g.fillRect(j, i, 1, 1);
+  }));
+  return image;
 }
 
 /** A decision in words, with the numbers of the rule C_o > C_d + T_s + ε. */

@@ -73,6 +73,28 @@ export class FieldMap {
   }
 }
 
+/** Begins a path through ground points; the caller strokes or fills it. */
+export function trace(g, map, points) {
+  g.beginPath();
+  points.forEach(([x, z], i) => {
+    const [px, py] = map.px(x, z);
+    if (i) g.lineTo(px, py);
+    else g.moveTo(px, py);
+  });
+}
+
+/** The agent nearest a canvas point, within 24 px (a finger's reach). */
+export function nearest(map, px, py, sample) {
+  if (!map || !sample) return null;
+  let best = null, bestD = 24;
+  for (const a of sample.agents) {
+    const [x, y] = map.px(a.position[0], a.position[1]);
+    const d = Math.hypot(x - px, y - py);
+    if (d < bestD) { best = a.id; bestD = d; }
+  }
+  return best;
+}
+
 /** An agent as an oriented marker: a disc with a nose toward its heading, and a label. */
 export function marker(g, map, position, heading, { fill, label, selected }) {
   const [x, y] = map.px(position[0], position[1]);

@@ -1,7 +1,7 @@
 // Fly balls (baseball and cricket): the field from above with the ball, its shadow and
 // height, the fielders with their trails and strategies, caught and missed balls
 // marked; a side view of the flight; and the selected fielder's eye (eye.js).
-import { $, FieldMap, fitCanvas, marker, plotFrame } from "./draw.js";
+import { $, FieldMap, fitCanvas, marker, nearest, plotFrame, trace } from "./draw.js";
 import { drawEye, opticalSamples } from "./eye.js";
 
 /** How long a catch or a miss stays marked on the field, in match seconds. */
@@ -103,9 +103,7 @@ export class FlyView {
       if (points.length < 2) continue;
       g.strokeStyle = a.id === selected ? "#ffd400" : "rgba(255,255,255,.55)";
       g.lineWidth = a.id === selected ? 2.5 : 1.5;
-      g.beginPath();
-      g.moveTo(...map.px(...points[0]));
-      for (const p of points) g.lineTo(...map.px(...p));
+      trace(g, map, points);
       g.stroke();
     }
     for (const a of sample.agents) {
@@ -121,8 +119,7 @@ export class FlyView {
   drawDiamond(g, map) {
     const f = this.field, r = f.fence_m, b = f.base_path_m;
     const poly = (points, fill, stroke) => {
-      g.beginPath();
-      points.forEach((p, i) => (i ? g.lineTo(...map.px(...p)) : g.moveTo(...map.px(...p))));
+      trace(g, map, points);
       g.closePath();
       if (fill) { g.fillStyle = fill; g.fill(); }
       if (stroke) { g.strokeStyle = stroke; g.stroke(); }
@@ -137,13 +134,13 @@ export class FlyView {
     poly([[0, 0], [b, 0], [b, b], [0, b]], "#4c9a45", "#fff");
     g.lineWidth = 3;
     g.strokeStyle = "#f0e6c8";
-    g.beginPath();
-    arc(r).forEach((p, i) => (i ? g.lineTo(...map.px(...p)) : g.moveTo(...map.px(...p))));
+    trace(g, map, arc(r));
     g.stroke();
     g.lineWidth = 1.5;
     g.strokeStyle = "#fff";
     for (const end of [[r, 0], [0, r]]) {
-      g.beginPath(); g.moveTo(...map.px(0, 0)); g.lineTo(...map.px(...end)); g.stroke();
+      trace(g, map, [[0, 0], end]);
+      g.stroke();
     }
     g.fillStyle = "#fff";
     for (const base of [[0, 0], [b, 0], [b, b], [0, b]]) {
@@ -164,9 +161,7 @@ export class FlyView {
     // The pitch runs from the batter's stumps to the bowler's, 3.05 m wide.
     const w = 1.525;
     g.fillStyle = "#d9c38f";
-    g.beginPath();
-    [[0, -w], [-f.pitch_length_m, -w], [-f.pitch_length_m, w], [0, w]]
-      .forEach((p, i) => (i ? g.lineTo(...map.px(...p)) : g.moveTo(...map.px(...p))));
+    trace(g, map, [[0, -w], [-f.pitch_length_m, -w], [-f.pitch_length_m, w], [0, w]]);
     g.closePath(); g.fill();
   }
 
@@ -241,16 +236,4 @@ export class FlyView {
       g.fillRect(x - 2, y - (a.id === selected ? 18 : 12), 4, a.id === selected ? 18 : 12);
     }
   }
-}
-
-/** The agent nearest a canvas point, within 24 px. */
-export function nearest(map, px, py, sample) {
-  if (!map || !sample) return null;
-  let best = null, bestD = 24;
-  for (const a of sample.agents) {
-    const [x, y] = map.px(a.position[0], a.position[1]);
-    const d = Math.hypot(x - px, y - py);
-    if (d < bestD) { best = a.id; bestD = d; }
-  }
-  return best;
 }

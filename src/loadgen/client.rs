@@ -37,9 +37,9 @@ pub struct Log {
     pub bytes: u64,
 }
 
-/// Shared by a round's spectators.
+/// What a round's spectators share.
 #[derive(Debug, Clone)]
-pub struct Round {
+pub struct Shared {
     /// Handshakes allowed in flight.
     pub gate: Arc<tokio::sync::Semaphore>,
     /// Spectators done connecting, whether they made it or not.
@@ -55,7 +55,7 @@ fn now_us() -> u64 {
 }
 
 /// Runs one spectator until `stop`; `None` if it never connected.
-pub async fn spectate(target: Target, round: Round) -> Option<Log> {
+pub async fn spectate(target: Target, round: Shared) -> Option<Log> {
     let connected = {
         let _permit = round.gate.acquire().await.ok()?;
         let socket = connect(&target).await;

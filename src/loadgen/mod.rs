@@ -136,7 +136,7 @@ pub fn run(plan: &Plan) -> anyhow::Result<Vec<Round>> {
 
 async fn round(plan: &Plan, server: &servers::Running, n: usize) -> anyhow::Result<Round> {
     tracing::info!(server = server.name, spectators = n, "connecting");
-    let shared = client::Round {
+    let shared = client::Shared {
         gate: Arc::new(tokio::sync::Semaphore::new(CONNECTING_AT_ONCE)),
         settled: Arc::new(AtomicUsize::new(0)),
         measuring: Arc::new(AtomicBool::new(false)),

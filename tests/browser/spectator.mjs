@@ -40,6 +40,11 @@ function cleanup() {
 
 function check(ok, what) {
   if (!ok) throw new Error(what);
+  passed(what);
+}
+
+/** Says a check passed whose failure would have thrown already (a wait that timed out). */
+function passed(what) {
   console.log(`ok: ${what.split(":")[0]}`);
 }
 
@@ -88,9 +93,9 @@ async function main() {
   for (const id of ["demo-baseball", "demo-cricket", "demo-basketball"]) {
     await page.locator(`#matches a[href="#/matches/${id}"]`).waitFor({ timeout: 10_000 });
   }
-  check(true, "lobby: lists the three demo matches as links");
+  passed("lobby: lists the three demo matches as links");
   await page.locator(`#replays a[href^="#/replays/demo-baseball-"]`).waitFor({ timeout: 10_000 });
-  check(true, "lobby: lists the demo matches' replays");
+  passed("lobby: lists the demo matches' replays");
   const scoreText = await page.locator(`#matches tr:has(a[href="#/matches/demo-basketball"])`).textContent();
   check(/pts in \d+ possessions/.test(scoreText), `lobby: shows the basketball score: ${scoreText}`);
   await shot("lobby");
@@ -118,7 +123,7 @@ async function main() {
     return /lf \(chapman\): tan ψ rises [\d.]+\/s, straightness R² [\d.]+/.test(text) && ink > 4000 && side > 1000 &&
       { text, ink, side };
   }, 30_000, "eye: the fielder's-eye panel explains tan ψ and both plots are drawn");
-  check(true, `eye: the fielder's-eye panel is drawn (${eye.ink} pixels inked) and explained: ${eye.text}`);
+  passed(`eye: the fielder's-eye panel is drawn (${eye.ink} pixels inked) and explained: ${eye.text}`);
   await page.waitForTimeout(1500);
   await shot("baseball-flight");
   // The flight ends caught or on the ground, and the panel and the log say which.
@@ -133,7 +138,7 @@ async function main() {
   // Picking another fielder from the list re-labels the panel.
   await page.selectOption("#agent", "cf");
   await page.waitForFunction(() => document.getElementById("eye-text").textContent.includes("cf (lot-optical)"), null, { timeout: 5_000 });
-  check(true, "eye: picking cf shows its view");
+  passed("eye: picking cf shows its view");
 
   // Reloading the URL comes back to the same view.
   await page.reload();
@@ -193,7 +198,7 @@ async function main() {
   const target = Math.floor(last / 2);
   await page.locator("#seek").evaluate((el, t) => { el.value = t; el.dispatchEvent(new Event("change")); }, target);
   await page.waitForFunction((t) => Math.abs(Number(document.getElementById("hud-tick")?.textContent) - t) < 40, target, { timeout: 5_000 });
-  check(true, `replay: seeking to tick ${target} shows that moment`);
+  passed(`replay: seeking to tick ${target} shows that moment`);
   await page.click("#play");
   await page.waitForFunction(() => document.getElementById("hud-playback")?.textContent.startsWith("paused"), null, { timeout: 2_000 });
   const paused = await tick();
@@ -225,11 +230,11 @@ async function main() {
   await page.locator("#hud-tick").waitFor({ timeout: 10_000 });
   server.kill("SIGTERM");
   await page.waitForFunction(() => document.querySelector("#hud .state").dataset.state === "retrying", null, { timeout: 10_000 });
-  check(true, "reconnect: the HUD shows the server gone");
+  passed("reconnect: the HUD shows the server gone");
   await shot("disconnected");
   server = await startServer(port);
   await page.waitForFunction(() => document.querySelector("#hud .state").dataset.state === "live", null, { timeout: 20_000 });
-  check(true, "reconnect: the page reconnects by itself when the server is back");
+  passed("reconnect: the page reconnects by itself when the server is back");
 
   // A replay link still works after the restart (same replay directory).
   await page.goto(`${base}/${replayHref}`);
