@@ -2,7 +2,7 @@
 //!
 //! # Layout
 //!
-//! Everything but [`server`] and [`replay`]'s file handling is the deterministic
+//! Everything but [`server`], [`loadgen`] and [`replay`]'s file handling is the deterministic
 //! simulation core: no clock, no threads of its own (a sweep may fan work out with
 //! rayon, but its results never depend on it), and no I/O except reading motion capture
 //! and the cost-map cache at start-up. The same inputs give the same bits on the same
