@@ -10,6 +10,9 @@ pub mod fly;
 pub mod hoops;
 pub mod scenario;
 
+#[cfg(test)]
+mod hostile_tests;
+
 pub use scenario::{
     AgentSpec, LaunchSpec, LimitsSpec, Mode, Options, Scenario, ScenarioError, Sport,
 };
