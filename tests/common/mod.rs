@@ -3,6 +3,8 @@
 // Each test binary uses the part of this it needs.
 #![allow(dead_code)]
 
+pub mod server;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
