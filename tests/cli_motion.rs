@@ -105,6 +105,10 @@ fn a_corrupt_clip_is_reported_and_the_rest_still_load() {
     }
     let good = std::fs::read_to_string(mocap().join("run/16_41.bvh")).unwrap();
     std::fs::write(run.join("16_41.bvh"), &good[..good.len() / 2]).unwrap();
+    // A number spoilt on line 300 (a frame line) is reported at that line.
+    let mut lines: Vec<&str> = good.lines().collect();
+    lines[299] = "0.0 1.5e NaNish";
+    std::fs::write(run.join("16_99.bvh"), lines.join("\n")).unwrap();
     let out = fieldhouse(&format!(
         "motion-graph --mocap {} --behaviour run --json",
         dir.0.display()
@@ -117,6 +121,10 @@ fn a_corrupt_clip_is_reported_and_the_rest_still_load() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         err.contains("16_41.bvh:") && err.contains("clip skipped"),
+        "{err}"
+    );
+    assert!(
+        err.contains("16_99.bvh:300: expected 96 channel values"),
         "{err}"
     );
     let doc: Value = serde_json::from_slice(&out.stdout).unwrap();

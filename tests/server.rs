@@ -72,7 +72,6 @@ async fn demo_matches_are_listed_and_stream_schema_valid_frames() {
     assert!(metrics.contains("fieldhouse_tick_duration_seconds_bucket"));
 }
 
-
 fn agent<'a>(frame: &'a Value, id: &str) -> &'a Value {
     frame["agents"]
         .as_array()
@@ -571,8 +570,6 @@ async fn the_reference_bot_plays_a_match_to_its_end() {
     assert!(!refused.status.success());
     assert!(String::from_utf8_lossy(&refused.stderr).contains("refused"));
 }
-
-/// A directory under the test target directory, gone before the test starts.
 
 /// `fieldhouse replay verify FILE` must succeed.
 fn assert_verifies(file: &std::path::Path) {

@@ -28,6 +28,14 @@ pub struct ServeArgs {
     /// frames sent live, for measuring latency on the same host (`fieldhouse loadgen`).
     #[arg(long)]
     stamp_frames: bool,
+    /// Also let pages from this origin open WebSockets (scheme://host[:port], or * for
+    /// any; repeatable). The server's own page always may; clients that send no Origin,
+    /// like bots, are not browsers and are not checked.
+    #[arg(long = "allow-origin", value_name = "ORIGIN")]
+    allow_origins: Vec<String>,
+    /// Most WebSockets one client address may hold open at once (default 256).
+    #[arg(long, value_name = "N")]
+    max_connections_per_ip: Option<usize>,
     /// A TOML file of server settings (addr, max_matches, max_message_bytes,
     /// bot_messages_per_second, bot_burst, send_timeout_ms, ...); flags override it.
     #[arg(long, value_name = "FILE")]
@@ -53,6 +61,11 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
     if let Some(dir) = args.replay_dir {
         config.replay_dir = Some(dir);
     }
+    config.allowed_origins.extend(args.allow_origins);
+    if let Some(n) = args.max_connections_per_ip {
+        config.max_connections_per_ip = n;
+    }
+    config.check().map_err(anyhow::Error::msg)?;
     if let Some(dir) = &config.replay_dir {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create the replay directory {}", dir.display()))?;

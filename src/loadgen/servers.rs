@@ -38,7 +38,9 @@ impl Running {
         std::fs::write(
             &config,
             format!(
-                "demo = false\nstamp_frames = true\nmax_matches = {}\n",
+                "demo = false\nstamp_frames = true\nmax_matches = {}\n\
+                 # Every simulated spectator comes from 127.0.0.1.\n\
+                 max_connections_per_ip = 100000\n",
                 matches.max(1)
             ),
         )

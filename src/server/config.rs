@@ -1,6 +1,7 @@
 //! The server's settings: defaults that suit a laptop, overridable by a TOML file
 //! (`serve --config FILE`) and by flags.
 
+use super::admission::valid_origin;
 use serde::Deserialize;
 use std::net::SocketAddr;
 use std::path::Path;
@@ -33,6 +34,12 @@ pub struct ServerConfig {
     /// frame latency (`fieldhouse loadgen` does). Replays keep the frames without it:
     /// a clock reading is no part of what a match computes.
     pub stamp_frames: bool,
+    /// Origins (`https://host[:port]`, or `*` for any) whose pages may open WebSockets
+    /// here besides the server's own. Clients that send no `Origin` (bots, tools) are
+    /// not browsers and are let in; their tokens guard what matters.
+    pub allowed_origins: Vec<String>,
+    /// Most WebSockets one client address may hold open at once.
+    pub max_connections_per_ip: usize,
 }
 
 impl Default for ServerConfig {
@@ -49,6 +56,8 @@ impl Default for ServerConfig {
             max_body_bytes: 64 * 1024,
             replay_dir: None,
             stamp_frames: false,
+            allowed_origins: Vec::new(),
+            max_connections_per_ip: 256,
         }
     }
 }
@@ -61,15 +70,39 @@ impl ServerConfig {
         let de = toml::Deserializer::new(&text);
         let config: ServerConfig = serde_path_to_error::deserialize(de)
             .map_err(|e| format!("{}: {}: {}", path.display(), e.path(), e.inner().message()))?;
-        if config.max_message_bytes < 256
-            || config.bot_messages_per_second == 0
-            || config.max_matches == 0
-        {
+        config
+            .check()
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        Ok(config)
+    }
+
+    /// Checks values the types allow but the server cannot use; the error names the
+    /// field.
+    pub fn check(&self) -> Result<(), String> {
+        let at_least = |field: &str, value: u64, min: u64| {
+            if value < min {
+                Err(format!("{field}: must be at least {min}, not {value}"))
+            } else {
+                Ok(())
+            }
+        };
+        at_least("max_message_bytes", self.max_message_bytes as u64, 256)?;
+        at_least(
+            "bot_messages_per_second",
+            self.bot_messages_per_second.into(),
+            1,
+        )?;
+        at_least("max_matches", self.max_matches as u64, 1)?;
+        at_least(
+            "max_connections_per_ip",
+            self.max_connections_per_ip as u64,
+            1,
+        )?;
+        if let Some(bad) = self.allowed_origins.iter().find(|o| !valid_origin(o)) {
             return Err(format!(
-                "{}: max_message_bytes must be at least 256, bot_messages_per_second and max_matches at least 1",
-                path.display()
+                "allowed_origins: \"{bad}\" is not an origin; write scheme://host[:port] (https://example.com) or *"
             ));
         }
-        Ok(config)
+        Ok(())
     }
 }

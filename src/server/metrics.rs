@@ -28,6 +28,8 @@ pub struct Metrics {
     pub closed_for_rate: AtomicU64,
     pub slow_clients_dropped: AtomicU64,
     pub replay_errors: AtomicU64,
+    pub refused_origin: AtomicU64,
+    pub refused_per_ip: AtomicU64,
 }
 
 impl Metrics {
@@ -125,6 +127,12 @@ impl Metrics {
             "# HELP fieldhouse_connections Open WebSocket connections by role.\n# TYPE fieldhouse_connections gauge\nfieldhouse_connections{{role=\"spectator\"}} {}\nfieldhouse_connections{{role=\"bot\"}} {}",
             self.spectators.load(Relaxed),
             self.bots.load(Relaxed)
+        );
+        let _ = writeln!(
+            out,
+            "# HELP fieldhouse_sockets_refused_total WebSocket requests refused before the upgrade, by reason.\n# TYPE fieldhouse_sockets_refused_total counter\nfieldhouse_sockets_refused_total{{reason=\"origin\"}} {}\nfieldhouse_sockets_refused_total{{reason=\"per_ip\"}} {}",
+            self.refused_origin.load(Relaxed),
+            self.refused_per_ip.load(Relaxed)
         );
         let _ = writeln!(out, "# HELP fieldhouse_tick_duration_seconds Time to simulate one tick.\n# TYPE fieldhouse_tick_duration_seconds histogram");
         let mut cumulative = 0;

@@ -10,10 +10,12 @@
 //! * [`replays`]: recorded matches: listed, downloaded, played with controls.
 //! * [`api`]: the REST API, health, readiness and metrics.
 //! * [`auth`]: tokens, compared in constant time.
+//! * [`admission`]: who may open a WebSocket: origin policy, connections per address.
 //! * [`metrics`]: Prometheus counters.
 //! * [`demo`]: the built-in demo matches.
 //! * [`web`]: the spectator page from `web/`, embedded in the binary.
 
+pub mod admission;
 pub mod api;
 pub mod auth;
 pub mod config;
@@ -70,6 +72,7 @@ pub async fn serve(
         shutdown: stop_rx,
         next_conn: AtomicU64::new(0),
         replay_dir: config.replay_dir.clone(),
+        connections: admission::Connections::default(),
     });
     if config.demo {
         demo::start_all(&app);
@@ -82,7 +85,9 @@ pub async fn serve(
         // Give sockets a moment to send their close frames.
         tokio::time::sleep(Duration::from_millis(200)).await;
     };
-    let served = axum::serve(listener, router)
+    // Sockets are counted per client address, so handlers need the peer's.
+    let service = router.into_make_service_with_connect_info::<std::net::SocketAddr>();
+    let served = axum::serve(listener, service)
         .with_graceful_shutdown(graceful)
         .await;
     // The matches have ended by now: the graceful shutdown gave them 200 ms after the
@@ -117,6 +122,12 @@ pub fn router(app: Arc<AppState>) -> Router {
         .route("/web/{file}", get(web::file))
         .fallback(api::fallback)
         .layer(axum::middleware::map_response(api::json_errors))
-        .layer(TraceLayer::new_for_http())
+        // Requests are logged by path only: a bot's token may ride in the query string
+        // (`?token=T`), and no token may reach the logs.
+        .layer(TraceLayer::new_for_http().make_span_with(
+            |request: &axum::http::Request<axum::body::Body>| {
+                tracing::debug_span!("request", method = %request.method(), path = %request.uri().path())
+            },
+        ))
         .with_state(app)
 }

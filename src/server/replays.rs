@@ -2,19 +2,21 @@
 //! WebSocket with the live protocol (`hello`, `frame`s, `end`) plus the client's
 //! `control` messages: play, pause, speed (0.25× to 8×), seek to a tick.
 
+use super::admission::admit;
 use super::api::ApiError;
 use super::state::AppState;
-use super::ws::{classify, shut, Read, GOING_AWAY, TOO_BIG};
+use super::ws::{classify, shut, upgrade, Read, GOING_AWAY, TOO_BIG};
 use crate::protocol::{encode, End, ErrorMessage};
 use crate::replay::{self, Replay};
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
-use axum::extract::{Path, State};
-use axum::http::StatusCode;
+use axum::extract::{ConnectInfo, Path, State};
+use axum::http::{HeaderMap, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::Json;
 use futures_util::{SinkExt, StreamExt};
 use serde::Deserialize;
 use serde_json::{json, Value};
+use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
@@ -118,8 +120,14 @@ pub async fn download(
 pub async fn watch(
     ws: WebSocketUpgrade,
     Path(id): Path<String>,
+    ConnectInfo(peer): ConnectInfo<SocketAddr>,
+    headers: HeaderMap,
     State(app): State<Arc<AppState>>,
 ) -> Response {
+    let admitted = match admit(&app, peer.ip(), &headers) {
+        Ok(a) => a,
+        Err(e) => return e.into_response(),
+    };
     let path = match file_of(&app, &id) {
         Ok(p) => p,
         Err(e) => return e.into_response(),
@@ -142,8 +150,10 @@ pub async fn watch(
                 .into_response()
         }
     };
-    ws.max_message_size(app.config.max_message_bytes)
-        .on_upgrade(move |socket| play(socket, replay, id, app))
+    upgrade(ws, &app).on_upgrade(move |socket| async move {
+        play(socket, replay, id, app).await;
+        drop(admitted);
+    })
 }
 
 /// What a replay viewer may ask.

@@ -73,6 +73,8 @@ pub struct AppState {
     pub next_conn: AtomicU64,
     /// Where matches are recorded, if anywhere.
     pub replay_dir: Option<std::path::PathBuf>,
+    /// Open WebSockets per client address.
+    pub connections: super::admission::Connections,
 }
 
 impl AppState {

@@ -8,17 +8,19 @@
 //! oversized message closes it with 1009, flooding with 1008. On shutdown every match
 //! ends: its sockets get `end` and close with 1001.
 
+use super::admission::admit;
 use super::api::ApiError;
 use super::auth;
 use super::state::{AppState, Control, MatchEntry};
 use crate::protocol::{decode, encode, ClientMessage, ErrorMessage, Hello, Limits};
 use axum::extract::ws::{CloseFrame, Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
-use axum::extract::{Path, Query, State};
+use axum::extract::{ConnectInfo, Path, Query, State};
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 use futures_util::stream::{SplitSink, SplitStream};
 use futures_util::{SinkExt, StreamExt};
 use std::collections::HashMap;
+use std::net::SocketAddr;
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -40,7 +42,7 @@ fn limits(app: &AppState) -> Limits {
     }
 }
 
-fn upgrade(ws: WebSocketUpgrade, app: &AppState) -> WebSocketUpgrade {
+pub(super) fn upgrade(ws: WebSocketUpgrade, app: &AppState) -> WebSocketUpgrade {
     ws.max_message_size(app.config.max_message_bytes)
         .max_frame_size(app.config.max_message_bytes)
         .read_buffer_size(SOCKET_BUFFER_BYTES)
@@ -141,12 +143,21 @@ pub(super) async fn shut(
 pub async fn spectate(
     ws: WebSocketUpgrade,
     Path(id): Path<String>,
+    ConnectInfo(peer): ConnectInfo<SocketAddr>,
+    headers: HeaderMap,
     State(app): State<Arc<AppState>>,
 ) -> Response {
+    let admitted = match admit(&app, peer.ip(), &headers) {
+        Ok(a) => a,
+        Err(e) => return e.into_response(),
+    };
     let Some(entry) = app.get(&id) else {
         return ApiError::not_found(&id).into_response();
     };
-    upgrade(ws, &app).on_upgrade(move |socket| spectator(socket, entry, app))
+    upgrade(ws, &app).on_upgrade(move |socket| async move {
+        spectator(socket, entry, app).await;
+        drop(admitted);
+    })
 }
 
 async fn spectator(socket: WebSocket, entry: Arc<MatchEntry>, app: Arc<AppState>) {
@@ -268,9 +279,14 @@ pub async fn play(
     ws: WebSocketUpgrade,
     Path(id): Path<String>,
     Query(query): Query<HashMap<String, String>>,
+    ConnectInfo(peer): ConnectInfo<SocketAddr>,
     headers: HeaderMap,
     State(app): State<Arc<AppState>>,
 ) -> Response {
+    let admitted = match admit(&app, peer.ip(), &headers) {
+        Ok(a) => a,
+        Err(e) => return e.into_response(),
+    };
     let Some(entry) = app.get(&id) else {
         return ApiError::not_found(&id).into_response();
     };
@@ -294,7 +310,10 @@ pub async fn play(
     if entry.ended.load(Relaxed) {
         return ApiError::gone(&id).into_response();
     }
-    upgrade(ws, &app).on_upgrade(move |socket| bot(socket, entry, app, k, agent))
+    upgrade(ws, &app).on_upgrade(move |socket| async move {
+        bot(socket, entry, app, k, agent).await;
+        drop(admitted);
+    })
 }
 
 /// A token bucket: `rate` messages a second, `burst` at once.

@@ -181,7 +181,6 @@ pub async fn next_of(socket: &mut Socket, kind: &str) -> Value {
     }
 }
 
-
 pub fn fielder_with_bot(mode: &str, deadline_ms: u64) -> Value {
     json!({
         "sport": "baseball",
@@ -195,6 +194,7 @@ pub fn fielder_with_bot(mode: &str, deadline_ms: u64) -> Value {
     })
 }
 
+/// A directory under the test target directory, gone before the test starts.
 pub fn empty_dir(name: &str) -> std::path::PathBuf {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
     let _ = std::fs::remove_dir_all(&dir);

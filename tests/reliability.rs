@@ -1,0 +1,253 @@
+//! Hostile clients and failing disks against the real binary: who may open sockets
+//! (origin policy, connections per address), what reaches the logs, and a replay
+//! directory that fills up or disappears under a running match. RELIABILITY.md lists
+//! each case with the test that covers it.
+
+mod common;
+
+use common::server::*;
+use serde_json::Value;
+use std::time::{Duration, Instant};
+use tokio_tungstenite::tungstenite::client::IntoClientRequest;
+use tokio_tungstenite::tungstenite::Error as WsError;
+
+/// Opens a WebSocket sending `origin`, if any: the socket, or the HTTP status of the
+/// refusal.
+async fn open(url: &str, origin: Option<&str>) -> Result<Socket, u16> {
+    let mut request = url.into_client_request().unwrap();
+    if let Some(origin) = origin {
+        request
+            .headers_mut()
+            .insert("origin", origin.parse().unwrap());
+    }
+    match tokio_tungstenite::connect_async(request).await {
+        Ok((socket, _)) => Ok(socket),
+        Err(WsError::Http(response)) => Err(response.status().as_u16()),
+        Err(e) => panic!("{url}: {e}"),
+    }
+}
+
+fn metric(server: &Server, name: &str) -> f64 {
+    let text = ureq::get(&server.http("/metrics"))
+        .call()
+        .unwrap()
+        .into_string()
+        .unwrap();
+    text.lines()
+        .find_map(|l| l.strip_prefix(name)?.trim().parse().ok())
+        .unwrap_or_else(|| panic!("{name} in /metrics:\n{text}"))
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn pages_from_other_origins_are_refused_unless_allowed() {
+    let server = Server::start(&["--allow-origin", "https://friend.example"]);
+    let url = server.ws("/ws/matches/demo-baseball");
+    let own = format!("http://{}", server.addr);
+    // Not a browser, the server's own page, an allowed origin: let in.
+    for origin in [None, Some(own.as_str()), Some("https://friend.example")] {
+        let mut socket = open(&url, origin)
+            .await
+            .unwrap_or_else(|status| panic!("origin {origin:?} was refused with {status}"));
+        assert_eq!(next(&mut socket).await["type"], "hello");
+    }
+    // Any other page: refused before the upgrade, on every socket route.
+    for path in [
+        "/ws/matches/demo-baseball",
+        "/ws/matches/demo-baseball/play?token=x",
+        "/ws/replays/x",
+    ] {
+        let refused = open(&server.ws(path), Some("https://evil.example")).await;
+        assert_eq!(refused.err(), Some(403), "{path}");
+    }
+    // Another port on the same host is another origin.
+    let other_port = format!("http://{}:1", server.addr.split(':').next().unwrap());
+    assert_eq!(open(&url, Some(&other_port)).await.err(), Some(403));
+    assert_eq!(
+        metric(
+            &server,
+            "fieldhouse_sockets_refused_total{reason=\"origin\"}"
+        ),
+        4.0
+    );
+    // The matches went on.
+    let before = server.tick("demo-baseball");
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    assert!(server.tick("demo-baseball") > before);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn one_address_holds_at_most_its_share_of_sockets() {
+    let server = Server::start(&["--max-connections-per-ip", "3"]);
+    let url = server.ws("/ws/matches/demo-cricket");
+    let mut held = Vec::new();
+    for _ in 0..3 {
+        let mut socket = open(&url, None).await.expect("within the cap");
+        next_of(&mut socket, "frame").await;
+        held.push(socket);
+    }
+    assert_eq!(open(&url, None).await.err(), Some(429));
+    assert_eq!(
+        open(&server.ws("/ws/replays/x"), None).await.err(),
+        Some(429),
+        "replay viewers count too"
+    );
+    // The sockets held are unharmed, and closing one frees its place.
+    for socket in &mut held {
+        next_of(socket, "frame").await;
+    }
+    held.pop().unwrap().close(None).await.unwrap();
+    let deadline = Instant::now() + Duration::from_secs(5);
+    let mut again = loop {
+        match open(&url, None).await {
+            Ok(socket) => break socket,
+            Err(429) if Instant::now() < deadline => {
+                tokio::time::sleep(Duration::from_millis(50)).await
+            }
+            Err(status) => panic!("a freed place was not given back: {status}"),
+        }
+    };
+    next_of(&mut again, "frame").await;
+    assert!(
+        metric(
+            &server,
+            "fieldhouse_sockets_refused_total{reason=\"per_ip\"}"
+        ) >= 2.0
+    );
+}
+
+#[test]
+fn bad_limits_are_refused_naming_the_setting() {
+    let bad_origin = common::failure("serve --no-demo --allow-origin friend.example");
+    assert!(
+        bad_origin.contains("allowed_origins") && bad_origin.contains("friend.example"),
+        "{bad_origin}"
+    );
+    let zero = common::failure("serve --no-demo --max-connections-per-ip 0");
+    assert!(zero.contains("max_connections_per_ip"), "{zero}");
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("bad-limits");
+    std::fs::create_dir_all(&dir).unwrap();
+    let config = dir.join("server.toml");
+    std::fs::write(
+        &config,
+        "allowed_origins = [\"https://ok.example\", \"https://x.example/path\"]\n",
+    )
+    .unwrap();
+    let err = common::failure(&format!("serve --config {}", config.display()));
+    assert!(
+        err.contains("server.toml") && err.contains("allowed_origins"),
+        "{err}"
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn no_token_reaches_the_logs_even_at_trace_level() {
+    let server = Server::launch(&[], "trace", &["--no-demo"]);
+    let (id, token, mut bot) = server.play_cf("realtime", 1000).await;
+    next_of(&mut bot, "perception").await;
+    // A wrong token, and the admin token, go through the logs' reach as well.
+    let refused = open(
+        &server.ws(&format!(
+            "/ws/matches/{id}/play?token=0123456789abcdef0123456789abcdef"
+        )),
+        None,
+    )
+    .await;
+    assert_eq!(refused.err(), Some(403));
+    ureq::delete(&server.http(&format!("/api/matches/{id}")))
+        .set("Authorization", &format!("Bearer {ADMIN}"))
+        .call()
+        .unwrap();
+    next_of(&mut bot, "end").await;
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let log = server.log.lock().unwrap().join("\n");
+    assert!(log.contains("/ws/matches/"), "requests are logged:\n{log}");
+    for secret in [token.as_str(), ADMIN, "0123456789abcdef0123456789abcdef"] {
+        assert!(!log.contains(secret), "a token reached the log");
+    }
+}
+
+/// `serve` with its replay directory on a tmpfs of `kib` KiB in a mount namespace of
+/// its own (the test runs as root, as CI does; `unshare` is util-linux's).
+fn server_on_a_small_disk(dir: &std::path::Path, kib: u32) -> Server {
+    std::fs::create_dir_all(dir).unwrap();
+    let mount = format!(
+        "mount -t tmpfs -o size={kib}k tmpfs '{}' && exec \"$0\" \"$@\"",
+        dir.display()
+    );
+    let dir = dir.to_str().unwrap();
+    Server::launch(
+        &["unshare", "-m", "sh", "-c", &mount],
+        "info",
+        &["--replay-dir", dir],
+    )
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_full_replay_disk_stops_the_recording_not_the_match() {
+    // Three demo matches write about 45 KB of frames a second: 64 KiB fills at once.
+    let server = server_on_a_small_disk(&empty_dir("full-disk"), 64);
+    let mut spectator = open(&server.ws("/ws/matches/demo-baseball"), None)
+        .await
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let failed = loop {
+        let matches = server.get("/api/matches")["matches"].clone();
+        let failed: Vec<Value> = matches
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|m| !m["replay_error"].is_null())
+            .cloned()
+            .collect();
+        if !failed.is_empty() {
+            break failed;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "no replay error reported: {matches}"
+        );
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    };
+    let why = failed[0]["replay_error"].as_str().unwrap();
+    assert!(
+        why.contains("No space left") || why.contains("os error 28"),
+        "{why}"
+    );
+    assert!(metric(&server, "fieldhouse_replay_errors_total") >= 1.0);
+    let log = server.log.lock().unwrap().join("\n");
+    assert!(
+        log.contains("replay recording stopped") || log.contains("cannot record"),
+        "{log}"
+    );
+    // Every match still ticks and still streams.
+    let id = failed[0]["id"].as_str().unwrap();
+    let before = server.tick(id);
+    let frame = next_of(&mut spectator, "frame").await;
+    let later = next_of(&mut spectator, "frame").await;
+    assert!(later["tick"].as_u64() > frame["tick"].as_u64());
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    assert!(server.tick(id) > before, "{id} stopped ticking");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_replay_directory_that_vanishes_leaves_new_matches_unrecorded_but_running() {
+    let dir = empty_dir("vanishing-replays");
+    let _ = std::fs::remove_file(&dir); // left by an earlier run
+    std::fs::create_dir_all(&dir).unwrap();
+    let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
+    // An operator's mistake: the directory is replaced by a file. (Root ignores
+    // permission bits, so a read-only directory would not stop this test's writes.)
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::write(&dir, "not a directory").unwrap();
+    let (id, _) = server.create(serde_json::json!({"sport": "cricket"}));
+    let shown = server.get(&format!("/api/matches/{id}"));
+    let why = shown["replay_error"]
+        .as_str()
+        .expect("the API shows the error");
+    assert!(why.starts_with("cannot create"), "{why}");
+    assert!(shown["replay"].is_null());
+    assert_eq!(metric(&server, "fieldhouse_replay_errors_total"), 1.0);
+    let before = server.tick(&id);
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    assert!(server.tick(&id) > before);
+}
