@@ -36,6 +36,19 @@ pub struct ServeArgs {
     /// Most WebSockets one client address may hold open at once (default 256).
     #[arg(long, value_name = "N")]
     max_connections_per_ip: Option<usize>,
+    /// Run as an Agones game server: say Ready to the SDK sidecar once listening, ping
+    /// Health every 2 s, and ask for Shutdown (then exit) once every match has ended
+    /// or on SIGTERM. Usually with --no-demo, the matches created by an allocator.
+    #[arg(long)]
+    agones: bool,
+    /// The Agones SDK sidecar's REST port (Agones sets AGONES_SDK_HTTP_PORT).
+    #[arg(
+        long,
+        value_name = "PORT",
+        env = "AGONES_SDK_HTTP_PORT",
+        default_value_t = 9358
+    )]
+    agones_sdk_port: u16,
     /// A TOML file of server settings (addr, max_matches, max_message_bytes,
     /// bot_messages_per_second, bot_burst, send_timeout_ms, ...); flags override it.
     #[arg(long, value_name = "FILE")]
@@ -62,6 +75,7 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
         config.replay_dir = Some(dir);
     }
     config.allowed_origins.extend(args.allow_origins);
+    config.agones_sdk_port = args.agones.then_some(args.agones_sdk_port);
     if let Some(n) = args.max_connections_per_ip {
         config.max_connections_per_ip = n;
     }

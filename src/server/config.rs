@@ -40,6 +40,10 @@ pub struct ServerConfig {
     pub allowed_origins: Vec<String>,
     /// Most WebSockets one client address may hold open at once.
     pub max_connections_per_ip: usize,
+    /// Run as an Agones game server, talking to the SDK sidecar on this port (`serve
+    /// --agones`; not a file setting: it is where the process runs, not how).
+    #[serde(skip)]
+    pub agones_sdk_port: Option<u16>,
 }
 
 impl Default for ServerConfig {
@@ -58,6 +62,7 @@ impl Default for ServerConfig {
             stamp_frames: false,
             allowed_origins: Vec::new(),
             max_connections_per_ip: 256,
+            agones_sdk_port: None,
         }
     }
 }

@@ -13,9 +13,11 @@
 //! * [`admission`]: who may open a WebSocket: origin policy, connections per address.
 //! * [`metrics`]: Prometheus counters.
 //! * [`demo`]: the built-in demo matches.
+//! * [`agones`]: running as an Agones game server (Ready, Health, Shutdown).
 //! * [`web`]: the spectator page from `web/`, embedded in the binary.
 
 pub mod admission;
+pub mod agones;
 pub mod api;
 pub mod auth;
 pub mod config;
@@ -77,9 +79,22 @@ pub async fn serve(
     if config.demo {
         demo::start_all(&app);
     }
+    let agones = config.agones_sdk_port.map(agones::Sdk::on_port);
+    if let Some(sdk) = &agones {
+        tokio::spawn(sdk.clone().ready_then_healthy(app.shutdown.clone()));
+    }
     let router = router(app.clone());
+    // Under Agones the server is done once its matches are; elsewhere it serves until
+    // told to stop.
+    let done = agones.is_some().then(|| agones::matches_done(app.clone()));
     let graceful = async move {
-        shutdown.await;
+        match done {
+            Some(done) => tokio::select! {
+                _ = shutdown => {}
+                _ = done => tracing::info!("every match has ended"),
+            },
+            None => shutdown.await,
+        }
         tracing::info!("shutting down: ending matches and closing sockets");
         let _ = stop_tx.send(true);
         // Give sockets a moment to send their close frames.
@@ -93,6 +108,9 @@ pub async fn serve(
     // The matches have ended by now: the graceful shutdown gave them 200 ms after the
     // stop, and a match ends at the next tick.
     ticking.shutdown_background();
+    if let Some(sdk) = &agones {
+        sdk.shutdown().await;
+    }
     served
 }
 
