@@ -1,6 +1,7 @@
-//! `serve --agones` against a fake Agones SDK sidecar: a small HTTP server on loopback
-//! that records what the game server tells it (Agones' REST SDK: POST /ready, /health,
-//! /shutdown).
+//! Operations: `serve --agones` against a fake Agones SDK sidecar (a small HTTP server
+//! on loopback that records what the game server tells it: Agones' REST SDK, POST
+//! /ready, /health, /shutdown), and the container files in docker/ against the binary
+//! they run. (No Docker engine runs here, so the images themselves are not built.)
 
 mod common;
 
@@ -143,4 +144,62 @@ fn sigterm_also_asks_the_sidecar_for_shutdown() {
         .success());
     sidecar.wait_for("POST /shutdown", Duration::from_secs(10));
     assert!(server.child.wait().unwrap().success());
+}
+
+/// The `args: [...]` lists of a manifest.
+fn args_lists(yaml: &str) -> Vec<Vec<String>> {
+    yaml.lines()
+        .filter_map(|l| l.trim().strip_prefix("args: "))
+        .map(|list| serde_json::from_str(list).expect("args are a JSON-style list"))
+        .collect()
+}
+
+#[test]
+fn the_container_files_use_flags_and_settings_the_binary_has() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let read = |p: &str| std::fs::read_to_string(root.join(p)).unwrap();
+    let help = String::from_utf8(common::fieldhouse("serve --help").stdout).unwrap();
+    // Every environment setting the Dockerfile and compose file give is one `serve` reads.
+    let dockerfile = read("docker/Dockerfile");
+    let compose = read("docker/compose.yaml");
+    for var in [
+        "FIELDHOUSE_ADDR",
+        "FIELDHOUSE_REPLAY_DIR",
+        "FIELDHOUSE_CACHE_DIR",
+        "FIELDHOUSE_MOCAP_DIR",
+    ] {
+        assert!(
+            help.contains(&format!("env: {var}")),
+            "serve --help does not read {var}"
+        );
+    }
+    assert!(
+        dockerfile.contains("FIELDHOUSE_ADDR=0.0.0.0:7878") && dockerfile.contains("EXPOSE 7878")
+    );
+    assert!(
+        compose.contains("FIELDHOUSE_ADMIN_TOKEN")
+            && compose.contains("/var/lib/fieldhouse/replays")
+    );
+    // The manifests' command lines parse (clap refuses an unknown flag before --help).
+    for manifest in ["docker/agones/fleet.yaml", "docker/agones/gameserver.yaml"] {
+        let lists = args_lists(&read(manifest));
+        assert!(!lists.is_empty(), "{manifest}");
+        for args in lists {
+            assert!(
+                args.contains(&"--agones".to_string()),
+                "{manifest}: {args:?}"
+            );
+            let out = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+                .args(&args)
+                .arg("--help")
+                .output()
+                .unwrap();
+            assert!(
+                out.status.success(),
+                "{manifest}: {args:?}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        assert!(read(manifest).contains("containerPort: 7878"));
+    }
 }
