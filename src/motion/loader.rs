@@ -136,9 +136,25 @@ fn load_clip(
     fps: f64,
 ) -> Result<(Clip, Vec<u8>), ClipFileError> {
     let bytes = fs::read(file)?;
-    let text = std::str::from_utf8(&bytes).map_err(|_| ClipFileError::NotText)?;
-    let bvh = bvh::parse(text)?;
-    Ok((clip_from_bvh(&bvh, name, behaviour, fps)?, bytes))
+    Ok((clip_from_bytes(&bytes, name, behaviour, fps)?, bytes))
+}
+
+fn clip_from_bytes(
+    bytes: &[u8],
+    name: &str,
+    behaviour: &str,
+    fps: f64,
+) -> Result<Clip, ClipFileError> {
+    let text = std::str::from_utf8(bytes).map_err(|_| ClipFileError::NotText)?;
+    clip_from_bvh(&bvh::parse(text)?, name, behaviour, fps)
+}
+
+/// One BVH file's bytes as a clip resampled to `fps`, exactly as the loader reads each
+/// file, or what is wrong with it (with the line, for a parse error). Public for the
+/// fuzz target `bvh` (fuzz/), which feeds it arbitrary bytes.
+pub fn parse_clip(bytes: &[u8], name: &str, behaviour: &str, fps: f64) -> Result<Clip, String> {
+    clip_from_bytes(bytes, name, behaviour, fps)
+        .map_err(|e| e.into_problem(PathBuf::from(name)).to_string())
 }
 
 fn clip_from_bvh(

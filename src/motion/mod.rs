@@ -28,6 +28,7 @@ pub use graph::{
     Constraints, Edge, GraphError, GraphParams, GraphStats, MotionGraph, AUTO_THRESHOLDS_M,
 };
 pub use library::{LibraryError, LoadProblem, MotionLibrary, MotionSource};
+pub use loader::parse_clip;
 pub use playback::PlaybackFrame;
 pub use step::{wrap_angle, Node, RootStep};
 pub use transitions::Transition;
