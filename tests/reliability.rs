@@ -251,3 +251,39 @@ async fn a_replay_directory_that_vanishes_leaves_new_matches_unrecorded_but_runn
     tokio::time::sleep(Duration::from_millis(300)).await;
     assert!(server.tick(&id) > before);
 }
+
+#[test]
+fn a_short_soak_leaves_nothing_behind() {
+    let report = common::json("soak --minutes 0.5 --json");
+    assert_eq!(report["failures"], 0, "{report:#}");
+    // A bot's command for a tick already past is refused as stale now and then on a
+    // busy machine; any other error is a fault.
+    for (code, _) in report["bot_errors"].as_object().unwrap() {
+        assert_eq!(code, "stale_tick", "{report:#}");
+    }
+    assert!(
+        report["matches_created"].as_u64().unwrap() >= 8,
+        "{report:#}"
+    );
+    assert_eq!(report["matches_created"], report["matches_deleted"]);
+    assert!(
+        report["bot_sessions"].as_u64().unwrap() >= 16,
+        "bots came back: {report:#}"
+    );
+    assert!(report["frames_received"].as_u64().unwrap() > 1000);
+    let (start, end) = (&report["samples"][0], &report["end"]);
+    assert_eq!(end["matches"], 0);
+    assert_eq!(end["sockets"], 0);
+    // Every socket and file the churn opened is closed again.
+    assert!(
+        end["fds"].as_u64() <= start["fds"].as_u64().map(|n| n + 2),
+        "{report:#}"
+    );
+    assert_eq!(end["threads"], start["threads"]);
+}
+
+#[test]
+fn soak_arguments_are_checked() {
+    let err = common::failure("soak --minutes 0");
+    assert!(err.contains("outside 0.5 to 120 minutes"), "{err}");
+}

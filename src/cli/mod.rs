@@ -14,6 +14,7 @@ mod plots;
 mod replay;
 mod run;
 mod serve;
+mod soak;
 mod sweep;
 
 use clap::{Parser, Subcommand};
@@ -60,6 +61,9 @@ enum Command {
     Replay(replay::ReplayArgs),
     /// Spectator load on fieldhouse (and a peer, e.g. Colyseus) on loopback: delivery, latency, CPU, memory.
     Loadgen(loadgen::LoadgenArgs),
+    /// Churn matches, spectators and bots on a server for a bounded time; report whether
+    /// memory, descriptors and threads stay flat.
+    Soak(soak::SoakArgs),
 }
 
 pub fn main() -> ExitCode {
@@ -86,6 +90,7 @@ pub fn main() -> ExitCode {
         Command::Run(args) => run::run(args, &mut out),
         Command::Replay(args) => replay::run(args, &mut out),
         Command::Loadgen(args) => loadgen::run(args, &mut out),
+        Command::Soak(args) => soak::run(args, &mut out),
     }
     .and_then(|()| Ok(out.flush()?));
     match result {

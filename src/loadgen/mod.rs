@@ -24,6 +24,7 @@
 mod client;
 mod procfs;
 mod servers;
+pub mod soak;
 
 pub use servers::Peer;
 

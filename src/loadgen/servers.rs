@@ -15,6 +15,9 @@ pub enum Peer {
     Colyseus { dir: PathBuf },
 }
 
+/// The admin token of the servers started here.
+const ADMIN: &str = "loadgen-admin-token-0123456789";
+
 /// How long a server may take to say it listens.
 const START_WITHIN: Duration = Duration::from_secs(120);
 
@@ -28,11 +31,10 @@ pub struct Running {
 }
 
 impl Running {
-    /// `fieldhouse serve` on a free port (no demos, frames stamped, room for `matches`)
-    /// with `matches` baseball matches (the default three outfielders, 60 Hz ticks,
-    /// 30 Hz frames).
+    /// `fieldhouse serve` on a free port (no demos, frames stamped, room for `matches`
+    /// and a few more) with `matches` baseball matches (the default three outfielders,
+    /// 60 Hz ticks, 30 Hz frames).
     pub fn fieldhouse(binary: &std::path::Path, matches: usize) -> anyhow::Result<Running> {
-        const ADMIN: &str = "loadgen-admin-token-0123456789";
         let config =
             std::env::temp_dir().join(format!("fieldhouse-loadgen-{}.toml", std::process::id()));
         std::fs::write(
@@ -41,7 +43,7 @@ impl Running {
                 "demo = false\nstamp_frames = true\nmax_matches = {}\n\
                  # Every simulated spectator comes from 127.0.0.1.\n\
                  max_connections_per_ip = 100000\n",
-                matches.max(1)
+                matches + 16
             ),
         )
         .with_context(|| format!("writing {}", config.display()))?;
@@ -61,16 +63,11 @@ impl Running {
         let addr: String = line[at..].chars().take_while(|c| *c != '/').collect();
         let _ = std::fs::remove_file(&config);
         let http = format!("http://{addr}");
-        let targets = (0..matches.max(1))
+        let targets = (0..matches)
             .map(|seed| {
-                let created: serde_json::Value = ureq::post(&format!("{http}/api/matches"))
-                    .set("authorization", &format!("Bearer {ADMIN}"))
-                    .send_json(
-                        serde_json::json!({"name": "loadgen", "sport": "baseball", "seed": seed}),
-                    )
-                    .context("creating a load match")?
-                    .into_json()?;
-                let id = created["id"].as_str().context("no match id")?;
+                let body =
+                    serde_json::json!({"name": "loadgen", "sport": "baseball", "seed": seed});
+                let (id, _) = Running::create_at(&http, &body)?;
                 Ok(Target::Fieldhouse {
                     url: format!("ws://{addr}/ws/matches/{id}"),
                     index: seed as u64,
@@ -115,18 +112,49 @@ impl Running {
         })
     }
 
+    /// Creates a match on the fieldhouse at `http`: its id and bot tokens.
+    pub fn create_at(
+        http: &str,
+        body: &serde_json::Value,
+    ) -> anyhow::Result<(String, serde_json::Value)> {
+        let created: serde_json::Value = ureq::post(&format!("{http}/api/matches"))
+            .set("authorization", &format!("Bearer {ADMIN}"))
+            .send_json(body)
+            .context("creating a match")?
+            .into_json()?;
+        let id = created["id"].as_str().context("no match id")?.to_string();
+        Ok((id, created["bot_tokens"].clone()))
+    }
+
+    pub fn delete_at(http: &str, id: &str) -> anyhow::Result<()> {
+        ureq::delete(&format!("{http}/api/matches/{id}"))
+            .set("authorization", &format!("Bearer {ADMIN}"))
+            .call()
+            .with_context(|| format!("deleting match {id}"))?;
+        Ok(())
+    }
+
     pub fn pid(&self) -> u32 {
         self.child.id()
     }
 
-    /// fieldhouse's `fieldhouse_tick_overruns_total`; None for the peer.
-    pub fn tick_overruns(&self) -> Option<u64> {
-        let metrics = ureq::get(&format!("{}/metrics", self.http.as_ref()?))
+    /// fieldhouse's HTTP base (empty for the peer).
+    pub fn http(&self) -> &str {
+        self.http.as_deref().unwrap_or_default()
+    }
+
+    /// fieldhouse's /metrics text; None for the peer.
+    pub fn metrics(&self) -> Option<String> {
+        ureq::get(&format!("{}/metrics", self.http.as_ref()?))
             .call()
             .ok()?
             .into_string()
-            .ok()?;
-        metrics
+            .ok()
+    }
+
+    /// fieldhouse's `fieldhouse_tick_overruns_total`; None for the peer.
+    pub fn tick_overruns(&self) -> Option<u64> {
+        self.metrics()?
             .lines()
             .find_map(|l| l.strip_prefix("fieldhouse_tick_overruns_total "))
             .and_then(|v| v.trim().parse().ok())
