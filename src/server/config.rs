@@ -111,3 +111,32 @@ impl ServerConfig {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::ServerConfig;
+
+    #[test]
+    fn the_defaults_listen_on_loopback_and_pass_their_own_check() {
+        let config = ServerConfig::default();
+        assert!(config.addr.ip().is_loopback());
+        assert_eq!(config.check(), Ok(()));
+        assert!(
+            config.allowed_origins.is_empty(),
+            "only the server's own pages"
+        );
+    }
+
+    #[test]
+    fn a_bad_setting_is_named() {
+        let check = |edit: fn(&mut ServerConfig)| {
+            let mut config = ServerConfig::default();
+            edit(&mut config);
+            config.check().unwrap_err()
+        };
+        assert!(check(|c| c.max_connections_per_ip = 0).starts_with("max_connections_per_ip:"));
+        assert!(check(|c| c.max_message_bytes = 10).starts_with("max_message_bytes:"));
+        assert!(check(|c| c.allowed_origins = vec!["example.com".into()])
+            .starts_with("allowed_origins:"));
+    }
+}
