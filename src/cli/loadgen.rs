@@ -28,6 +28,11 @@ pub struct LoadgenArgs {
     /// Seconds between the last connection and the window (0 to 60).
     #[arg(long, default_value_t = 2.0, value_parser = settle)]
     settle: f64,
+    /// Instead of spectators: this many bots (1 to 2,000) in lock-step matches (spread
+    /// over --matches, at most 32 each), every perception answered at once; reports the
+    /// tick turnaround (command sent -> next perception).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=2000))]
+    bots: Option<u32>,
     /// A peer to run under the same load, after fieldhouse, in the same run.
     #[arg(long, value_enum, default_value_t = PeerKind::None)]
     peer: PeerKind,
@@ -74,6 +79,21 @@ pub fn run(args: LoadgenArgs, out: &mut impl Write) -> anyhow::Result<()> {
             PeerKind::Colyseus => Some(Peer::Colyseus { dir: args.peer_dir }),
         },
     };
+    if let Some(bots) = args.bots {
+        let bots = bots as usize;
+        anyhow::ensure!(
+            bots <= 32 * plan.matches && bots >= plan.matches,
+            "--bots {bots} over --matches {}: each match holds 1 to 32 bots",
+            plan.matches
+        );
+        let round = loadgen::run_bots(&plan, bots)?;
+        if args.json {
+            writeln!(out, "{}", serde_json::to_string_pretty(&round)?)?;
+        } else {
+            write!(out, "{}", loadgen::bot_table(&round))?;
+        }
+        return Ok(());
+    }
     let rounds = loadgen::run(&plan)?;
     if args.json {
         writeln!(out, "{}", serde_json::to_string_pretty(&rounds)?)?;

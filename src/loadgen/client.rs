@@ -129,17 +129,23 @@ async fn connect(target: &Target) -> anyhow::Result<Socket> {
     Ok(socket)
 }
 
+/// The whole number right after the first `label` in `text` (`"tick":` → 42), read
+/// without decoding the message.
+pub(super) fn number_after(text: &str, label: &str) -> Option<u64> {
+    let at = text.find(label)? + label.len();
+    let digits = text[at..].bytes().take_while(u8::is_ascii_digit).count();
+    text[at..at + digits].parse().ok()
+}
+
 /// A fieldhouse frame's tick and publish time: `{"type":"frame","sent_us":N,…"tick":T`.
 fn fieldhouse_frame(text: &str) -> Option<(u64, Option<u64>)> {
-    let number_after = |label: &str| -> Option<u64> {
-        let at = text.find(label)? + label.len();
-        let digits = text[at..].bytes().take_while(u8::is_ascii_digit).count();
-        text[at..at + digits].parse().ok()
-    };
     if !text.starts_with(r#"{"type":"frame""#) {
         return None;
     }
-    Some((number_after(r#""tick":"#)?, number_after(r#""sent_us":"#)))
+    Some((
+        number_after(text, r#""tick":"#)?,
+        number_after(text, r#""sent_us":"#),
+    ))
 }
 
 /// Colyseus protocol codes (`@colyseus/shared-types` Protocol): the low five bits of the

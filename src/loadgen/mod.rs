@@ -21,11 +21,13 @@
 //! Everything is bounded: the counts and the window are arguments, each phase has a
 //! deadline, and the servers started here are killed at the end.
 
+mod bots;
 mod client;
 mod procfs;
 mod servers;
 pub mod soak;
 
+pub use bots::{table as bot_table, BotRound};
 pub use servers::Peer;
 
 use anyhow::Context;
@@ -133,6 +135,23 @@ pub fn run(plan: &Plan) -> anyhow::Result<Vec<Round>> {
         }
     }
     Ok(rounds)
+}
+
+/// The bot round: `bots` bots spread over `plan.matches` lock-step matches, measured
+/// over `plan.seconds` after `plan.settle_s` (see [`bots`]).
+pub fn run_bots(plan: &Plan, bots: usize) -> anyhow::Result<BotRound> {
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .context("starting the async runtime")?;
+    let (server, urls) = servers::Running::fieldhouse_bots(&plan.fieldhouse, plan.matches, bots)?;
+    runtime.block_on(bots::round(
+        &server,
+        &urls,
+        plan.matches,
+        plan.seconds,
+        plan.settle_s,
+    ))
 }
 
 async fn round(plan: &Plan, server: &servers::Running, n: usize) -> anyhow::Result<Round> {

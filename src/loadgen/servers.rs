@@ -42,7 +42,10 @@ impl Running {
             format!(
                 "demo = false\nstamp_frames = true\nmax_matches = {}\n\
                  # Every simulated spectator comes from 127.0.0.1.\n\
-                 max_connections_per_ip = 100000\n",
+                 max_connections_per_ip = 100000\n\
+                 # Lock-step bots answer as fast as the match goes; the default 200\n\
+                 # messages a second would pace the match instead of the server.\n\
+                 bot_messages_per_second = 1000000\nbot_burst = 1000000\n",
                 matches + 16
             ),
         )
@@ -110,6 +113,35 @@ impl Running {
             child,
             http: None,
         })
+    }
+
+    /// `fieldhouse serve` with `matches` lock-step baseball matches whose fielders are
+    /// all bots, `bots` of them spread evenly: each bot's match and `/play` URL.
+    pub fn fieldhouse_bots(
+        binary: &std::path::Path,
+        matches: usize,
+        bots: usize,
+    ) -> anyhow::Result<(Running, Vec<(usize, String)>)> {
+        let server = Running::fieldhouse(binary, 0)?;
+        let http = server.http().to_string();
+        let ws = http.replacen("http://", "ws://", 1);
+        let mut urls = Vec::with_capacity(bots);
+        for m in 0..matches {
+            let here = bots / matches + usize::from(m < bots % matches);
+            let agents: Vec<_> = (0..here)
+                .map(|k| serde_json::json!({"id": format!("f{k}"), "bot": true}))
+                .collect();
+            let body = serde_json::json!({
+                "name": "loadgen bots", "sport": "baseball", "seed": m,
+                "mode": "lockstep", "lockstep_deadline_ms": 1000, "agents": agents,
+            });
+            let (id, tokens) = Running::create_at(&http, &body)?;
+            for k in 0..here {
+                let token = tokens[format!("f{k}")].as_str().context("no bot token")?;
+                urls.push((m, format!("{ws}/ws/matches/{id}/play?token={token}")));
+            }
+        }
+        Ok((server, urls))
     }
 
     /// Creates a match on the fieldhouse at `http`: its id and bot tokens.

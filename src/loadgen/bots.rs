@@ -1,0 +1,171 @@
+//! A bot round of `fieldhouse loadgen --bots N`: N bots in lock-step matches, each
+//! answering every perception at once, and the server's **tick turnaround** measured:
+//! for each bot, the time from sending its command for one tick to receiving the
+//! perception of the next. In lock-step a match moves on once every one of its bots
+//! has answered, so this is the server's whole share of a tick (reading the commands,
+//! stepping the world, writing the perceptions) plus loopback, with the slowest bot of
+//! the match included, as a bot author would see it.
+
+use super::client::number_after;
+use super::servers::Running;
+use super::{procfs, Percentiles};
+use futures_util::{SinkExt, StreamExt};
+use serde::Serialize;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use tokio_tungstenite::tungstenite::Message;
+
+#[derive(Debug, Clone, Serialize)]
+pub struct BotRound {
+    pub matches: usize,
+    pub bots: usize,
+    pub connected: usize,
+    pub window_s: f64,
+    /// Ticks a match made per second in the window (median over matches): lock-step
+    /// matches go at their bots' pace.
+    pub ticks_per_s_median: f64,
+    /// Command sent → next perception received, ms.
+    pub turnaround_ms: Percentiles,
+    pub commands: u64,
+    pub server_cpu_s: f64,
+    pub server_cpu_us_per_command: f64,
+    pub server_rss_mb: f64,
+    pub loadgen_cpu_s: f64,
+}
+
+/// One bot's measurements in the window.
+#[derive(Default)]
+struct Seen {
+    turnarounds_us: Vec<u64>,
+    commands: u64,
+    first_tick: Option<u64>,
+    last_tick: u64,
+}
+
+pub(super) async fn round(
+    server: &Running,
+    urls: &[(usize, String)],
+    matches: usize,
+    seconds: f64,
+    settle_s: f64,
+) -> anyhow::Result<BotRound> {
+    let measuring = Arc::new(AtomicBool::new(false));
+    let stop = Arc::new(AtomicBool::new(false));
+    let tasks: Vec<_> = urls
+        .iter()
+        .map(|(m, url)| {
+            let (url, measuring, stop) = (url.clone(), measuring.clone(), stop.clone());
+            let m = *m;
+            tokio::spawn(async move { (m, play(&url, &measuring, &stop).await) })
+        })
+        .collect();
+    tokio::time::sleep(Duration::from_secs_f64(settle_s.max(1.0))).await;
+    let cpu_before = procfs::cpu(server.pid())?;
+    let self_before = procfs::cpu(std::process::id())?;
+    measuring.store(true, Ordering::SeqCst);
+    let started = Instant::now();
+    tokio::time::sleep(Duration::from_secs_f64(seconds)).await;
+    measuring.store(false, Ordering::SeqCst);
+    let window_s = started.elapsed().as_secs_f64();
+    let server_cpu = procfs::cpu(server.pid())? - cpu_before;
+    let loadgen_cpu_s = (procfs::cpu(std::process::id())? - self_before).total_s();
+    let memory = procfs::memory(server.pid())?;
+    stop.store(true, Ordering::SeqCst);
+    let mut turnarounds = Vec::new();
+    let mut commands = 0;
+    let mut connected = 0;
+    // Per match, the ticks its bots saw in the window (the most any of them saw).
+    let mut ticks = vec![0u64; matches];
+    for task in tasks {
+        if let Ok((m, Some(seen))) = task.await {
+            connected += 1;
+            commands += seen.commands;
+            turnarounds.extend(seen.turnarounds_us);
+            if let Some(first) = seen.first_tick {
+                ticks[m] = ticks[m].max(seen.last_tick - first);
+            }
+        }
+    }
+    let mut rates: Vec<f64> = ticks.iter().map(|&t| t as f64 / window_s).collect();
+    rates.sort_by(f64::total_cmp);
+    Ok(BotRound {
+        matches,
+        bots: urls.len(),
+        connected,
+        window_s,
+        ticks_per_s_median: rates.get(rates.len() / 2).copied().unwrap_or(0.0),
+        turnaround_ms: Percentiles::of(turnarounds),
+        commands,
+        server_cpu_s: server_cpu.total_s(),
+        server_cpu_us_per_command: server_cpu.total_s() * 1e6 / commands.max(1) as f64,
+        server_rss_mb: memory.rss_mb,
+        loadgen_cpu_s,
+    })
+}
+
+/// Plays one agent: every perception answered with `stand` at once.
+async fn play(url: &str, measuring: &AtomicBool, stop: &AtomicBool) -> Option<Seen> {
+    let mut socket = match tokio_tungstenite::connect_async(url).await {
+        Ok((socket, _)) => socket,
+        Err(e) => {
+            tracing::warn!(error = %e, "a bot could not connect");
+            return None;
+        }
+    };
+    let mut seen = Seen::default();
+    let mut answered_at: Option<Instant> = None;
+    while !stop.load(Ordering::Relaxed) {
+        let next = tokio::time::timeout(Duration::from_millis(200), socket.next()).await;
+        let text = match next {
+            Err(_) => continue,
+            Ok(Some(Ok(Message::Text(text)))) => text,
+            Ok(Some(Ok(_))) => continue,
+            Ok(_) => break,
+        };
+        if !text.as_str().starts_with(r#"{"type":"perception""#) {
+            continue;
+        }
+        let arrived = Instant::now();
+        let Some(tick) = number_after(text.as_str(), r#""tick":"#) else {
+            continue;
+        };
+        let command = format!(r#"{{"type":"command","tick":{tick},"action":{{"kind":"stand"}}}}"#);
+        if socket.send(Message::Text(command.into())).await.is_err() {
+            break;
+        }
+        if measuring.load(Ordering::Relaxed) {
+            if let Some(at) = answered_at {
+                seen.turnarounds_us.push((arrived - at).as_micros() as u64);
+            }
+            seen.commands += 1;
+            seen.first_tick.get_or_insert(tick);
+            seen.last_tick = tick;
+        }
+        answered_at = Some(Instant::now());
+    }
+    let _ = socket.close(None).await;
+    Some(seen)
+}
+
+pub fn table(r: &BotRound) -> String {
+    format!(
+        "bots: {} in {} lock-step matches ({} connected), {:.0} s window\n\
+         ticks per match per second (median): {:.0}\n\
+         tick turnaround (command sent -> next perception) p50/p99/max: {:.2}/{:.2}/{:.2} ms\n\
+         commands: {}; server CPU {:.2} s ({:.1} µs per command); server RSS {:.1} MB; load generator CPU {:.2} s\n",
+        r.bots,
+        r.matches,
+        r.connected,
+        r.window_s,
+        r.ticks_per_s_median,
+        r.turnaround_ms.p50,
+        r.turnaround_ms.p99,
+        r.turnaround_ms.max,
+        r.commands,
+        r.server_cpu_s,
+        r.server_cpu_us_per_command,
+        r.server_rss_mb,
+        r.loadgen_cpu_s
+    )
+}
