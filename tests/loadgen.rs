@@ -69,3 +69,33 @@ fn loadgen_refuses_bad_arguments_and_a_missing_peer() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+#[test]
+fn loadgen_bots_answer_every_perception_and_report_the_turnaround() {
+    let out = fieldhouse("loadgen --bots 6 --matches 2 --seconds 1 --settle 0 --json");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let round: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(round["bots"], 6);
+    assert_eq!(round["connected"], 6);
+    // Lock-step matches go at their bots' pace: far more than 60 ticks a second, and
+    // every bot answered many of them.
+    let commands = round["commands"].as_u64().unwrap();
+    assert!(commands >= 6 * 60, "{round}");
+    assert!(
+        round["ticks_per_s_median"].as_f64().unwrap() > 60.0,
+        "{round}"
+    );
+    let t = &round["turnaround_ms"];
+    assert!(
+        t["p50"].as_f64().unwrap() > 0.0 && t["p50"].as_f64() <= t["p99"].as_f64(),
+        "{round}"
+    );
+    // More bots than two matches can seat is refused.
+    let err = common::failure("loadgen --bots 70 --matches 2");
+    assert!(err.contains("each match holds 1 to 32 bots"), "{err}");
+    assert_eq!(fieldhouse("loadgen --bots 0").status.code(), Some(2));
+}
