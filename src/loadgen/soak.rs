@@ -212,16 +212,28 @@ async fn one_match(http: String, sport: &'static str, k: u64, counts: Arc<Counts
     }
 }
 
-async fn spectator(url: String, stay: Duration, drop_tcp: bool, counts: Arc<Counts>) {
-    let mut socket = match tokio_tungstenite::connect_async(url.as_str()).await {
-        Ok((socket, _)) => socket,
-        Err(e) => {
-            tracing::warn!(error = %e, "soak: a spectator could not connect");
-            counts.failures.fetch_add(1, Relaxed);
-            return;
+type Socket =
+    tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
+
+/// Opens a socket, counting it as a session of `sessions`, or as a failure.
+async fn open(url: &str, who: &str, sessions: &AtomicU64, counts: &Counts) -> Option<Socket> {
+    match tokio_tungstenite::connect_async(url).await {
+        Ok((socket, _)) => {
+            sessions.fetch_add(1, Relaxed);
+            Some(socket)
         }
+        Err(e) => {
+            tracing::warn!(error = %e, who, "soak: could not connect");
+            counts.failures.fetch_add(1, Relaxed);
+            None
+        }
+    }
+}
+
+async fn spectator(url: String, stay: Duration, drop_tcp: bool, counts: Arc<Counts>) {
+    let Some(mut socket) = open(&url, "spectator", &counts.spectators, &counts).await else {
+        return;
     };
-    counts.spectators.fetch_add(1, Relaxed);
     let until = tokio::time::Instant::now() + stay;
     while let Ok(Some(Ok(message))) = tokio::time::timeout_at(until, socket.next()).await {
         if let Message::Text(text) = message {
@@ -237,15 +249,9 @@ async fn spectator(url: String, stay: Duration, drop_tcp: bool, counts: Arc<Coun
 
 /// A bot answering each perception with `stand` for `stay`.
 async fn bot_session(url: &str, stay: Duration, counts: &Counts) {
-    let mut socket = match tokio_tungstenite::connect_async(url).await {
-        Ok((socket, _)) => socket,
-        Err(e) => {
-            tracing::warn!(error = %e, "soak: a bot could not connect");
-            counts.failures.fetch_add(1, Relaxed);
-            return;
-        }
+    let Some(mut socket) = open(url, "bot", &counts.bots, counts).await else {
+        return;
     };
-    counts.bots.fetch_add(1, Relaxed);
     let until = tokio::time::Instant::now() + stay;
     while let Ok(Some(Ok(Message::Text(text)))) =
         tokio::time::timeout_at(until, socket.next()).await
