@@ -37,7 +37,7 @@ pub enum ParseErrorKind {
     RepeatedChannel(String),
     #[error("CHANNELS {0}: a joint has at most six channels")]
     TooManyChannels(usize),
-    #[error("Frame Time {0} must be positive")]
+    #[error("Frame Time {0} is outside 0.0001 to 1 s (capture at 1 Hz to 10 kHz)")]
     BadFrameTime(f64),
     #[error("expected {expected} channel values, found {found}")]
     ChannelCount { expected: usize, found: usize },
@@ -126,6 +126,10 @@ impl Bvh {
     }
 }
 
+/// The shortest and longest frame times a capture may have, seconds.
+const MIN_FRAME_TIME_S: f64 = 1e-4;
+const MAX_FRAME_TIME_S: f64 = 1.0;
+
 /// Reads a whole BVH file.
 pub fn parse(text: &str) -> Result<Bvh, ParseError> {
     let lines: Vec<(usize, Vec<&str>)> = text
@@ -148,7 +152,10 @@ pub fn parse(text: &str) -> Result<Bvh, ParseError> {
     cursor.keyword("Frame")?;
     cursor.keyword("Time:")?;
     let (time_line, frame_time) = cursor.number("Frame Time")?;
-    if frame_time <= 0.0 {
+    // Capture runs at 1 Hz to 10 kHz. A frame time outside that is a corrupt file, and
+    // a huge one would make resampling allocate a frame for every 1/30 s of it: the
+    // fuzzer's `Frame Time: 40617321` asked for 3.6 billion.
+    if !(MIN_FRAME_TIME_S..=MAX_FRAME_TIME_S).contains(&frame_time) {
         return Err(ParseError {
             line: time_line,
             kind: ParseErrorKind::BadFrameTime(frame_time),

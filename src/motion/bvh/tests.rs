@@ -129,6 +129,20 @@ fn structural_mistakes_name_the_line() {
         (err.line, err.kind),
         (18, ParseErrorKind::BadFrameTime(0.0))
     );
+    // Found by the `bvh` fuzz target: a frame time of 470 days made resampling ask
+    // for billions of frames. Capture runs at 1 Hz to 10 kHz.
+    for absurd in ["40617321", "1.5", "0.00001", "-0.01"] {
+        let err = error(&good.replace("0.0083333", absurd));
+        assert_eq!(err.line, 18, "{absurd}");
+        assert!(
+            matches!(err.kind, ParseErrorKind::BadFrameTime(_)),
+            "{absurd}"
+        );
+    }
+    assert!(
+        parse(&good.replace("0.0083333", "1")).is_ok(),
+        "1 Hz is allowed"
+    );
     let err = error(&good.replace("Frames: 1", "Frames: many"));
     assert_eq!(err.line, 17);
     // Cut inside the hierarchy: the error points at the last line there is.
