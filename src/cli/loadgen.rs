@@ -33,6 +33,10 @@ pub struct LoadgenArgs {
     /// tick turnaround (command sent -> next perception).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=2000))]
     bots: Option<u32>,
+    /// With --bots: how long each bot thinks before answering, ms (0 to 1000; 0 drives
+    /// the matches as fast as the machine goes, 16 is about real-time play).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=1000))]
+    think_ms: u64,
     /// A peer to run under the same load, after fieldhouse, in the same run.
     #[arg(long, value_enum, default_value_t = PeerKind::None)]
     peer: PeerKind,
@@ -86,7 +90,8 @@ pub fn run(args: LoadgenArgs, out: &mut impl Write) -> anyhow::Result<()> {
             "--bots {bots} over --matches {}: each match holds 1 to 32 bots",
             plan.matches
         );
-        let round = loadgen::run_bots(&plan, bots)?;
+        let think = std::time::Duration::from_millis(args.think_ms);
+        let round = loadgen::run_bots(&plan, bots, think)?;
         if args.json {
             writeln!(out, "{}", serde_json::to_string_pretty(&round)?)?;
         } else {

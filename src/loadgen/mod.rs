@@ -139,7 +139,7 @@ pub fn run(plan: &Plan) -> anyhow::Result<Vec<Round>> {
 
 /// The bot round: `bots` bots spread over `plan.matches` lock-step matches, measured
 /// over `plan.seconds` after `plan.settle_s` (see [`bots`]).
-pub fn run_bots(plan: &Plan, bots: usize) -> anyhow::Result<BotRound> {
+pub fn run_bots(plan: &Plan, bots: usize, think: Duration) -> anyhow::Result<BotRound> {
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()
@@ -149,6 +149,7 @@ pub fn run_bots(plan: &Plan, bots: usize) -> anyhow::Result<BotRound> {
         &server,
         &urls,
         plan.matches,
+        think,
         plan.seconds,
         plan.settle_s,
     ))

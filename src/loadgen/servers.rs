@@ -35,6 +35,25 @@ impl Running {
     /// and a few more) with `matches` baseball matches (the default three outfielders,
     /// 60 Hz ticks, 30 Hz frames).
     pub fn fieldhouse(binary: &std::path::Path, matches: usize) -> anyhow::Result<Running> {
+        let mut server = Running::empty_fieldhouse(binary, matches + 16)?;
+        let http = server.http().to_string();
+        let ws = http.replacen("http://", "ws://", 1);
+        server.targets = (0..matches)
+            .map(|seed| {
+                let body =
+                    serde_json::json!({"name": "loadgen", "sport": "baseball", "seed": seed});
+                let (id, _) = Running::create_at(&http, &body)?;
+                Ok(Target::Fieldhouse {
+                    url: format!("{ws}/ws/matches/{id}"),
+                    index: seed as u64,
+                })
+            })
+            .collect::<anyhow::Result<_>>()?;
+        Ok(server)
+    }
+
+    /// `fieldhouse serve` on a free port with no matches and room for `room`.
+    pub fn empty_fieldhouse(binary: &std::path::Path, room: usize) -> anyhow::Result<Running> {
         let config =
             std::env::temp_dir().join(format!("fieldhouse-loadgen-{}.toml", std::process::id()));
         std::fs::write(
@@ -46,7 +65,7 @@ impl Running {
                  # Lock-step bots answer as fast as the match goes; the default 200\n\
                  # messages a second would pace the match instead of the server.\n\
                  bot_messages_per_second = 1000000\nbot_burst = 1000000\n",
-                matches + 16
+                room
             ),
         )
         .with_context(|| format!("writing {}", config.display()))?;
@@ -65,23 +84,11 @@ impl Running {
         let at = line.find("http://").expect("found") + 7;
         let addr: String = line[at..].chars().take_while(|c| *c != '/').collect();
         let _ = std::fs::remove_file(&config);
-        let http = format!("http://{addr}");
-        let targets = (0..matches)
-            .map(|seed| {
-                let body =
-                    serde_json::json!({"name": "loadgen", "sport": "baseball", "seed": seed});
-                let (id, _) = Running::create_at(&http, &body)?;
-                Ok(Target::Fieldhouse {
-                    url: format!("ws://{addr}/ws/matches/{id}"),
-                    index: seed as u64,
-                })
-            })
-            .collect::<anyhow::Result<_>>()?;
         Ok(Running {
             name: "fieldhouse",
-            targets,
+            targets: Vec::new(),
             child,
-            http: Some(http),
+            http: Some(format!("http://{addr}")),
         })
     }
 
@@ -122,7 +129,7 @@ impl Running {
         matches: usize,
         bots: usize,
     ) -> anyhow::Result<(Running, Vec<(usize, String)>)> {
-        let server = Running::fieldhouse(binary, 0)?;
+        let server = Running::empty_fieldhouse(binary, matches)?;
         let http = server.http().to_string();
         let ws = http.replacen("http://", "ws://", 1);
         let mut urls = Vec::with_capacity(bots);

@@ -70,7 +70,7 @@ struct Counts {
 }
 
 pub fn run(fieldhouse: &std::path::Path, minutes: f64) -> anyhow::Result<Report> {
-    let server = Running::fieldhouse(fieldhouse, 0)?;
+    let server = Running::empty_fieldhouse(fieldhouse, 16)?;
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()
