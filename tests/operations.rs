@@ -189,11 +189,7 @@ fn the_container_files_use_flags_and_settings_the_binary_has() {
                 args.contains(&"--agones".to_string()),
                 "{manifest}: {args:?}"
             );
-            let out = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
-                .args(&args)
-                .arg("--help")
-                .output()
-                .unwrap();
+            let out = common::fieldhouse(&format!("{} --help", args.join(" ")));
             assert!(
                 out.status.success(),
                 "{manifest}: {args:?}: {}",

@@ -100,7 +100,7 @@ pub async fn spectate(target: Target, round: Shared) -> Option<Log> {
     Some(log)
 }
 
-type Socket =
+pub(super) type Socket =
     tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
 
 async fn connect(target: &Target) -> anyhow::Result<Socket> {

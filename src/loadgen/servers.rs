@@ -193,11 +193,16 @@ impl Running {
 
     /// fieldhouse's `fieldhouse_tick_overruns_total`; None for the peer.
     pub fn tick_overruns(&self) -> Option<u64> {
-        self.metrics()?
-            .lines()
-            .find_map(|l| l.strip_prefix("fieldhouse_tick_overruns_total "))
-            .and_then(|v| v.trim().parse().ok())
+        metric(&self.metrics()?, "fieldhouse_tick_overruns_total")
     }
+}
+
+/// A sample's value in Prometheus text: `name` with its labels, as written
+/// (`fieldhouse_connections{role="bot"}`).
+pub fn metric(text: &str, name: &str) -> Option<u64> {
+    text.lines()
+        .find_map(|l| l.strip_prefix(name)?.strip_prefix(' '))
+        .and_then(|v| v.trim().parse().ok())
 }
 
 impl Drop for Running {

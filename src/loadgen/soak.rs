@@ -6,8 +6,9 @@
 //! memory, open file descriptors and threads, and its own gauges (matches, sockets),
 //! are sampled throughout; after the churn stops, everything must be back where it was.
 
+use super::client::Socket;
 use super::procfs;
-use super::servers::Running;
+use super::servers::{metric, Running};
 use anyhow::Context;
 use futures_util::{SinkExt, StreamExt};
 use serde::Serialize;
@@ -133,21 +134,15 @@ async fn churn(server: &Running, minutes: f64) -> anyhow::Result<Report> {
 fn sample(server: &Running, start: Instant) -> anyhow::Result<Sample> {
     let pid = server.pid();
     let gauges = server.metrics().unwrap_or_default();
-    let gauge = |name: &str| -> u64 {
-        gauges
-            .lines()
-            .filter_map(|l| l.strip_prefix(name))
-            .filter_map(|v| v.trim().parse::<u64>().ok())
-            .sum()
-    };
+    let gauge = |name: &str| metric(&gauges, name).unwrap_or(0);
     Ok(Sample {
         at_s: start.elapsed().as_secs_f64(),
         rss_mb: procfs::memory(pid)?.rss_mb,
         fds: std::fs::read_dir(format!("/proc/{pid}/fd"))?.count(),
         threads: std::fs::read_dir(format!("/proc/{pid}/task"))?.count(),
-        matches: gauge("fieldhouse_matches "),
-        sockets: gauge("fieldhouse_connections{role=\"spectator\"} ")
-            + gauge("fieldhouse_connections{role=\"bot\"} "),
+        matches: gauge("fieldhouse_matches"),
+        sockets: gauge("fieldhouse_connections{role=\"spectator\"}")
+            + gauge("fieldhouse_connections{role=\"bot\"}"),
     })
 }
 
@@ -211,9 +206,6 @@ async fn one_match(http: String, sport: &'static str, k: u64, counts: Arc<Counts
         let _ = p.await;
     }
 }
-
-type Socket =
-    tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
 
 /// Opens a socket, counting it as a session of `sessions`, or as a failure.
 async fn open(url: &str, who: &str, sessions: &AtomicU64, counts: &Counts) -> Option<Socket> {

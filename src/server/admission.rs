@@ -12,9 +12,11 @@
 
 use super::api::ApiError;
 use super::state::AppState;
+use axum::extract::{ConnectInfo, FromRequestParts};
+use axum::http::request::Parts;
 use axum::http::{HeaderMap, StatusCode};
 use std::collections::HashMap;
-use std::net::IpAddr;
+use std::net::{IpAddr, SocketAddr};
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::{Arc, Mutex};
 
@@ -43,9 +45,33 @@ impl Drop for Admitted {
     }
 }
 
+/// Every socket route takes an `Admitted` among its arguments, so the checks run before
+/// the handler and its upgrade; the handler keeps it for the socket's life.
+impl FromRequestParts<Arc<AppState>> for Admitted {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(
+        parts: &mut Parts,
+        app: &Arc<AppState>,
+    ) -> Result<Admitted, ApiError> {
+        let peer = parts
+            .extensions
+            .get::<ConnectInfo<SocketAddr>>()
+            .map(|ConnectInfo(peer)| peer.ip())
+            .ok_or_else(|| {
+                ApiError::new(
+                    StatusCode::INTERNAL_SERVER_ERROR,
+                    "internal",
+                    "the server was started without peer addresses",
+                )
+            })?;
+        admit(app, peer, &parts.headers)
+    }
+}
+
 /// Lets a WebSocket request in, or says why not: 403 for an origin the policy does
 /// not allow, 429 for an address at its connection cap.
-pub fn admit(app: &Arc<AppState>, ip: IpAddr, headers: &HeaderMap) -> Result<Admitted, ApiError> {
+fn admit(app: &Arc<AppState>, ip: IpAddr, headers: &HeaderMap) -> Result<Admitted, ApiError> {
     if let Err(origin) = check_origin(&app.config.allowed_origins, headers) {
         app.metrics.refused_origin.fetch_add(1, Relaxed);
         return Err(ApiError::forbidden(&format!(

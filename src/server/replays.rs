@@ -2,21 +2,20 @@
 //! WebSocket with the live protocol (`hello`, `frame`s, `end`) plus the client's
 //! `control` messages: play, pause, speed (0.25× to 8×), seek to a tick.
 
-use super::admission::admit;
+use super::admission::Admitted;
 use super::api::ApiError;
 use super::state::AppState;
 use super::ws::{classify, shut, upgrade, Read, GOING_AWAY, TOO_BIG};
 use crate::protocol::{encode, End, ErrorMessage};
 use crate::replay::{self, Replay};
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
-use axum::extract::{ConnectInfo, Path, State};
-use axum::http::{HeaderMap, StatusCode};
+use axum::extract::{Path, State};
+use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use axum::Json;
 use futures_util::{SinkExt, StreamExt};
 use serde::Deserialize;
 use serde_json::{json, Value};
-use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
@@ -120,14 +119,9 @@ pub async fn download(
 pub async fn watch(
     ws: WebSocketUpgrade,
     Path(id): Path<String>,
-    ConnectInfo(peer): ConnectInfo<SocketAddr>,
-    headers: HeaderMap,
+    admitted: Admitted,
     State(app): State<Arc<AppState>>,
 ) -> Response {
-    let admitted = match admit(&app, peer.ip(), &headers) {
-        Ok(a) => a,
-        Err(e) => return e.into_response(),
-    };
     let path = match file_of(&app, &id) {
         Ok(p) => p,
         Err(e) => return e.into_response(),

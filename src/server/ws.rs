@@ -8,19 +8,18 @@
 //! oversized message closes it with 1009, flooding with 1008. On shutdown every match
 //! ends: its sockets get `end` and close with 1001.
 
-use super::admission::admit;
+use super::admission::Admitted;
 use super::api::ApiError;
 use super::auth;
 use super::state::{AppState, Control, MatchEntry};
 use crate::protocol::{decode, encode, ClientMessage, ErrorMessage, Hello, Limits};
 use axum::extract::ws::{CloseFrame, Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
-use axum::extract::{ConnectInfo, Path, Query, State};
+use axum::extract::{Path, Query, State};
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 use futures_util::stream::{SplitSink, SplitStream};
 use futures_util::{SinkExt, StreamExt};
 use std::collections::HashMap;
-use std::net::SocketAddr;
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -143,14 +142,9 @@ pub(super) async fn shut(
 pub async fn spectate(
     ws: WebSocketUpgrade,
     Path(id): Path<String>,
-    ConnectInfo(peer): ConnectInfo<SocketAddr>,
-    headers: HeaderMap,
+    admitted: Admitted,
     State(app): State<Arc<AppState>>,
 ) -> Response {
-    let admitted = match admit(&app, peer.ip(), &headers) {
-        Ok(a) => a,
-        Err(e) => return e.into_response(),
-    };
     let Some(entry) = app.get(&id) else {
         return ApiError::not_found(&id).into_response();
     };
@@ -279,14 +273,10 @@ pub async fn play(
     ws: WebSocketUpgrade,
     Path(id): Path<String>,
     Query(query): Query<HashMap<String, String>>,
-    ConnectInfo(peer): ConnectInfo<SocketAddr>,
+    admitted: Admitted,
     headers: HeaderMap,
     State(app): State<Arc<AppState>>,
 ) -> Response {
-    let admitted = match admit(&app, peer.ip(), &headers) {
-        Ok(a) => a,
-        Err(e) => return e.into_response(),
-    };
     let Some(entry) = app.get(&id) else {
         return ApiError::not_found(&id).into_response();
     };
