@@ -12,6 +12,8 @@ export class CourtView {
     this.field = hello.match.field;
     this.court = this.field.court;
     this.agents = hello.match.agents;
+    /** Teams never change, so frames leave them out: they are in the hello. */
+    this.teams = new Map(this.agents.map((a) => [a.id, a.team]));
     /** Cost maps by behaviour: fetched once each; a map is the same at every pose. */
     this.costmaps = new Map();
     this.reset();
@@ -24,7 +26,9 @@ export class CourtView {
 
   apply(frame) {
     for (const e of frame.events) {
-      if (e.kind === "decision") this.decisions.set(e.agent, { ...e, time_s: frame.time_s });
+      if (e.kind === "decision") {
+        this.decisions.set(e.agent, { ...e, safe: safeSquares(this.court, e.safe), time_s: frame.time_s });
+      }
       if (e.kind === "shot") this.shot = { ...e, time_s: frame.time_s };
     }
   }
@@ -89,7 +93,7 @@ export class CourtView {
 
     for (const a of sample.agents) {
       marker(g, map, a.position, a.heading, {
-        fill: TEAM_COLOURS[a.team] ?? "#fff",
+        fill: TEAM_COLOURS[this.teams.get(a.id)] ?? "#fff",
         label: `${a.id} · ${a.behaviour} · ${a.action.replaceAll("_", " ")}${a.controller === "bot" ? " (bot)" : ""}`,
         selected: a.id === selected,
       });
@@ -154,7 +158,7 @@ export class CourtView {
     };
     g.strokeStyle = "rgba(255,255,255,.9)";
     g.lineWidth = 1;
-    for (const c of decision.candidates ?? []) square(c.cell);
+    for (const cell of decision.safe) square(cell);
     if (decision.chosen) {
       g.strokeStyle = "#ffd400";
       g.lineWidth = 3;
@@ -224,6 +228,27 @@ function costImage(m) {
   return image;
 }
 
+/**
+ * The centres of a decision's safe squares, from the bitmap it carries (PROTOCOL.md):
+ * `box` is [first row, first column, rows, columns] of the court's squares (rows along z
+ * from -width/2, columns along x from the baseline); bit r·columns + c of `bits` (base64,
+ * least significant bit of each byte first) marks square (first row + r, first column + c).
+ */
+export function safeSquares(court, safe) {
+  if (!safe) return [];
+  const [i0, j0, rows, columns] = safe.box;
+  const bytes = Uint8Array.from(atob(safe.bits), (ch) => ch.charCodeAt(0));
+  const s = court.square_m;
+  const cells = [];
+  for (let bit = 0; bit < rows * columns; bit++) {
+    if (bytes[bit >> 3] & (1 << (bit & 7))) {
+      const i = i0 + Math.floor(bit / columns), j = j0 + (bit % columns);
+      cells.push([(j + 0.5) * s, -court.width_m / 2 + (i + 0.5) * s]);
+    }
+  }
+  return cells;
+}
+
 /** A decision in words, with the numbers of the rule C_o > C_d + T_s + ε. */
 function explain(d, now) {
   const age = Math.max(0, now - d.time_s);
@@ -234,7 +259,7 @@ function explain(d, now) {
     text += `<br>C<sub>o</sub> ${c.c_o.toFixed(1)} s ${margin > 0 ? "&gt;" : "≤"} C<sub>d</sub> ${c.c_d.toFixed(1)} s + ` +
       `T<sub>s</sub> ${c.t_s.toFixed(1)} s + ε ${c.epsilon.toFixed(1)} s; shot success ${(100 * c.success).toFixed(0)} %`;
   }
-  const n = d.candidates?.length ?? 0;
+  const n = d.safe.length;
   text += `<br><span class="muted">${n} safe square${n === 1 ? "" : "s"} outlined; decided ${age.toFixed(1)} s ago.</span>`;
   return text;
 }

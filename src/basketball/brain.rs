@@ -9,6 +9,7 @@ use super::decision::{Chosen, Keep, Situation};
 use super::event::Event;
 use super::game::{Game, Order};
 use super::params::Brain;
+use super::safe::SafeSquares;
 use crate::costmap::AgentPose;
 use glam::DVec2;
 
@@ -143,11 +144,7 @@ impl Game {
                 action,
                 reason,
                 chosen,
-                candidates: if chosen.is_some() {
-                    self.candidates.clone()
-                } else {
-                    Vec::new()
-                },
+                safe: chosen.and_then(|_| SafeSquares::of(&self.params.court, &self.candidates)),
             });
         }
         if action == Action::Pass {

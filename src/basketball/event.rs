@@ -1,7 +1,8 @@
 //! What a game reports: events as they happen, and snapshots of the whole court.
 
 use super::agent::{Action, Team};
-use super::decision::{Candidate, Chosen};
+use super::decision::Chosen;
+use super::safe::SafeSquares;
 use serde::Serialize;
 
 /// How a possession ended.
@@ -20,14 +21,15 @@ pub enum Outcome {
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Event {
     /// An agent chose a new action (or, with the ball, a new shooting square). `chosen`
-    /// and `candidates` are those of `basketball-decide`; `candidates` here holds only
-    /// the squares that satisfied the rule, so a spectator can outline them.
+    /// is that of `basketball-decide`; `safe` the squares that satisfied the rule, as a
+    /// bitmap, so a spectator can outline them (`None` when none did, or for a play that
+    /// chose no square).
     Decision {
         agent: String,
         action: Action,
         reason: String,
         chosen: Option<Chosen>,
-        candidates: Vec<Candidate>,
+        safe: Option<SafeSquares>,
     },
     Pass {
         from: String,
@@ -59,6 +61,8 @@ pub enum Event {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct AgentView {
     pub id: String,
+    /// Not in frames: a player's team never changes, and the `hello` lists it.
+    #[serde(skip)]
     pub team: Team,
     pub behaviour: &'static str,
     pub position: [f64; 2],

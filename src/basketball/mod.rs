@@ -8,7 +8,7 @@
 //! * [`decision`]: opponent modelling, `C_o > C_d + T_s + ε`.
 //! * [`agent`], [`brain`], [`game`]: the game as a deterministic state machine; the
 //!   offense's `simple` and `costmap` brains; the defender.
-//! * [`event`]: what a game reports.
+//! * [`event`]: what a game reports; [`safe`]: a decision's safe squares as a bitmap.
 //! * [`eval`]: the paper's experiment, possessions and points per possession.
 
 pub mod agent;
@@ -20,6 +20,7 @@ pub mod eval;
 pub mod event;
 pub mod game;
 pub mod params;
+pub mod safe;
 pub mod shot;
 
 pub use agent::{Action, Agent, Team};

@@ -178,6 +178,19 @@ fn every_possession_ends_in_a_shot_a_turnover_or_the_shot_clock() {
                     assert_eq!(*points > 0, *outcome == Outcome::Made);
                     shot_pending = false;
                 }
+                // The chosen square satisfied the rule, so the bitmap of safe squares
+                // (cut to their box) holds it.
+                Event::Decision { chosen, safe, .. } => {
+                    let court = &params.court;
+                    match (chosen, safe) {
+                        (Some(c), Some(safe)) => {
+                            let square = court.square_of(DVec2::from_array(c.cell)).unwrap();
+                            assert!(safe.squares(court).contains(&square), "{c:?} {safe:?}");
+                        }
+                        (None, None) => {}
+                        other => panic!("a chosen square comes with its safe squares: {other:?}"),
+                    }
+                }
                 _ => {}
             }
         }

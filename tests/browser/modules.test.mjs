@@ -1,8 +1,10 @@
 // The page's pure modules against analytic oracles, in Node (no browser needed):
 // the fielder's-eye optics (eye.js), line fits (draw.js) and frame interpolation
-// (timeline.js). Run by tests/browser.rs with `node --test`.
+// (timeline.js), and the decoding of a decision's safe squares (court.js). Run by
+// tests/browser.rs with `node --test`.
 import assert from "node:assert/strict";
 import { test } from "node:test";
+import { safeSquares } from "../../web/court.js";
 import { fitLine } from "../../web/draw.js";
 import { opticalSamples, straightness } from "../../web/eye.js";
 import { Timeline } from "../../web/timeline.js";
@@ -109,4 +111,25 @@ test("the clock plays behind the newest frame at the given rate, and hands over 
   // A frame from the past (a seek backwards) starts again.
   t.push(frame(10, 10, 0));
   assert.equal(t.frames.length, 1);
+});
+
+test("a decision's safe squares decode to the centres of exactly the squares whose bits are set", () => {
+  const court = { square_m: 0.5, width_m: 15 };
+  // Worked by hand: rows 3-4, columns 5-7; bits 0 and 5 of one byte (0b100001, base64
+  // "IQ==") are squares (3, 5) and (4, 7), centred at x = (j + ½)·0.5, z = −7.5 + (i + ½)·0.5.
+  assert.deepEqual(safeSquares(court, { box: [3, 5, 2, 3], bits: "IQ==" }), [[2.75, -5.75], [3.75, -5.25]]);
+  // The whole 28 × 30 court with every third square set, least significant bit first.
+  const [rows, columns] = [30, 28];
+  const bytes = new Uint8Array(Math.ceil((rows * columns) / 8));
+  const expected = [];
+  for (let bit = 0; bit < rows * columns; bit++) {
+    if (bit % 3 !== 0) continue;
+    bytes[bit >> 3] |= 1 << (bit & 7);
+    const [i, j] = [Math.floor(bit / columns), bit % columns];
+    expected.push([(j + 0.5) * 0.5, -7.5 + (i + 0.5) * 0.5]);
+  }
+  const bits = Buffer.from(bytes).toString("base64");
+  assert.equal(bits.length, 140);
+  assert.deepEqual(safeSquares(court, { box: [0, 0, rows, columns], bits }), expected);
+  assert.deepEqual(safeSquares(court, null), []);
 });

@@ -204,6 +204,9 @@ async function main() {
   passed(`replay: seeking to tick ${target} shows that moment`);
   await page.click("#play");
   await page.waitForFunction(() => document.getElementById("hud-playback")?.textContent.startsWith("paused"), null, { timeout: 2_000 });
+  // Frames the server sent before it read the pause are still arriving: paused, the
+  // page shows the newest frame, so let them land before taking the tick.
+  await page.waitForTimeout(300);
   const paused = await tick();
   await page.waitForTimeout(800);
   check(await tick() === paused, `replay: paused, the tick stays at ${paused}`);
@@ -235,6 +238,10 @@ async function main() {
   await page.waitForFunction(() => document.querySelector("#hud .state").dataset.state === "retrying", null, { timeout: 10_000 });
   passed("reconnect: the HUD shows the server gone");
   await shot("disconnected");
+  // The page notices the close before the old process has let go of the port.
+  const gone = Date.now();
+  if (server.exitCode === null && server.signalCode === null) await new Promise((r) => server.once("exit", r));
+  console.log(`reconnect: the old server exited ${Date.now() - gone} ms after the page saw it go`);
   server = await startServer(port);
   await page.waitForFunction(() => document.querySelector("#hud .state").dataset.state === "live", null, { timeout: 20_000 });
   passed("reconnect: the page reconnects by itself when the server is back");
