@@ -26,7 +26,7 @@
 //!   the `simple` and `costmap` offenses, and the possession experiment.
 //! * [`sim`]: a whole match of any sport as one deterministic [`sim::World`]: scenarios
 //!   checked field by field, fly balls with fielders, basketball, bots' commands.
-//! * [`protocol`]: the WebSocket messages (version 1), as the server sends and reads them.
+//! * [`protocol`]: the WebSocket messages (version 2), as the server sends and reads them.
 //! * [`session`]: a world with its id and frame rate, stepping and encoding frames: what
 //!   the server, headless runs and replay verification all drive.
 //! * [`replay`]: replay files (JSON lines: header, frames, bot commands, footer with a

@@ -1,4 +1,4 @@
-//! The WebSocket protocol, version 1: every message is a JSON object with a `"type"`.
+//! The WebSocket protocol, version 2: every message is a JSON object with a `"type"`.
 //! Each type has a JSON Schema in `proto/<type>.schema.json`, and `PROTOCOL.md` explains
 //! them for bot authors. Fields are only ever added; a breaking change bumps [`VERSION`].
 //!
@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 pub const PROTOCOL: &str = "fieldhouse";
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// Everything static about a match, as `hello` and `GET /api/matches/{id}` show it.
 #[derive(Debug, Clone, Serialize)]

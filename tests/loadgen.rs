@@ -72,7 +72,8 @@ fn loadgen_refuses_bad_arguments_and_a_missing_peer() {
 
 #[test]
 fn loadgen_bots_answer_every_perception_and_report_the_turnaround() {
-    let out = fieldhouse("loadgen --bots 6 --matches 2 --seconds 1 --settle 0 --json");
+    let out =
+        fieldhouse("loadgen --bots 6 --matches 2 --spectators 4 --seconds 1 --settle 0 --json");
     assert!(
         out.status.success(),
         "{}",
@@ -93,6 +94,22 @@ fn loadgen_bots_answer_every_perception_and_report_the_turnaround() {
     assert!(
         t["p50"].as_f64().unwrap() > 0.0 && t["p50"].as_f64() <= t["p99"].as_f64(),
         "{round}"
+    );
+    // The spectators watched the bots' matches in the same window: lock-step frames come
+    // at the bots' pace (one every two ticks), far faster than 30 a second.
+    let watched = &round["spectators"];
+    assert_eq!(watched["connected"], 4, "{round}");
+    assert_eq!(watched["matches"], 2, "{round}");
+    let share = watched["delivered_share"].as_f64().unwrap();
+    assert!(share > 0.0 && share <= 1.0, "{round}");
+    assert!(
+        watched["rate_median_hz"].as_f64().unwrap() > 30.0,
+        "{round}"
+    );
+    let err = common::failure("loadgen --bots 6 --matches 2 --spectators 10,20");
+    assert!(
+        err.contains("--spectators with --bots is one count"),
+        "{err}"
     );
     // More bots than two matches can seat is refused.
     let err = common::failure("loadgen --bots 70 --matches 2");

@@ -39,7 +39,7 @@ async fn demo_matches_are_listed_and_stream_schema_valid_frames() {
         assert_eq!(hello["type"], "hello");
         assert_eq!(
             (hello["protocol"].as_str(), hello["version"].as_u64()),
-            (Some("fieldhouse"), Some(1))
+            (Some("fieldhouse"), Some(2))
         );
         assert_eq!(hello["role"], "spectator");
         assert!(hello["match"]["motion_source"]

@@ -1,4 +1,5 @@
-//! `fieldhouse loadgen`: spectator load on fieldhouse and a peer, side by side.
+//! `fieldhouse loadgen`: spectator load on fieldhouse and a peer, side by side; bots in
+//! lock-step, with spectators of their matches.
 
 use clap::{Args, ValueEnum};
 use fieldhouse::loadgen::{self, Peer, Plan};
@@ -16,8 +17,10 @@ use std::path::PathBuf;
     Example: fieldhouse loadgen --spectators 1000,5000 --seconds 10 --peer colyseus"
 )]
 pub struct LoadgenArgs {
-    /// Spectator counts, comma-separated: one round per count (at most 20,000 each).
-    #[arg(long, value_delimiter = ',', default_value = "1000", value_parser = clap::value_parser!(u32).range(1..=20_000))]
+    /// Spectator counts, comma-separated: one round per count (at most 20,000 each;
+    /// default 1000). With --bots, one count: spectators watching the bots' matches in
+    /// the same window (default none).
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=20_000))]
     spectators: Vec<u32>,
     /// fieldhouse matches to spread the spectators over (the peer always has one room).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
@@ -28,9 +31,10 @@ pub struct LoadgenArgs {
     /// Seconds between the last connection and the window (0 to 60).
     #[arg(long, default_value_t = 2.0, value_parser = settle)]
     settle: f64,
-    /// Instead of spectators: this many bots (1 to 2,000) in lock-step matches (spread
-    /// over --matches, at most 32 each), every perception answered at once; reports the
-    /// tick turnaround (command sent -> next perception).
+    /// Bots (1 to 2,000) in lock-step matches instead of spectator rounds (spread over
+    /// --matches, at most 32 each), every perception answered after --think-ms; reports
+    /// the tick turnaround (command sent -> next perception), and with --spectators N
+    /// also N spectators of the same matches.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=2000))]
     bots: Option<u32>,
     /// With --bots: how long each bot thinks before answering, ms (0 to 1000; 0 drives
@@ -72,8 +76,15 @@ fn seconds_within(text: &str, low: f64, high: f64) -> Result<f64, String> {
 }
 
 pub fn run(args: LoadgenArgs, out: &mut impl Write) -> anyhow::Result<()> {
+    let spectators = match (&args.spectators[..], args.bots) {
+        ([], None) => vec![1000],
+        ([_, _, ..], Some(_)) => anyhow::bail!(
+            "--spectators with --bots is one count (the spectators watching the bots' matches)"
+        ),
+        (counts, _) => counts.iter().map(|&n| n as usize).collect(),
+    };
     let plan = Plan {
-        spectators: args.spectators.iter().map(|&n| n as usize).collect(),
+        spectators,
         matches: args.matches as usize,
         seconds: args.seconds,
         settle_s: args.settle,

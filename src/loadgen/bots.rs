@@ -13,13 +13,16 @@
 //! Bots that answer at once drive the matches as fast as the machine goes, so the times
 //! are then mostly the queue of every other match's tick; bots that think for a frame's
 //! time (16 ms) give the load of real-time lock-step play.
+//!
+//! Spectators can watch the same matches in the same window (`--spectators`): they are
+//! measured as in a spectator round, and the server's CPU is then that of both loads.
 
-use super::client::number_after;
+use super::client::{self, number_after};
 use super::servers::Running;
-use super::{procfs, Percentiles};
+use super::{procfs, Percentiles, Round, CONNECTING_AT_ONCE, CONNECT_WITHIN};
 use futures_util::{SinkExt, StreamExt};
 use serde::Serialize;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;
@@ -43,6 +46,8 @@ pub struct BotRound {
     pub server_cpu_us_per_command: f64,
     pub server_rss_mb: f64,
     pub loadgen_cpu_s: f64,
+    /// The spectators watching the bots' matches in the same window, if any.
+    pub spectators: Option<Round>,
 }
 
 /// One bot's measurements in the window.
@@ -57,16 +62,44 @@ struct Seen {
     last_tick: u64,
 }
 
+/// What a bot round runs: `think` per perception, and `spectators` watching.
+pub(super) struct BotLoad {
+    pub think: Duration,
+    pub spectators: usize,
+    pub seconds: f64,
+    pub settle_s: f64,
+}
+
 pub(super) async fn round(
     server: &Running,
     urls: &[(usize, String)],
     matches: usize,
-    think: Duration,
-    seconds: f64,
-    settle_s: f64,
+    load: &BotLoad,
 ) -> anyhow::Result<BotRound> {
+    let BotLoad {
+        think,
+        spectators,
+        seconds,
+        settle_s,
+    } = *load;
     let measuring = Arc::new(AtomicBool::new(false));
     let stop = Arc::new(AtomicBool::new(false));
+    let watching = client::Shared {
+        gate: Arc::new(tokio::sync::Semaphore::new(CONNECTING_AT_ONCE)),
+        settled: Arc::new(AtomicUsize::new(0)),
+        measuring: measuring.clone(),
+        stop: stop.clone(),
+    };
+    let watchers: Vec<_> = (0..spectators)
+        .map(|i| {
+            let target = server.targets[i % server.targets.len()].clone();
+            tokio::spawn(client::spectate(target, watching.clone()))
+        })
+        .collect();
+    let deadline = Instant::now() + CONNECT_WITHIN;
+    while watching.settled.load(Ordering::SeqCst) < spectators && Instant::now() < deadline {
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
     let tasks: Vec<_> = urls
         .iter()
         .map(|(m, url)| {
@@ -76,6 +109,7 @@ pub(super) async fn round(
         })
         .collect();
     tokio::time::sleep(Duration::from_secs_f64(settle_s.max(1.0))).await;
+    let overruns_before = server.tick_overruns();
     let cpu_before = procfs::cpu(server.pid())?;
     let self_before = procfs::cpu(std::process::id())?;
     measuring.store(true, Ordering::SeqCst);
@@ -86,7 +120,17 @@ pub(super) async fn round(
     let server_cpu = procfs::cpu(server.pid())? - cpu_before;
     let loadgen_cpu_s = (procfs::cpu(std::process::id())? - self_before).total_s();
     let memory = procfs::memory(server.pid())?;
+    let overruns = server
+        .tick_overruns()
+        .zip(overruns_before)
+        .map(|(after, before)| after - before);
     stop.store(true, Ordering::SeqCst);
+    let mut logs = Vec::with_capacity(spectators);
+    for task in watchers {
+        if let Ok(Some(log)) = task.await {
+            logs.push(log);
+        }
+    }
     let mut waits = Vec::new();
     let mut commands = 0;
     // Per match and tick: the first perception's arrival, the last command's sending.
@@ -139,6 +183,19 @@ pub(super) async fn round(
         server_cpu_us_per_command: server_cpu.total_s() * 1e6 / commands.max(1) as f64,
         server_rss_mb: memory.rss_mb,
         loadgen_cpu_s,
+        spectators: (spectators > 0).then(|| {
+            super::summarise(
+                server.name,
+                matches,
+                spectators,
+                window_s,
+                &logs,
+                server_cpu,
+                loadgen_cpu_s,
+                memory,
+                overruns,
+            )
+        }),
     })
 }
 
@@ -198,7 +255,13 @@ async fn play(
 }
 
 pub fn table(r: &BotRound) -> String {
-    format!(
+    let watched = r.spectators.as_ref().map_or(String::new(), |s| {
+        format!(
+            "spectators of the same matches, same window (server CPU and RSS are both loads'):\n{}",
+            super::table(std::slice::from_ref(s))
+        )
+    });
+    let bots = format!(
         "bots: {} in {} lock-step matches ({} connected), thinking {:.0} ms, {:.0} s window\n\
          ticks per match per second (median): {:.0}\n\
          tick turnaround (a match's last command sent -> its next perception) p50/p99/max: {:.2}/{:.2}/{:.2} ms\n\
@@ -221,5 +284,6 @@ pub fn table(r: &BotRound) -> String {
         r.server_cpu_us_per_command,
         r.server_rss_mb,
         r.loadgen_cpu_s
-    )
+    );
+    bots + &watched
 }

@@ -68,7 +68,8 @@ pub struct Round {
     pub spectators: usize,
     pub connected: usize,
     pub window_s: f64,
-    /// Messages the server published in the window, per spectator.
+    /// Messages the server published in the window, per spectator (on average over
+    /// their matches).
     pub published: u64,
     pub delivered: u64,
     pub delivered_share: f64,
@@ -138,21 +139,21 @@ pub fn run(plan: &Plan) -> anyhow::Result<Vec<Round>> {
 }
 
 /// The bot round: `bots` bots spread over `plan.matches` lock-step matches, measured
-/// over `plan.seconds` after `plan.settle_s` (see [`bots`]).
+/// over `plan.seconds` after `plan.settle_s` (see [`bots`]), with `plan.spectators[0]`
+/// spectators (if any) watching the same matches.
 pub fn run_bots(plan: &Plan, bots: usize, think: Duration) -> anyhow::Result<BotRound> {
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()
         .context("starting the async runtime")?;
     let (server, urls) = servers::Running::fieldhouse_bots(&plan.fieldhouse, plan.matches, bots)?;
-    runtime.block_on(bots::round(
-        &server,
-        &urls,
-        plan.matches,
+    let load = bots::BotLoad {
         think,
-        plan.seconds,
-        plan.settle_s,
-    ))
+        spectators: plan.spectators.first().copied().unwrap_or(0),
+        seconds: plan.seconds,
+        settle_s: plan.settle_s,
+    };
+    runtime.block_on(bots::round(&server, &urls, plan.matches, &load))
 }
 
 async fn round(plan: &Plan, server: &servers::Running, n: usize) -> anyhow::Result<Round> {
@@ -241,8 +242,23 @@ fn summarise(
     }
     // Published in the window, per match: every message some spectator received. (With
     // thousands of spectators a message none of them got is not a realistic gap to
-    // miss.)
-    let published = first.len() as u64 / matches as u64;
+    // miss.) Matches publish at different rates when they are lock-step, so each
+    // spectator is owed its own match's messages: spectator i watches match i % matches,
+    // named by the top bits of a fieldhouse key (the peer has one room, and its keys are
+    // hashes).
+    let mut per_match = vec![0u64; matches];
+    for key in first.keys() {
+        let m = if matches == 1 {
+            0
+        } else {
+            (key >> 40) as usize
+        };
+        if let Some(count) = per_match.get_mut(m) {
+            *count += 1;
+        }
+    }
+    let owed: u64 = (0..n).map(|i| per_match[i % matches]).sum();
+    let published = owed / n.max(1) as u64;
     let spread = seen
         .iter()
         .flat_map(|l| &l.arrivals)
@@ -261,7 +277,7 @@ fn summarise(
         window_s,
         published,
         delivered,
-        delivered_share: delivered as f64 / (n as f64 * published.max(1) as f64),
+        delivered_share: delivered as f64 / owed.max(1) as f64,
         rate_median_hz: rates.get(rates.len() / 2).copied().unwrap_or(0.0),
         rate_min_hz: rates.first().copied().unwrap_or(0.0),
         latency_ms: (!latencies.is_empty()).then(|| Percentiles::of(latencies)),

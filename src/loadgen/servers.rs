@@ -123,13 +123,14 @@ impl Running {
     }
 
     /// `fieldhouse serve` with `matches` lock-step baseball matches whose fielders are
-    /// all bots, `bots` of them spread evenly: each bot's match and `/play` URL.
+    /// all bots, `bots` of them spread evenly: each bot's match and `/play` URL. The
+    /// matches are also the server's spectator targets.
     pub fn fieldhouse_bots(
         binary: &std::path::Path,
         matches: usize,
         bots: usize,
     ) -> anyhow::Result<(Running, Vec<(usize, String)>)> {
-        let server = Running::empty_fieldhouse(binary, matches)?;
+        let mut server = Running::empty_fieldhouse(binary, matches)?;
         let http = server.http().to_string();
         let ws = http.replacen("http://", "ws://", 1);
         let mut urls = Vec::with_capacity(bots);
@@ -143,6 +144,10 @@ impl Running {
                 "mode": "lockstep", "lockstep_deadline_ms": 1000, "agents": agents,
             });
             let (id, tokens) = Running::create_at(&http, &body)?;
+            server.targets.push(Target::Fieldhouse {
+                url: format!("{ws}/ws/matches/{id}"),
+                index: m as u64,
+            });
             for k in 0..here {
                 let token = tokens[format!("f{k}")].as_str().context("no bot token")?;
                 urls.push((m, format!("{ws}/ws/matches/{id}/play?token={token}")));
