@@ -16,8 +16,11 @@
 //! is then V at the start pose. Unlike a forward search there is no heading to
 //! discretise, which is what made forward states merge badly. Each state keeps the exact
 //! point whose walk set its value, so every cost is that of a real walk (its path replays
-//! exactly); the one approximation is that a local cell (half a map cell) keeps only its
-//! cheapest walk, so a later walk through another point of the same cell is not followed.
+//! exactly); the one approximation is that a local cell (a third of a map cell) keeps
+//! only its cheapest walk, so a later walk through another point of the same cell is not
+//! followed. At the first branch node, where the map is read off, every walk offered is
+//! placed in the map as it comes (not only those that improve a local cell): a walk that
+//! grazes a map cell is not lost to a cheaper one elsewhere in the same local cell.
 
 use super::grid::cell_index;
 use super::prepared::{Prepared, Segments};
@@ -135,60 +138,6 @@ pub(crate) fn build(
         .into_iter()
         .map(|f| depth.saturating_sub(f.unwrap_or(u32::MAX)))
         .collect();
-    let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); depth as usize + 1];
-    let mut into: Vec<Vec<u32>> = vec![Vec::new(); nodes];
-    for (s, seg) in segments.iter().enumerate() {
-        let base = branch_ids[seg.from as usize].expect("segments start at branch nodes") as usize
-            * per_node;
-        for (k, &(p, frames)) in seg.stops.iter().enumerate() {
-            let Some(cell) = local.index(p) else { break };
-            let state = base + cell;
-            if frames <= spare[seg.from as usize] && frames < u32::from(value[state]) {
-                value[state] = frames as u16;
-                point[state] = p.as_vec2().to_array();
-                via[state] = Via {
-                    segment: s as u32,
-                    next: BASE | (k as u32 + 1),
-                };
-                buckets[frames as usize].push(state as u32);
-            }
-        }
-        into[seg.to as usize].push(s as u32);
-    }
-    for t in 0..=depth as usize {
-        for state in std::mem::take(&mut buckets[t]) {
-            let state = state as usize;
-            if value[state] as usize != t {
-                continue; // settled earlier at a lower value
-            }
-            let (m_branch, y) = (
-                state / per_node,
-                DVec2::new(f64::from(point[state][0]), f64::from(point[state][1])),
-            );
-            let m = node_of_branch[m_branch];
-            for &s in &into[m as usize] {
-                let seg = &segments[s as usize];
-                let offered = t as u32 + seg.frames;
-                if offered > spare[seg.from as usize] {
-                    continue;
-                }
-                let x = seg.end.position + y.rotate(seg.end.facing);
-                let Some(cell) = local.index(x) else { continue };
-                let target =
-                    branch_ids[seg.from as usize].expect("branch") as usize * per_node + cell;
-                if offered < u32::from(value[target]) {
-                    value[target] = offered as u16;
-                    point[target] = x.as_vec2().to_array();
-                    via[target] = Via {
-                        segment: s,
-                        next: state as u32,
-                    };
-                    buckets[offered as usize].push(target as u32);
-                }
-            }
-        }
-    }
-
     // The start: run from the start node to the first branch node (no choices before).
     let mut costs = vec![None; grid.cells()];
     let mut lead = Vec::new();
@@ -217,42 +166,106 @@ pub(crate) fn build(
     for (c, p) in lead_paths {
         paths[c] = p;
     }
-    let Some(b0) = branch_ids[node as usize] else {
-        return BackwardResult { costs, paths };
-    };
-    // Every state of the first branch node is an exact walk to its point: place the
-    // point in the map and keep the cheapest walk into each cell.
-    let base = b0 as usize * per_node;
-    for state in base..base + per_node {
-        if value[state] == u16::MAX {
-            continue;
-        }
-        let local_point = DVec2::new(f64::from(point[state][0]), f64::from(point[state][1]));
+    // Every walk offered to the first branch node is placed in the map as it is offered,
+    // whether or not it improves that node's local cell: the local cell keeps one walk,
+    // but the map wants the cheapest in each of *its* cells, and a walk that only grazes a
+    // map cell must not lose to a cheaper one elsewhere in the same local cell.
+    let b0 = segs.branch[node as usize].then_some(node);
+    let lead_frames = frames;
+    let mut placed: Vec<Option<(u32, Via)>> = vec![None; grid.cells()];
+    let mut place = |local_point: DVec2, offered: u32, how: Via| {
         let world = at.position + local_point.rotate(at.facing);
-        let Some(c) = grid.cell_of(world) else {
-            continue;
-        };
-        let total = frames + u32::from(value[state]);
-        if total <= depth && costs[c].is_none_or(|v| total < v) {
-            costs[c] = Some(total);
-            let mut path = lead.clone();
-            let mut s = state as u32;
-            loop {
-                let v = via[s as usize];
-                let seg = &segments[v.segment as usize];
-                let len = if v.next & BASE != 0 {
-                    (v.next & !BASE) as usize
-                } else {
-                    seg.stops.len()
-                };
-                path.extend((0..len).map(|k| graph.edge(segs.step(seg.first_step + k)).id));
-                if v.next & BASE != 0 {
-                    break;
-                }
-                s = v.next;
+        let total = lead_frames + offered;
+        if let Some(c) = grid.cell_of(world).filter(|_| total <= depth) {
+            if costs[c].is_none_or(|v| total < v) && placed[c].is_none_or(|(v, _)| total < v) {
+                placed[c] = Some((total, how));
             }
-            paths[c] = path;
         }
+    };
+    let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); depth as usize + 1];
+    let mut into: Vec<Vec<u32>> = vec![Vec::new(); nodes];
+    for (s, seg) in segments.iter().enumerate() {
+        let base = branch_ids[seg.from as usize].expect("segments start at branch nodes") as usize
+            * per_node;
+        for (k, &(p, frames)) in seg.stops.iter().enumerate() {
+            let Some(cell) = local.index(p) else { break };
+            let state = base + cell;
+            let how = Via {
+                segment: s as u32,
+                next: BASE | (k as u32 + 1),
+            };
+            if Some(seg.from) == b0 {
+                place(p, frames, how);
+            }
+            if frames <= spare[seg.from as usize] && frames < u32::from(value[state]) {
+                value[state] = frames as u16;
+                point[state] = p.as_vec2().to_array();
+                via[state] = how;
+                buckets[frames as usize].push(state as u32);
+            }
+        }
+        into[seg.to as usize].push(s as u32);
+    }
+    for t in 0..=depth as usize {
+        for state in std::mem::take(&mut buckets[t]) {
+            let state = state as usize;
+            if value[state] as usize != t {
+                continue; // settled earlier at a lower value
+            }
+            let (m_branch, y) = (
+                state / per_node,
+                DVec2::new(f64::from(point[state][0]), f64::from(point[state][1])),
+            );
+            let m = node_of_branch[m_branch];
+            for &s in &into[m as usize] {
+                let seg = &segments[s as usize];
+                let offered = t as u32 + seg.frames;
+                if offered > spare[seg.from as usize] {
+                    continue;
+                }
+                let x = seg.end.position + y.rotate(seg.end.facing);
+                let how = Via {
+                    segment: s,
+                    next: state as u32,
+                };
+                if Some(seg.from) == b0 {
+                    place(x, offered, how);
+                }
+                let Some(cell) = local.index(x) else { continue };
+                let target =
+                    branch_ids[seg.from as usize].expect("branch") as usize * per_node + cell;
+                if offered < u32::from(value[target]) {
+                    value[target] = offered as u16;
+                    point[target] = x.as_vec2().to_array();
+                    via[target] = how;
+                    buckets[offered as usize].push(target as u32);
+                }
+            }
+        }
+    }
+
+    for (c, entry) in placed.iter().enumerate() {
+        let Some((total, how)) = *entry else { continue };
+        if costs[c].is_some_and(|v| v <= total) {
+            continue;
+        }
+        costs[c] = Some(total);
+        let mut path = lead.clone();
+        let mut v = how;
+        loop {
+            let seg = &segments[v.segment as usize];
+            let len = if v.next & BASE != 0 {
+                (v.next & !BASE) as usize
+            } else {
+                seg.stops.len()
+            };
+            path.extend((0..len).map(|k| graph.edge(segs.step(seg.first_step + k)).id));
+            if v.next & BASE != 0 {
+                break;
+            }
+            v = via[v.next as usize];
+        }
+        paths[c] = path;
     }
     BackwardResult { costs, paths }
 }
