@@ -81,9 +81,10 @@ fn no_map_beats_the_straight_line_at_top_speed() {
     }
 }
 
-/// On the CMU running data, search finds costs within 3 frames (0.1 s) of 50,000 Monte
-/// Carlo walks, or better, in at least 97 % of the cells the walks reach. (The issue's
-/// target, as good as 200,000 walks in 99 % of cells, is not met yet: see BENCHMARKS.md.)
+/// On the CMU running data, search finds costs as good as 50,000 Monte Carlo walks, or
+/// better, in at least 85 % of the cells the walks reach, and within 3 frames (0.1 s) in
+/// at least 98 %. (The target, as good as 200,000 walks in 99 % of cells, is not
+/// met yet: see BENCHMARKS.md.)
 #[test]
 fn search_keeps_up_with_many_monte_carlo_walks_on_real_running() {
     let graph = fixtures::cmu_graph("run");
@@ -116,10 +117,20 @@ fn search_keeps_up_with_many_monte_carlo_walks_on_real_running() {
             }
         }
     }
+    let as_good = mc
+        .costs
+        .iter()
+        .zip(&search.costs)
+        .filter(|(m, s)| m.is_some_and(|m| s.is_some_and(|s| s <= m)))
+        .count();
     assert!(reached > 300, "{reached}");
     assert!(
-        close * 100 >= 97 * reached,
+        close * 100 >= 98 * reached,
         "search within 3 frames in {close} of {reached} cells"
+    );
+    assert!(
+        as_good * 100 >= 85 * reached,
+        "search as good or better in {as_good} of {reached} cells"
     );
 }
 
