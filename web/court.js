@@ -197,7 +197,7 @@ export class CourtView {
     const agent = sample.agents.find((a) => a.id === selected);
     const decision = this.decisions.get(selected);
     $("decision").innerHTML = decision
-      ? explain(decision, sample.time_s)
+      ? explain(decision, this.field.decision, sample.time_s)
       : `${escapeHtml(selected ?? "")} has made no decision since you started watching.`;
     const entry = agent && this.costmap(agent.behaviour);
     const horizon = entry?.map?.horizon_s ?? 8;
@@ -250,14 +250,14 @@ export function safeSquares(court, safe) {
 }
 
 /** A decision in words, with the numbers of the rule C_o > C_d + T_s + ε. */
-function explain(d, now) {
+function explain(d, rule, now) {
   const age = Math.max(0, now - d.time_s);
   let text = `<b>${escapeHtml(d.agent)}</b> ${escapeHtml(d.reason)}`;
   const c = d.chosen;
   if (c) {
-    const margin = c.c_o - (c.c_d + c.t_s + c.epsilon);
+    const margin = c.c_o - (c.c_d + rule.shot_time_s + rule.epsilon_s);
     text += `<br>C<sub>o</sub> ${c.c_o.toFixed(1)} s ${margin > 0 ? "&gt;" : "≤"} C<sub>d</sub> ${c.c_d.toFixed(1)} s + ` +
-      `T<sub>s</sub> ${c.t_s.toFixed(1)} s + ε ${c.epsilon.toFixed(1)} s; shot success ${(100 * c.success).toFixed(0)} %`;
+      `T<sub>s</sub> ${rule.shot_time_s.toFixed(1)} s + ε ${rule.epsilon_s.toFixed(1)} s; shot success ${(100 * c.success).toFixed(0)} %`;
   }
   const n = d.safe.length;
   text += `<br><span class="muted">${n} safe square${n === 1 ? "" : "s"} outlined; decided ${age.toFixed(1)} s ago.</span>`;

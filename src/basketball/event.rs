@@ -28,6 +28,7 @@ pub enum Event {
         agent: String,
         action: Action,
         reason: String,
+        #[serde(serialize_with = "chosen_on_the_wire")]
         chosen: Option<Chosen>,
         safe: Option<SafeSquares>,
     },
@@ -56,6 +57,31 @@ pub enum Event {
         duration_s: f64,
         passes: u32,
     },
+}
+
+/// `chosen` as frames carry it: without T_s and ε, which are the match's (the hello's
+/// `field.decision`) and the same in every decision.
+fn chosen_on_the_wire<S: serde::Serializer>(
+    chosen: &Option<Chosen>,
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    #[derive(Serialize)]
+    struct OnTheWire {
+        cell: [f64; 2],
+        success: f64,
+        c_o: f64,
+        c_d: f64,
+        here: bool,
+    }
+    chosen
+        .map(|c| OnTheWire {
+            cell: c.cell,
+            success: c.success,
+            c_o: c.c_o,
+            c_d: c.c_d,
+            here: c.here,
+        })
+        .serialize(s)
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -3,6 +3,7 @@
 //! bots command. Baseball puts three outfielders in fair territory; cricket puts
 //! fielders around the ring, with balls hit all round the wicket.
 
+use super::mark_bot;
 use super::scenario::{range, LaunchSpec, Scenario, ScenarioError, Sport};
 use crate::fielding::{forecast, Body, CatchZone, Fielder, FielderConfig, Limits, StrategyKind};
 use crate::perception::{PerceptionConfig, Sighting};
@@ -464,14 +465,15 @@ impl FlyWorld {
             .iter()
             .map(|f| {
                 let b = &f.fielder.body;
-                json!({
+                let mut v = json!({
                     "id": f.id,
                     "position": b.pos.to_array(),
                     "heading": if b.vel.length() > 1e-6 { b.vel.y.atan2(b.vel.x) } else { (-f.home).y.atan2(-f.home.x) },
                     "speed": b.vel.length(),
                     "strategy": f.strategy.name(),
-                    "controller": if f.by_bot { "bot" } else { "builtin" },
-                })
+                });
+                mark_bot(&mut v, f.by_bot);
+                v
             })
             .collect();
         (

@@ -157,6 +157,7 @@ impl HoopsWorld {
             "shot_clock_s": p.shot_clock_s,
             "offense": p.offense.name(),
             "defender_motion": p.defender.motion.name(),
+            "decision": p.decision,
         })
     }
 
@@ -186,11 +187,7 @@ impl HoopsWorld {
             .enumerate()
             .map(|(k, a)| {
                 let mut v = serde_json::to_value(a).expect("agents serialise");
-                v["controller"] = json!(if self.game.is_controlled(k) {
-                    "bot"
-                } else {
-                    "builtin"
-                });
+                super::mark_bot(&mut v, self.game.is_controlled(k));
                 v
             })
             .collect();
