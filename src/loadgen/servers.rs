@@ -10,7 +10,7 @@ use std::time::Duration;
 /// The peer run under the same load.
 #[derive(Debug, Clone)]
 pub enum Peer {
-    /// Colyseus 0.18 from `DIR` (bench/peers: `npm ci` there installs it and the Node 22
+    /// Colyseus 0.18 from `DIR` (bench/peers: `npm install` there installs the locked versions and the Node 22
     /// it needs): `DIR/node_modules/.bin/node DIR/colyseus-server.mjs PORT`.
     Colyseus { dir: PathBuf },
 }
@@ -97,7 +97,7 @@ impl Running {
         let node = dir.join("node_modules/.bin/node");
         if !node.exists() {
             bail!(
-                "no Node 22 at {}: run `npm ci --prefix {}` first",
+                "no Node 22 at {}: run `npm install --prefix {}` first",
                 node.display(),
                 dir.display()
             );
