@@ -6,7 +6,7 @@
 //! * [`capability`]: each behaviour's motion graph and cost map (the physical
 //!   capability model), embedded at an agent's pose; moves play a map's stored path.
 //! * [`decision`]: opponent modelling, `C_o > C_d + T_s + ε`.
-//! * [`agent`], [`brain`], [`game`]: the game as a deterministic state machine; the
+//! * [`agent`], `brain`, [`game`]: the game as a deterministic state machine; the
 //!   offense's `simple` and `costmap` brains; the defender.
 //! * [`event`]: what a game reports; [`safe`]: a decision's safe squares as a bitmap.
 //! * [`eval`]: the paper's experiment, possessions and points per possession.

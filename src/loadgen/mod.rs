@@ -139,7 +139,7 @@ pub fn run(plan: &Plan) -> anyhow::Result<Vec<Round>> {
 }
 
 /// The bot round: `bots` bots spread over `plan.matches` lock-step matches, measured
-/// over `plan.seconds` after `plan.settle_s` (see [`bots`]), with `plan.spectators[0]`
+/// over `plan.seconds` after `plan.settle_s` (see `loadgen::bots`), with `plan.spectators[0]`
 /// spectators (if any) watching the same matches.
 pub fn run_bots(plan: &Plan, bots: usize, think: Duration) -> anyhow::Result<BotRound> {
     let runtime = tokio::runtime::Builder::new_multi_thread()

@@ -2,7 +2,7 @@
 //! `minutes`, every few seconds a match is created (baseball, cricket and basketball in
 //! turn, each with a bot slot), spectators join and leave it (some closing politely,
 //! some dropping the TCP connection), a bot plays its agent for a while, leaves, and
-//! comes back, and the match is deleted after [`MATCH_LIFETIME`]. The server's resident
+//! comes back, and the match is deleted after `MATCH_LIFETIME` (15 s). The server's resident
 //! memory, open file descriptors and threads, and its own gauges (matches, sockets),
 //! are sampled throughout; after the churn stops, everything must be back where it was.
 

@@ -44,7 +44,7 @@ pub fn wrap_angle(a: f64) -> f64 {
     }
 }
 
-/// A node: frame `frame` of clip `clip` (an index into [`MotionGraph::clip_names`]), with
+/// A node: frame `frame` of clip `clip` (an index into [`MotionGraph::clip_names`](super::MotionGraph::clip_names)), with
 /// how the body moves around it, averaged over ⅔ s (about a stride) so the hips' sway
 /// within a stride does not count as turning.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
