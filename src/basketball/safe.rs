@@ -36,14 +36,10 @@ impl SafeSquares {
             .filter_map(|c| court.square_of(DVec2::from_array(c.cell)))
             .map(|s| (s / nx, s % nx))
             .collect();
-        let (i0, j0) = squares
+        let (i0, j0, i1, j1) = squares
             .iter()
-            .copied()
-            .reduce(|a, b| (a.0.min(b.0), a.1.min(b.1)))?;
-        let (i1, j1) = squares
-            .iter()
-            .copied()
-            .reduce(|a, b| (a.0.max(b.0), a.1.max(b.1)))?;
+            .map(|&(i, j)| (i, j, i, j))
+            .reduce(|a, b| (a.0.min(b.0), a.1.min(b.1), a.2.max(b.2), a.3.max(b.3)))?;
         let (rows, columns) = (i1 - i0 + 1, j1 - j0 + 1);
         let mut bytes = vec![0u8; (rows * columns).div_ceil(8)];
         for (i, j) in squares {

@@ -330,11 +330,8 @@ fn chains_from(
     root: Chain,
     depth: u32,
 ) -> Vec<Chain> {
-    let mut out_of: Vec<Vec<usize>> = Vec::new();
+    let mut out_of: Vec<Vec<usize>> = vec![Vec::new(); segs.branch.len()];
     for (i, s) in segments.iter().enumerate() {
-        if out_of.len() <= s.from as usize {
-            out_of.resize(s.from as usize + 1, Vec::new());
-        }
         out_of[s.from as usize].push(i);
     }
     let mut chains = vec![root];
@@ -344,14 +341,14 @@ fn chains_from(
         // graph the chains of the next level would cost more than they find.
         let coming: usize = level
             .clone()
-            .map(|i| out_of.get(chains[i].node as usize).map_or(0, Vec::len))
+            .map(|i| out_of[chains[i].node as usize].len())
             .sum();
         if chains.len() + coming > CHAIN_BUDGET {
             break;
         }
         let next = chains.len();
         for i in level.clone() {
-            for &s in out_of.get(chains[i].node as usize).into_iter().flatten() {
+            for &s in &out_of[chains[i].node as usize] {
                 let seg = &segments[s];
                 let from = &chains[i];
                 let frames = from.frames + seg.frames;

@@ -17,12 +17,12 @@
 //! Spectators can watch the same matches in the same window (`--spectators`): they are
 //! measured as in a spectator round, and the server's CPU is then that of both loads.
 
-use super::client::{self, number_after};
+use super::client::number_after;
 use super::servers::Running;
-use super::{procfs, Percentiles, Round, CONNECTING_AT_ONCE, CONNECT_WITHIN};
+use super::{Audience, Percentiles, Round, Window};
 use futures_util::{SinkExt, StreamExt};
 use serde::Serialize;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;
@@ -84,22 +84,7 @@ pub(super) async fn round(
     } = *load;
     let measuring = Arc::new(AtomicBool::new(false));
     let stop = Arc::new(AtomicBool::new(false));
-    let watching = client::Shared {
-        gate: Arc::new(tokio::sync::Semaphore::new(CONNECTING_AT_ONCE)),
-        settled: Arc::new(AtomicUsize::new(0)),
-        measuring: measuring.clone(),
-        stop: stop.clone(),
-    };
-    let watchers: Vec<_> = (0..spectators)
-        .map(|i| {
-            let target = server.targets[i % server.targets.len()].clone();
-            tokio::spawn(client::spectate(target, watching.clone()))
-        })
-        .collect();
-    let deadline = Instant::now() + CONNECT_WITHIN;
-    while watching.settled.load(Ordering::SeqCst) < spectators && Instant::now() < deadline {
-        tokio::time::sleep(Duration::from_millis(50)).await;
-    }
+    let audience = Audience::connect(server, spectators, &measuring, &stop).await;
     let tasks: Vec<_> = urls
         .iter()
         .map(|(m, url)| {
@@ -109,28 +94,9 @@ pub(super) async fn round(
         })
         .collect();
     tokio::time::sleep(Duration::from_secs_f64(settle_s.max(1.0))).await;
-    let overruns_before = server.tick_overruns();
-    let cpu_before = procfs::cpu(server.pid())?;
-    let self_before = procfs::cpu(std::process::id())?;
-    measuring.store(true, Ordering::SeqCst);
-    let started = Instant::now();
-    tokio::time::sleep(Duration::from_secs_f64(seconds)).await;
-    measuring.store(false, Ordering::SeqCst);
-    let window_s = started.elapsed().as_secs_f64();
-    let server_cpu = procfs::cpu(server.pid())? - cpu_before;
-    let loadgen_cpu_s = (procfs::cpu(std::process::id())? - self_before).total_s();
-    let memory = procfs::memory(server.pid())?;
-    let overruns = server
-        .tick_overruns()
-        .zip(overruns_before)
-        .map(|(after, before)| after - before);
+    let window = Window::measure(server, &measuring, seconds).await?;
     stop.store(true, Ordering::SeqCst);
-    let mut logs = Vec::with_capacity(spectators);
-    for task in watchers {
-        if let Ok(Some(log)) = task.await {
-            logs.push(log);
-        }
-    }
+    let logs = audience.logs().await;
     let mut waits = Vec::new();
     let mut commands = 0;
     // Per match and tick: the first perception's arrival, the last command's sending.
@@ -167,35 +133,24 @@ pub(super) async fn round(
             })
         })
         .collect();
-    let mut rates: Vec<f64> = ticks.iter().map(|&t| t as f64 / window_s).collect();
+    let mut rates: Vec<f64> = ticks.iter().map(|&t| t as f64 / window.seconds).collect();
     rates.sort_by(f64::total_cmp);
     Ok(BotRound {
         matches,
         bots: urls.len(),
         connected,
-        window_s,
+        window_s: window.seconds,
         think_ms: think.as_secs_f64() * 1000.0,
         ticks_per_s_median: rates.get(rates.len() / 2).copied().unwrap_or(0.0),
         turnaround_ms: Percentiles::of(turnarounds),
         bot_wait_ms: Percentiles::of(waits),
         commands,
-        server_cpu_s: server_cpu.total_s(),
-        server_cpu_us_per_command: server_cpu.total_s() * 1e6 / commands.max(1) as f64,
-        server_rss_mb: memory.rss_mb,
-        loadgen_cpu_s,
-        spectators: (spectators > 0).then(|| {
-            super::summarise(
-                server.name,
-                matches,
-                spectators,
-                window_s,
-                &logs,
-                server_cpu,
-                loadgen_cpu_s,
-                memory,
-                overruns,
-            )
-        }),
+        server_cpu_s: window.server_cpu.total_s(),
+        server_cpu_us_per_command: window.server_cpu.total_s() * 1e6 / commands.max(1) as f64,
+        server_rss_mb: window.memory.rss_mb,
+        loadgen_cpu_s: window.loadgen_cpu_s,
+        spectators: (spectators > 0)
+            .then(|| super::summarise(server.name, matches, spectators, &logs, &window)),
     })
 }
 

@@ -80,7 +80,8 @@ pub async fn spectate(target: Target, round: Shared) -> Option<Log> {
         let at_us = now_us();
         let seen = match (&target, &message) {
             (Target::Fieldhouse { index, .. }, Message::Text(text)) => {
-                fieldhouse_frame(text.as_str()).map(|(tick, sent)| (index << 40 | tick, sent))
+                fieldhouse_frame(text.as_str())
+                    .map(|(tick, sent)| (index << MATCH_SHIFT | tick, sent))
             }
             (Target::Colyseus { .. }, Message::Binary(bytes)) => {
                 colyseus_patch(&mut socket, bytes).await
@@ -148,6 +149,10 @@ fn fieldhouse_frame(text: &str) -> Option<(u64, Option<u64>)> {
     ))
 }
 
+/// A message's key is its match's index shifted this far, then the message within the
+/// match (a fieldhouse frame's tick; a hash of a Colyseus patch, whose one room is 0).
+pub const MATCH_SHIFT: u32 = 40;
+
 /// Colyseus protocol codes (`@colyseus/shared-types` Protocol): the low five bits of the
 /// first byte; the high bits are modifiers.
 const JOIN_ROOM: u8 = 10;
@@ -164,7 +169,8 @@ async fn colyseus_patch(socket: &mut Socket, bytes: &[u8]) -> Option<(u64, Optio
         ROOM_STATE_PATCH => {
             let mut hasher = std::collections::hash_map::DefaultHasher::new();
             bytes.hash(&mut hasher);
-            Some((hasher.finish(), None))
+            // The peer's one room is match 0.
+            Some((hasher.finish() & ((1 << MATCH_SHIFT) - 1), None))
         }
         _ => None,
     }

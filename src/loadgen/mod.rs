@@ -158,73 +158,122 @@ pub fn run_bots(plan: &Plan, bots: usize, think: Duration) -> anyhow::Result<Bot
 
 async fn round(plan: &Plan, server: &servers::Running, n: usize) -> anyhow::Result<Round> {
     tracing::info!(server = server.name, spectators = n, "connecting");
-    let shared = client::Shared {
-        gate: Arc::new(tokio::sync::Semaphore::new(CONNECTING_AT_ONCE)),
-        settled: Arc::new(AtomicUsize::new(0)),
-        measuring: Arc::new(AtomicBool::new(false)),
-        stop: Arc::new(AtomicBool::new(false)),
-    };
-    let tasks: Vec<_> = (0..n)
-        .map(|i| {
-            let target = server.targets[i % server.targets.len()].clone();
-            tokio::spawn(client::spectate(target, shared.clone()))
-        })
-        .collect();
-    // Every handshake done (within a bound), then a moment to settle.
-    let deadline = std::time::Instant::now() + CONNECT_WITHIN;
-    while shared.settled.load(Ordering::SeqCst) < n && std::time::Instant::now() < deadline {
-        tokio::time::sleep(Duration::from_millis(50)).await;
-    }
+    let measuring = Arc::new(AtomicBool::new(false));
+    let stop = Arc::new(AtomicBool::new(false));
+    let audience = Audience::connect(server, n, &measuring, &stop).await;
     tokio::time::sleep(Duration::from_secs_f64(plan.settle_s)).await;
-
-    let overruns_before = server.tick_overruns();
-    let cpu_before = procfs::cpu(server.pid())?;
-    let self_before = procfs::cpu(std::process::id())?;
-    shared.measuring.store(true, Ordering::SeqCst);
-    let started = std::time::Instant::now();
-    tokio::time::sleep(Duration::from_secs_f64(plan.seconds)).await;
-    shared.measuring.store(false, Ordering::SeqCst);
-    let window_s = started.elapsed().as_secs_f64();
-    let server_cpu = procfs::cpu(server.pid())? - cpu_before;
-    let loadgen_cpu_s = (procfs::cpu(std::process::id())? - self_before).total_s();
-    let memory = procfs::memory(server.pid())?;
-    let tick_overruns = match (overruns_before, server.tick_overruns()) {
-        (Some(a), Some(b)) => Some(b - a),
-        _ => None,
-    };
-    shared.stop.store(true, Ordering::SeqCst);
-
-    let mut seen = Vec::with_capacity(n);
-    for task in tasks {
-        if let Ok(Some(log)) = task.await {
-            seen.push(log);
-        }
-    }
+    let window = Window::measure(server, &measuring, plan.seconds).await?;
+    stop.store(true, Ordering::SeqCst);
+    let seen = audience.logs().await;
     Ok(summarise(
         server.name,
         server.targets.len(),
         n,
-        window_s,
         &seen,
-        server_cpu,
-        loadgen_cpu_s,
-        memory,
-        tick_overruns,
+        &window,
     ))
 }
 
-#[allow(clippy::too_many_arguments)]
-fn summarise(
-    server: &'static str,
-    matches: usize,
-    n: usize,
-    window_s: f64,
-    seen: &[client::Log],
+/// Spectators of a server's targets (spectator i watches `targets[i % len]`), logging
+/// what arrives while `measuring` is set, until `stop`.
+struct Audience {
+    tasks: Vec<tokio::task::JoinHandle<Option<client::Log>>>,
+}
+
+impl Audience {
+    /// Connects `n` spectators, at most [`CONNECTING_AT_ONCE`] handshakes at a time, and
+    /// returns once every handshake is done (or after [`CONNECT_WITHIN`]).
+    async fn connect(
+        server: &servers::Running,
+        n: usize,
+        measuring: &Arc<AtomicBool>,
+        stop: &Arc<AtomicBool>,
+    ) -> Audience {
+        let shared = client::Shared {
+            gate: Arc::new(tokio::sync::Semaphore::new(CONNECTING_AT_ONCE)),
+            settled: Arc::new(AtomicUsize::new(0)),
+            measuring: measuring.clone(),
+            stop: stop.clone(),
+        };
+        let tasks = (0..n)
+            .map(|i| {
+                let target = server.targets[i % server.targets.len()].clone();
+                tokio::spawn(client::spectate(target, shared.clone()))
+            })
+            .collect();
+        let deadline = std::time::Instant::now() + CONNECT_WITHIN;
+        while shared.settled.load(Ordering::SeqCst) < n && std::time::Instant::now() < deadline {
+            tokio::time::sleep(Duration::from_millis(50)).await;
+        }
+        Audience { tasks }
+    }
+
+    /// The logs of those that connected, once `stop` is set.
+    async fn logs(self) -> Vec<client::Log> {
+        let mut logs = Vec::with_capacity(self.tasks.len());
+        for task in self.tasks {
+            if let Ok(Some(log)) = task.await {
+                logs.push(log);
+            }
+        }
+        logs
+    }
+}
+
+/// What a measured window cost: its length, the server's CPU and memory, the load
+/// generator's own CPU, and fieldhouse's tick overruns (None for the peer).
+struct Window {
+    seconds: f64,
     server_cpu: procfs::Cpu,
     loadgen_cpu_s: f64,
     memory: procfs::Memory,
     tick_overruns: Option<u64>,
+}
+
+impl Window {
+    /// Sets `measuring` for `seconds` and takes the server's and our own costs around it.
+    async fn measure(
+        server: &servers::Running,
+        measuring: &AtomicBool,
+        seconds: f64,
+    ) -> anyhow::Result<Window> {
+        let overruns_before = server.tick_overruns();
+        let cpu_before = procfs::cpu(server.pid())?;
+        let self_before = procfs::cpu(std::process::id())?;
+        measuring.store(true, Ordering::SeqCst);
+        let started = std::time::Instant::now();
+        tokio::time::sleep(Duration::from_secs_f64(seconds)).await;
+        measuring.store(false, Ordering::SeqCst);
+        let seconds = started.elapsed().as_secs_f64();
+        let server_cpu = procfs::cpu(server.pid())? - cpu_before;
+        let loadgen_cpu_s = (procfs::cpu(std::process::id())? - self_before).total_s();
+        Ok(Window {
+            seconds,
+            server_cpu,
+            loadgen_cpu_s,
+            memory: procfs::memory(server.pid())?,
+            tick_overruns: server
+                .tick_overruns()
+                .zip(overruns_before)
+                .map(|(after, before)| after - before),
+        })
+    }
+}
+
+fn summarise(
+    server: &'static str,
+    matches: usize,
+    n: usize,
+    seen: &[client::Log],
+    window: &Window,
 ) -> Round {
+    let Window {
+        seconds: window_s,
+        server_cpu,
+        loadgen_cpu_s,
+        memory,
+        tick_overruns,
+    } = *window;
     let delivered: u64 = seen.iter().map(|l| l.arrivals.len() as u64).sum();
     let bytes: u64 = seen.iter().map(|l| l.bytes).sum();
     let mut rates: Vec<f64> = seen
@@ -244,16 +293,10 @@ fn summarise(
     // thousands of spectators a message none of them got is not a realistic gap to
     // miss.) Matches publish at different rates when they are lock-step, so each
     // spectator is owed its own match's messages: spectator i watches match i % matches,
-    // named by the top bits of a fieldhouse key (the peer has one room, and its keys are
-    // hashes).
+    // named by the top bits of a message's key (see `client::MATCH_SHIFT`).
     let mut per_match = vec![0u64; matches];
     for key in first.keys() {
-        let m = if matches == 1 {
-            0
-        } else {
-            (key >> 40) as usize
-        };
-        if let Some(count) = per_match.get_mut(m) {
+        if let Some(count) = per_match.get_mut((key >> client::MATCH_SHIFT) as usize) {
             *count += 1;
         }
     }

@@ -1,5 +1,6 @@
 //! Basketball in a live match: the core's [`Game`] with a line-up from the scenario.
 
+use super::mark_bot;
 use super::scenario::{Scenario, ScenarioError};
 use crate::basketball::{
     Brain, Capabilities, DefenderMotion, Event, Game, GameParams, Order, Team,
@@ -187,7 +188,7 @@ impl HoopsWorld {
             .enumerate()
             .map(|(k, a)| {
                 let mut v = serde_json::to_value(a).expect("agents serialise");
-                super::mark_bot(&mut v, self.game.is_controlled(k));
+                mark_bot(&mut v, self.game.is_controlled(k));
                 v
             })
             .collect();
