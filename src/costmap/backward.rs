@@ -22,7 +22,9 @@
 //! [`EXACT_LEVELS`] choices are followed exactly, and every walk offered to the node one
 //! of them ends at is placed in the map through it as it comes (not only those that
 //! improve a local cell), so a walk that grazes a map cell is not lost to a cheaper one
-//! elsewhere in the same local cell.
+//! elsewhere in the same local cell. And every walk short enough to count (about 28
+//! frames on CMU running; see [`exhaustive_horizon`]) is followed exactly from the start,
+//! so the cells reachable that soon get their exact costs.
 
 use super::grid::cell_index;
 use super::prepared::{Prepared, Segments};
@@ -168,6 +170,20 @@ pub(crate) fn build(
     for (c, p) in lead_paths {
         paths[c] = p;
     }
+    let horizon = exhaustive_horizon(graph, input.start, nodes, depth);
+    exhaust(
+        graph,
+        grid,
+        Walk {
+            node: input.start,
+            at: Walker::START,
+            frames: 0,
+        },
+        horizon,
+        &mut Vec::new(),
+        &mut costs,
+        &mut paths,
+    );
     // Every walk offered to a node near the start is placed in the map as it is offered,
     // through every exact walk from the start to that node, whether or not it improves
     // the node's local cell: the local cell keeps one walk, but the map wants the cheapest
@@ -373,6 +389,81 @@ fn chains_from(
         level = next..chains.len();
     }
     chains
+}
+
+/// Most walker steps the exhaustive walks from the start may take: about 4 ms.
+const EXHAUSTIVE_STEPS: f64 = 200_000.0;
+
+/// The longest horizon (in frames, at most `depth`) within which every walk from `start`
+/// fits in [`EXHAUSTIVE_STEPS`] steps, counted without walking them: the number of walks
+/// of each length, by dynamic programming over the nodes. On CMU running that is about
+/// 27 frames; a densely connected graph (the synthetic library's) gets a shorter one.
+fn exhaustive_horizon(graph: &Prepared, start: u32, nodes: usize, depth: u32) -> u32 {
+    let mut ways = vec![vec![0f64; nodes]; depth as usize + 1];
+    ways[0][start as usize] = 1.0;
+    let mut steps = 0.0;
+    for t in 0..depth as usize {
+        for n in 0..nodes {
+            let w = ways[t][n];
+            if w == 0.0 {
+                continue;
+            }
+            for e in graph.out(n as u32) {
+                if let Some(later) = ways.get_mut(t + e.frames as usize) {
+                    later[e.to as usize] += w;
+                }
+            }
+        }
+        steps += ways[t + 1].iter().sum::<f64>();
+        if steps > EXHAUSTIVE_STEPS {
+            return t as u32;
+        }
+    }
+    depth
+}
+
+/// Where a walk is: its node, its pose in the start's frame, the frames it has taken.
+#[derive(Clone, Copy)]
+struct Walk {
+    node: u32,
+    at: Walker,
+    frames: u32,
+}
+
+/// Follows every walk from `from` up to `horizon` frames, depth first, and keeps in the
+/// map each cell's cheapest (with its path, `trail` being the edges so far). Merged
+/// search loses cells that the best walk enters by millimetres (a sway of the hips
+/// across a cell's edge); within the horizon nothing is merged, so every cell reachable
+/// that soon gets its exact cost. Monte Carlo's random walks cover nearly every walk
+/// this short, so this is where it would otherwise win.
+fn exhaust(
+    graph: &Prepared,
+    grid: &super::Grid,
+    from: Walk,
+    horizon: u32,
+    trail: &mut Vec<u32>,
+    costs: &mut [Option<u32>],
+    paths: &mut [Vec<u32>],
+) {
+    for e in graph.out(from.node) {
+        let next = Walk {
+            node: e.to,
+            at: from.at.after(&e.step, e.turn),
+            frames: from.frames + e.frames,
+        };
+        if next.frames > horizon {
+            continue;
+        }
+        trail.push(e.id);
+        if let Some(c) = grid.cell_of(next.at.position) {
+            if costs[c].is_none_or(|v| next.frames < v) {
+                costs[c] = Some(next.frames);
+                paths[c].clone_from(trail);
+            }
+        }
+        exhaust(graph, grid, next, horizon, trail, costs, paths);
+        trail.pop();
+    }
 }
 
 /// The fewest frames from `start` to each node (Dijkstra over the enabled edges).

@@ -83,8 +83,8 @@ fn no_map_beats_the_straight_line_at_top_speed() {
 
 /// On the CMU running data, search finds costs as good as 50,000 Monte Carlo walks, or
 /// better, in at least 85 % of the cells the walks reach, and within 3 frames (0.1 s) in
-/// at least 98 %. (The target, as good as 200,000 walks in 99 % of cells, is not
-/// met yet: see BENCHMARKS.md.)
+/// at least 98 %, and never worse where the walks need at most 24 frames. (The issue's
+/// target, as good as 200,000 walks in 99 % of cells, is not met yet: see BENCHMARKS.md.)
 #[test]
 fn search_keeps_up_with_many_monte_carlo_walks_on_real_running() {
     let graph = fixtures::cmu_graph("run");
@@ -111,6 +111,11 @@ fn search_keeps_up_with_many_monte_carlo_walks_on_real_running() {
     let (mut reached, mut close, mut as_good) = (0, 0, 0);
     for (m, s) in mc.costs.iter().zip(&search.costs) {
         if let Some(m) = m {
+            // Every walk this short is followed exactly (the horizon on this graph is 28
+            // frames), so no random walk can beat search here.
+            if *m <= 24 {
+                assert!(s.is_some_and(|s| s <= *m), "{s:?} > {m} within the horizon");
+            }
             reached += 1;
             close += usize::from(s.is_some_and(|s| s <= m + 3));
             as_good += usize::from(s.is_some_and(|s| s <= *m));
