@@ -142,15 +142,18 @@ pub(crate) fn build(
         .into_iter()
         .map(|f| depth.saturating_sub(f.unwrap_or(u32::MAX)))
         .collect();
-    // The start: run from the start node to the first branch node (no choices before).
     let mut costs = vec![None; grid.cells()];
+    let mut paths = vec![Vec::new(); grid.cells()];
+    if let Some(c) = grid.cell_of(Walker::START.position) {
+        costs[c] = Some(0);
+    }
+    // Every short walk, exactly. That includes the lead from the start node to the first
+    // branch node (a single walk, so always within the horizon) and places its cells.
+    let horizon = exhaustive_horizon(graph, input.start, nodes, depth);
+    exhaust(graph, grid, input.start, horizon, &mut costs, &mut paths);
+    // The lead, where the exact walks through the first choices begin.
     let mut lead = Vec::new();
     let (mut node, mut at, mut frames) = (input.start, Walker::START, 0u32);
-    let mut lead_paths: Vec<(usize, Vec<u32>)> = Vec::new();
-    if let Some(c) = grid.cell_of(at.position) {
-        costs[c] = Some(0);
-        lead_paths.push((c, Vec::new()));
-    }
     while !segs.branch[node as usize] && frames < depth {
         let Some(e) = graph.out(node).first() else {
             break;
@@ -159,31 +162,7 @@ pub(crate) fn build(
         frames += e.frames;
         node = e.to;
         lead.push(e.id);
-        if let Some(c) = grid.cell_of(at.position) {
-            if costs[c].is_none_or(|v| frames < v) {
-                costs[c] = Some(frames);
-                lead_paths.push((c, lead.clone()));
-            }
-        }
     }
-    let mut paths = vec![Vec::new(); grid.cells()];
-    for (c, p) in lead_paths {
-        paths[c] = p;
-    }
-    let horizon = exhaustive_horizon(graph, input.start, nodes, depth);
-    exhaust(
-        graph,
-        grid,
-        Walk {
-            node: input.start,
-            at: Walker::START,
-            frames: 0,
-        },
-        horizon,
-        &mut Vec::new(),
-        &mut costs,
-        &mut paths,
-    );
     // Every walk offered to a node near the start is placed in the map as it is offered,
     // through every exact walk from the start to that node, whether or not it improves
     // the node's local cell: the local cell keeps one walk, but the map wants the cheapest
@@ -396,25 +375,26 @@ const EXHAUSTIVE_STEPS: f64 = 200_000.0;
 
 /// The longest horizon (in frames, at most `depth`) within which every walk from `start`
 /// fits in [`EXHAUSTIVE_STEPS`] steps, counted without walking them: the number of walks
-/// of each length, by dynamic programming over the nodes. On CMU running that is about
-/// 27 frames; a densely connected graph (the synthetic library's) gets a shorter one.
+/// of each length, by dynamic programming over the nodes. On CMU running that is 28
+/// frames; a densely connected graph (the synthetic library's) gets a shorter one.
 fn exhaustive_horizon(graph: &Prepared, start: u32, nodes: usize, depth: u32) -> u32 {
-    let mut ways = vec![vec![0f64; nodes]; depth as usize + 1];
+    // Walks ending at frame t, by node, for the frames an edge can still reach: a ring
+    // of rows, so a long horizon costs no more memory than a short one.
+    let longest = (0..graph.edge_count())
+        .map(|i| graph.edge(i).frames as usize)
+        .max()
+        .unwrap_or(1);
+    let mut ways = vec![vec![0f64; nodes]; longest + 1];
     ways[0][start as usize] = 1.0;
     let mut steps = 0.0;
     for t in 0..depth as usize {
-        for n in 0..nodes {
-            let w = ways[t][n];
-            if w == 0.0 {
-                continue;
-            }
+        let now = std::mem::replace(&mut ways[t % (longest + 1)], vec![0f64; nodes]);
+        for (n, &w) in now.iter().enumerate().filter(|(_, &w)| w > 0.0) {
             for e in graph.out(n as u32) {
-                if let Some(later) = ways.get_mut(t + e.frames as usize) {
-                    later[e.to as usize] += w;
-                }
+                ways[(t + e.frames as usize) % (longest + 1)][e.to as usize] += w;
             }
         }
-        steps += ways[t + 1].iter().sum::<f64>();
+        steps += ways[(t + 1) % (longest + 1)].iter().sum::<f64>();
         if steps > EXHAUSTIVE_STEPS {
             return t as u32;
         }
@@ -430,26 +410,41 @@ struct Walk {
     frames: u32,
 }
 
-/// Follows every walk from `from` up to `horizon` frames, depth first, and keeps in the
-/// map each cell's cheapest (with its path, `trail` being the edges so far). Merged
-/// search loses cells that the best walk enters by millimetres (a sway of the hips
-/// across a cell's edge); within the horizon nothing is merged, so every cell reachable
-/// that soon gets its exact cost. Monte Carlo's random walks cover nearly every walk
-/// this short, so this is where it would otherwise win.
+/// Follows every walk from `start` up to `horizon` frames, depth first, and keeps in the
+/// map each cell's cheapest, with its path. Merged search loses cells that the best walk
+/// enters by millimetres (a sway of the hips across a cell's edge); within the horizon
+/// nothing is merged, so every cell reachable that soon gets its exact cost. Monte
+/// Carlo's random walks cover nearly every walk this short, so this is where it would
+/// otherwise win. (An explicit stack: a graph with few choices can have a horizon of
+/// thousands of frames.)
 fn exhaust(
     graph: &Prepared,
     grid: &super::Grid,
-    from: Walk,
+    start: u32,
     horizon: u32,
-    trail: &mut Vec<u32>,
     costs: &mut [Option<u32>],
     paths: &mut [Vec<u32>],
 ) {
-    for e in graph.out(from.node) {
+    let root = Walk {
+        node: start,
+        at: Walker::START,
+        frames: 0,
+    };
+    // Each walk on the stack with the next of its edges to try; `trail` holds the edges
+    // taken to the top one.
+    let mut stack = vec![(root, 0)];
+    let mut trail = Vec::new();
+    while let Some((walk, tried)) = stack.last_mut() {
+        let Some(e) = graph.out(walk.node).get(*tried) else {
+            stack.pop();
+            trail.pop();
+            continue;
+        };
+        *tried += 1;
         let next = Walk {
             node: e.to,
-            at: from.at.after(&e.step, e.turn),
-            frames: from.frames + e.frames,
+            at: walk.at.after(&e.step, e.turn),
+            frames: walk.frames + e.frames,
         };
         if next.frames > horizon {
             continue;
@@ -458,11 +453,10 @@ fn exhaust(
         if let Some(c) = grid.cell_of(next.at.position) {
             if costs[c].is_none_or(|v| next.frames < v) {
                 costs[c] = Some(next.frames);
-                paths[c].clone_from(trail);
+                paths[c].clone_from(&trail);
             }
         }
-        exhaust(graph, grid, next, horizon, trail, costs, paths);
-        trail.pop();
+        stack.push((next, 0));
     }
 }
 
