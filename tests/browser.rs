@@ -49,7 +49,7 @@ fn spectator_page_in_chromium() {
         .arg(driver.join("spectator.mjs"))
         .current_dir(&driver)
         .env("FIELDHOUSE_BIN", env!("CARGO_BIN_EXE_fieldhouse"))
-        .env("FIELDHOUSE_MOCAP_DIR", common::mocap())
+        .env_remove("FIELDHOUSE_MOCAP_DIR")
         .env(
             "FIELDHOUSE_CACHE_DIR",
             Path::new(env!("CARGO_TARGET_TMPDIR")).join("server-cache"),

@@ -3,13 +3,12 @@
 
 mod common;
 
-use common::{failure, fieldhouse, json, mocap};
+use common::{failure, fieldhouse, json};
 use serde_json::Value;
 
 fn source() -> String {
     format!(
-        "--mocap {} --cache-dir {}",
-        mocap().display(),
+        "--cache-dir {}",
         std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
             .join("basketball-cache")
             .display()

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{failure, fieldhouse, json, mocap};
+use common::{failure, fieldhouse, json, repository_mocap};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -27,11 +27,7 @@ impl Drop for Scratch {
 
 #[test]
 fn the_motion_graph_of_real_running_is_strongly_connected() {
-    let doc = json(&format!(
-        "motion-graph --mocap {} --behaviour run --json",
-        mocap().display()
-    ));
-    assert!(doc["motion_source"].as_str().unwrap().starts_with("mocap"));
+    let doc = json("motion-graph --behaviour run --json");
     let nodes = doc["nodes"].as_array().unwrap().len();
     assert_eq!(nodes, doc["largest_scc"].as_u64().unwrap() as usize);
     assert!(nodes * 2 >= doc["frames"].as_u64().unwrap() as usize);
@@ -72,25 +68,69 @@ fn the_motion_graph_of_real_running_is_strongly_connected() {
 }
 
 #[test]
-fn without_motion_capture_the_synthetic_library_is_used_and_labelled() {
-    let out = fieldhouse("motion-graph --behaviour dribble");
-    assert!(out.status.success());
-    let text = String::from_utf8(out.stdout).unwrap();
-    assert!(text.contains("from synthetic"), "{text}");
+fn the_embedded_capture_is_the_default_and_a_directory_replaces_it() {
+    let clips_on_disk = |behaviour: &str| {
+        std::fs::read_dir(repository_mocap().join(behaviour))
+            .unwrap()
+            .count()
+    };
+    let all: usize = ["run", "dribble", "defense"]
+        .iter()
+        .map(|b| clips_on_disk(b))
+        .sum();
+    let embedded = json("motion-graph --behaviour dribble --json");
+    assert_eq!(
+        embedded["motion_source"],
+        format!("CMU motion capture, embedded: {all} clips")
+    );
+    assert_eq!(
+        embedded["clips"].as_array().unwrap().len(),
+        clips_on_disk("dribble")
+    );
+    // A user's directory replaces it, by flag or by environment, named without its path.
+    let dir = Scratch::new("user-mocap");
+    std::fs::create_dir_all(dir.0.join("run")).unwrap();
+    for name in ["16_36.bvh", "16_45.bvh"] {
+        std::fs::copy(
+            repository_mocap().join("run").join(name),
+            dir.0.join("run").join(name),
+        )
+        .unwrap();
+    }
+    let by_flag = json(&format!(
+        "motion-graph --behaviour run --json --mocap {}",
+        dir.0.display()
+    ));
+    let source = by_flag["motion_source"].as_str().unwrap();
+    assert!(
+        source.starts_with("user capture: 2 clips, fingerprint "),
+        "{source}"
+    );
+    assert!(!source.contains(&*dir.0.to_string_lossy()), "{source}");
+    assert_eq!(by_flag["clips"], serde_json::json!(["16_36", "16_45"]));
+    let by_env = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args(["motion-graph", "--behaviour", "run", "--json"])
+        .env("FIELDHOUSE_MOCAP_DIR", &dir.0)
+        .output()
+        .unwrap();
+    let by_env: Value = serde_json::from_slice(&by_env.stdout).unwrap();
+    assert_eq!(by_env["motion_source"], by_flag["motion_source"]);
 }
 
 #[test]
 fn motion_errors_name_what_is_wrong() {
-    let err = failure(&format!(
-        "motion-graph --mocap {} --behaviour swim",
-        mocap().display()
-    ));
+    let err = failure("motion-graph --behaviour swim");
     assert!(
         err.contains("\"swim\"") && err.contains("defense, dribble, run"),
         "{err}"
     );
+    // A directory that is not there names itself, what --mocap takes, and the way back
+    // to the built-in capture; the OS error is said once.
     let err = failure("motion-graph --mocap /nonexistent/mocap --behaviour run");
     assert!(err.contains("/nonexistent/mocap"), "{err}");
+    assert!(err.contains("one folder per behaviour"), "{err}");
+    assert!(err.contains("Leave it out"), "{err}");
+    assert_eq!(err.matches("os error").count(), 1, "{err}");
     let err = failure("motion-graph --behaviour run --threshold -1");
     assert!(err.contains("greater than 0"), "{err}");
 }
@@ -101,9 +141,9 @@ fn a_corrupt_clip_is_reported_and_the_rest_still_load() {
     let run = dir.0.join("run");
     std::fs::create_dir_all(&run).unwrap();
     for name in ["16_36.bvh", "16_45.bvh"] {
-        std::fs::copy(mocap().join("run").join(name), run.join(name)).unwrap();
+        std::fs::copy(repository_mocap().join("run").join(name), run.join(name)).unwrap();
     }
-    let good = std::fs::read_to_string(mocap().join("run/16_41.bvh")).unwrap();
+    let good = std::fs::read_to_string(repository_mocap().join("run/16_41.bvh")).unwrap();
     std::fs::write(run.join("16_41.bvh"), &good[..good.len() / 2]).unwrap();
     // A number spoilt on line 300 (a frame line) is reported at that line.
     let mut lines: Vec<&str> = good.lines().collect();
@@ -120,7 +160,7 @@ fn a_corrupt_clip_is_reported_and_the_rest_still_load() {
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("16_41.bvh:") && err.contains("clip skipped"),
+        err.contains("16_41.bvh:") && err.contains("skipped a motion clip"),
         "{err}"
     );
     assert!(
@@ -133,8 +173,7 @@ fn a_corrupt_clip_is_reported_and_the_rest_still_load() {
 
 fn costmap(extra: &str, cache: &Path) -> Value {
     json(&format!(
-        "costmap --mocap {} --behaviour run --size 12 --depth 120 --cache-dir {} --json {extra}",
-        mocap().display(),
+        "costmap --behaviour run --size 12 --depth 120 --cache-dir {} --json {extra}",
         cache.display()
     ))
 }
@@ -201,8 +240,7 @@ fn the_heat_map_is_a_png_of_the_grid() {
     let dir = Scratch::new("costmap-png");
     let file = dir.0.join("run.png");
     let out = fieldhouse(&format!(
-        "costmap --mocap {} --behaviour run --method grassfire --size 10 --cell 0.5 --no-cache --png {}",
-        mocap().display(),
+        "costmap --behaviour run --method grassfire --size 10 --cell 0.5 --no-cache --png {}",
         file.display()
     ));
     assert!(
@@ -219,8 +257,7 @@ fn the_heat_map_is_a_png_of_the_grid() {
 
 #[test]
 fn costmap_arguments_are_checked() {
-    let m = mocap();
-    let base = format!("costmap --mocap {} --behaviour run --no-cache", m.display());
+    let base = "costmap --behaviour run --no-cache";
     let err = failure(&format!("{base} --obstacle 1,2,3"));
     assert!(err.contains("X0,Z0,X1,Z1"), "{err}");
     let err = failure(&format!("{base} --obstacle 1,2,1,5"));
@@ -246,8 +283,7 @@ fn an_interrupted_build_leaves_no_cache_file() {
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
         .args(
             format!(
-                "costmap --mocap {} --behaviour run --method mc --iterations 50000000 --cache-dir {}",
-                mocap().display(),
+                "costmap --behaviour run --method mc --iterations 50000000 --cache-dir {}",
                 cache.0.display()
             )
             .split_whitespace(),

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{failure, fieldhouse, json, mocap};
+use common::{failure, fieldhouse, json};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -43,10 +43,9 @@ fn run(dir: &Path, scenario: &str, out: &str) -> (PathBuf, Value) {
     std::fs::write(&file, scenario).unwrap();
     let replay = dir.join(out);
     let doc = json(&format!(
-        "run {} --out {} --json --mocap {} --cache-dir {}",
+        "run {} --out {} --json --cache-dir {}",
         file.display(),
         replay.display(),
-        mocap().display(),
         dir.join("cache").display()
     ));
     (replay, doc)
@@ -184,11 +183,7 @@ fn a_basketball_scenario_with_bots_runs_with_builtin_brains() {
     ));
     assert!(err.contains("--bots builtin"), "{err}");
     let replay = dir.join("hoops.jsonl");
-    let source = format!(
-        "--mocap {} --cache-dir {}",
-        mocap().display(),
-        dir.join("cache").display()
-    );
+    let source = format!("--cache-dir {}", dir.join("cache").display());
     let doc = json(&format!(
         "run {} --bots builtin --out {} --json {source}",
         file.display(),

@@ -42,10 +42,12 @@ async fn demo_matches_are_listed_and_stream_schema_valid_frames() {
             (Some("fieldhouse"), Some(2))
         );
         assert_eq!(hello["role"], "spectator");
-        assert!(hello["match"]["motion_source"]
-            .as_str()
-            .unwrap()
-            .contains("mocap"));
+        // The embedded capture by default, named without any path of the server's.
+        let source = hello["match"]["motion_source"].as_str().unwrap();
+        assert!(
+            source.starts_with("CMU motion capture, embedded: ") && !source.contains('/'),
+            "{source}"
+        );
         assert_valid(&hello);
         if m["sport"] != "basketball" {
             assert_eq!(hello["match"]["field"]["eye_height_m"], 1.7);

@@ -1,5 +1,5 @@
-//! Where motion comes from on the command line (`--mocap DIR` or `FIELDHOUSE_MOCAP_DIR`,
-//! else the synthetic library), and `fieldhouse motion-graph`.
+//! Where motion comes from on the command line (the CMU capture embedded in the binary,
+//! or `--mocap DIR` / `FIELDHOUSE_MOCAP_DIR` for a user's own), and `fieldhouse motion-graph`.
 
 use anyhow::Context;
 use clap::Args;
@@ -10,8 +10,9 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug, Clone)]
 pub struct MotionSourceArgs {
-    /// Directory of BVH motion capture, one folder per behaviour (DIR/run/*.bvh, ...).
-    /// Without it (and without FIELDHOUSE_MOCAP_DIR) the built-in synthetic library is used.
+    /// Your own BVH motion capture instead of the CMU capture built into fieldhouse: a
+    /// directory with one folder per behaviour (DIR/run/*.bvh, DIR/dribble/*.bvh,
+    /// DIR/defense/*.bvh). Default: the embedded CMU capture (data/mocap/README.md).
     #[arg(long, value_name = "DIR", env = "FIELDHOUSE_MOCAP_DIR")]
     pub mocap: Option<PathBuf>,
 }
@@ -20,14 +21,18 @@ impl MotionSourceArgs {
     /// Loads the motion library, logging which source it is and every clip that failed.
     pub fn load(&self) -> anyhow::Result<MotionLibrary> {
         let library = match &self.mocap {
-            Some(dir) => MotionLibrary::load(dir, FPS)
-                .with_context(|| format!("loading motion capture from {}", dir.display()))?,
-            None => MotionLibrary::synthetic(FPS),
+            Some(dir) => MotionLibrary::load(dir, FPS).with_context(|| {
+                format!(
+                    "--mocap (or FIELDHOUSE_MOCAP_DIR) {} is not a usable motion directory. \
+                     It takes your own capture: one folder per behaviour of BVH files \
+                     (run/, dribble/, defense/). Leave it out to use the CMU motion capture \
+                     built into fieldhouse",
+                    dir.display()
+                )
+            })?,
+            None => MotionLibrary::embedded(FPS),
         };
-        for problem in &library.problems {
-            tracing::warn!(%problem, "clip skipped");
-        }
-        tracing::info!(source = %library.source, clips = library.clips.len(), "motion loaded");
+        tracing::info!(source = %library.source, "motion loaded");
         Ok(library)
     }
 }
@@ -82,7 +87,7 @@ impl GraphArgs {
     about = "Build a behaviour's motion graph and print its size",
     allow_negative_numbers = true,
     args_override_self = true,
-    after_help = "Example: fieldhouse motion-graph --mocap ../shared/mocap --behaviour run --json"
+    after_help = "Example: fieldhouse motion-graph --behaviour run --json"
 )]
 pub struct MotionGraphArgs {
     #[command(flatten)]

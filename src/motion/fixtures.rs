@@ -75,19 +75,16 @@ pub fn graph() -> MotionGraph {
     MotionGraph::build("run", &refs, GraphParams::default()).unwrap()
 }
 
-/// The CMU motion capture beside the project (or where `FIELDHOUSE_MOCAP_DIR` says).
-pub fn mocap_dir() -> std::path::PathBuf {
-    let beside = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/mocap");
-    if beside.is_dir() {
-        return beside;
-    }
-    std::env::var_os("FIELDHOUSE_MOCAP_DIR")
-        .map(std::path::PathBuf::from)
-        .expect("no mocap data: put it in ../shared/mocap or set FIELDHOUSE_MOCAP_DIR")
+/// The CMU motion capture embedded in the binary, loaded once per test binary.
+pub fn cmu_library() -> &'static MotionLibrary {
+    static LIBRARY: std::sync::OnceLock<MotionLibrary> = std::sync::OnceLock::new();
+    LIBRARY.get_or_init(|| MotionLibrary::embedded(FPS))
 }
 
-pub fn cmu_library() -> MotionLibrary {
-    MotionLibrary::load(&mocap_dir(), FPS).expect("the CMU data load")
+/// The repository's copy of the motion capture, which the binary embeds: for tests of
+/// the directory loader.
+pub fn mocap_dir() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/mocap")
 }
 
 /// The motion graph of a CMU behaviour, with the automatic threshold.
@@ -106,7 +103,7 @@ pub fn cmu_capabilities() -> std::sync::Arc<crate::basketball::Capabilities> {
     CAPS.get_or_init(|| {
         let cache = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-cache");
         std::sync::Arc::new(
-            crate::basketball::Capabilities::build(&cmu_library(), Some(&cache))
+            crate::basketball::Capabilities::build(cmu_library(), Some(&cache))
                 .expect("the CMU behaviours build"),
         )
     })

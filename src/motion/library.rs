@@ -1,39 +1,66 @@
-//! A behaviour-labelled collection of clips: loaded from a BVH directory (one folder per
-//! behaviour) or, without one, the built-in synthetic locomotion library.
+//! A behaviour-labelled collection of clips: the CMU motion capture embedded in the
+//! binary, or a user's own capture read from a directory (one folder per behaviour).
 
-use super::{loader, synthetic, Clip};
+use super::{embedded, loader, Clip};
 use std::fmt;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
-/// Where the motion came from: shown wherever motion is used, so nobody mistakes the
-/// synthetic stand-in for human data.
+/// Where the motion came from: named wherever motion is used, so everyone knows what the
+/// agents move with.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum MotionSource {
-    /// BVH motion capture read from `dir`. `fingerprint` is a hash over every loaded
-    /// file's relative path and bytes: the same data gives the same fingerprint.
-    Mocap { dir: PathBuf, fingerprint: String },
-    /// The built-in synthetic locomotion library.
-    Synthetic,
+    /// The CMU motion capture compiled into the binary (the repository's `data/mocap`).
+    Embedded { clips: usize, fingerprint: String },
+    /// A user's own BVH capture, read from `dir`.
+    Directory {
+        dir: PathBuf,
+        clips: usize,
+        fingerprint: String,
+    },
 }
 
 impl MotionSource {
-    /// What cached artefacts built from this motion are keyed by.
+    /// A hash over every loaded file's relative path and bytes: the same data gives the
+    /// same fingerprint, embedded or read from a directory, on any machine. What cached
+    /// artefacts built from the motion are keyed by, and what a replay records.
     pub fn fingerprint(&self) -> &str {
         match self {
-            MotionSource::Mocap { fingerprint, .. } => fingerprint,
-            MotionSource::Synthetic => "synthetic",
+            MotionSource::Embedded { fingerprint, .. }
+            | MotionSource::Directory { fingerprint, .. } => fingerprint,
+        }
+    }
+
+    /// The directory a user's capture was read from: for the operator's own log only,
+    /// never for visitors (the [`Display`](fmt::Display) form names no path).
+    pub fn dir(&self) -> Option<&Path> {
+        match self {
+            MotionSource::Embedded { .. } => None,
+            MotionSource::Directory { dir, .. } => Some(dir),
         }
     }
 }
 
+/// What visitors are shown (the page, `/readyz`, `/api/matches`, command output): the
+/// kind of motion and its size, never a path of the machine it runs on.
 impl fmt::Display for MotionSource {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let plural = |n: usize| if n == 1 { "" } else { "s" };
         match self {
-            MotionSource::Mocap { dir, fingerprint } => {
-                write!(f, "mocap {} ({fingerprint})", dir.display())
+            MotionSource::Embedded { clips, .. } => {
+                write!(
+                    f,
+                    "CMU motion capture, embedded: {clips} clip{}",
+                    plural(*clips)
+                )
             }
-            MotionSource::Synthetic => f.write_str("synthetic"),
+            MotionSource::Directory {
+                clips, fingerprint, ..
+            } => write!(
+                f,
+                "user capture: {clips} clip{}, fingerprint {fingerprint}",
+                plural(*clips)
+            ),
         }
     }
 }
@@ -50,12 +77,13 @@ pub struct LoadProblem {
 
 #[derive(Debug, Error)]
 pub enum LibraryError {
-    #[error("cannot read motion directory {dir}: {source}")]
+    /// The chain printed with `{:#}` adds the OS error once, after this message.
+    #[error("cannot read motion directory {}", dir.display())]
     Unreadable {
         dir: PathBuf,
         source: std::io::Error,
     },
-    #[error("no BVH clip could be loaded from {dir} (looked for DIR/<behaviour>/*.bvh)")]
+    #[error("no BVH clip could be loaded from {} (looked for DIR/<behaviour>/*.bvh)", dir.display())]
     Empty {
         dir: PathBuf,
         problems: Vec<LoadProblem>,
@@ -80,13 +108,10 @@ impl MotionLibrary {
         loader::load_library(dir, fps)
     }
 
-    /// The built-in synthetic locomotion library at `fps`.
-    pub fn synthetic(fps: f64) -> MotionLibrary {
-        MotionLibrary {
-            source: MotionSource::Synthetic,
-            clips: synthetic::clips(fps),
-            problems: vec![],
-        }
+    /// The CMU motion capture compiled into the binary, resampled to `fps`: the motion
+    /// every command uses unless told to read a directory.
+    pub fn embedded(fps: f64) -> MotionLibrary {
+        embedded::library(fps)
     }
 
     /// The behaviours present, sorted.

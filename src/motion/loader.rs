@@ -43,6 +43,13 @@ impl ClipFileError {
     }
 }
 
+/// One BVH file of a library: its path below the library's root (`behaviour/name.bvh`,
+/// which names its behaviour and clip) and its bytes.
+pub(super) struct MotionFile {
+    pub rel: String,
+    pub bytes: Vec<u8>,
+}
+
 /// Loads every `DIR/<behaviour>/*.bvh` (the folder name is the behaviour; other files
 /// are ignored), resampled to `fps`, sorted by (behaviour, name).
 pub(super) fn load_library(dir: &Path, fps: f64) -> Result<MotionLibrary, LibraryError> {
@@ -59,30 +66,62 @@ pub(super) fn load_library(dir: &Path, fps: f64) -> Result<MotionLibrary, Librar
     }
     behaviours.sort();
 
-    let mut clips = Vec::new();
+    let mut files = Vec::new();
     let mut problems = Vec::new();
-    // (relative path, bytes) of each loaded file, for the fingerprint.
-    let mut loaded = Vec::new();
     for behaviour_dir in behaviours {
-        let behaviour = file_name(&behaviour_dir);
-        let files = match bvh_files(&behaviour_dir) {
-            Ok(files) => files,
+        let paths = match bvh_files(&behaviour_dir) {
+            Ok(paths) => paths,
             Err(e) => {
                 problems.push(ClipFileError::Io(e).into_problem(behaviour_dir));
                 continue;
             }
         };
-        for file in files {
-            let name = file
-                .file_stem()
-                .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
-            match load_clip(&file, &name, &behaviour, fps) {
-                Ok((clip, bytes)) => {
-                    loaded.push((format!("{behaviour}/{}", file_name(&file)), bytes));
-                    clips.push(clip);
-                }
-                Err(e) => problems.push(e.into_problem(file)),
+        for path in paths {
+            match fs::read(&path) {
+                Ok(bytes) => files.push(MotionFile {
+                    rel: format!("{}/{}", file_name(&behaviour_dir), file_name(&path)),
+                    bytes,
+                }),
+                Err(e) => problems.push(ClipFileError::Io(e).into_problem(path)),
             }
+        }
+    }
+    let library = from_files(files, problems, fps, dir, |clips, fingerprint| {
+        MotionSource::Directory {
+            dir: dir.to_path_buf(),
+            clips,
+            fingerprint,
+        }
+    })?;
+    tracing::info!(dir = %dir.display(), source = %library.source, skipped = library.problems.len(), "loaded motion capture");
+    Ok(library)
+}
+
+/// Parses `files` into a library whose source `source(clips, fingerprint)` names. A file
+/// that fails costs its clip, reported in `problems` under `root/rel`; it is an error
+/// only if nothing loads. Directory and embedded libraries both come through here, so the
+/// same files give the same clips and the same fingerprint wherever they are read from.
+pub(super) fn from_files(
+    files: Vec<MotionFile>,
+    mut problems: Vec<LoadProblem>,
+    fps: f64,
+    root: &Path,
+    source: impl FnOnce(usize, String) -> MotionSource,
+) -> Result<MotionLibrary, LibraryError> {
+    let mut clips = Vec::new();
+    let mut loaded = Vec::new();
+    for file in files {
+        let rel = Path::new(&file.rel);
+        let behaviour = rel.parent().map_or_else(String::new, file_name);
+        let name = rel
+            .file_stem()
+            .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+        match clip_from_bytes(&file.bytes, &name, &behaviour, fps) {
+            Ok(clip) => {
+                clips.push(clip);
+                loaded.push(file);
+            }
+            Err(e) => problems.push(e.into_problem(root.join(rel))),
         }
     }
     for problem in &problems {
@@ -90,18 +129,13 @@ pub(super) fn load_library(dir: &Path, fps: f64) -> Result<MotionLibrary, Librar
     }
     if clips.is_empty() {
         return Err(LibraryError::Empty {
-            dir: dir.to_path_buf(),
+            dir: root.to_path_buf(),
             problems,
         });
     }
     clips.sort_by(|a, b| (&a.behaviour, &a.name).cmp(&(&b.behaviour, &b.name)));
-    let fingerprint = fingerprint(&mut loaded);
-    tracing::info!(dir = %dir.display(), clips = clips.len(), skipped = problems.len(), %fingerprint, "loaded motion capture");
     Ok(MotionLibrary {
-        source: MotionSource::Mocap {
-            dir: dir.to_path_buf(),
-            fingerprint,
-        },
+        source: source(clips.len(), fingerprint(&mut loaded)),
         clips,
         problems,
     })
@@ -126,17 +160,6 @@ fn bvh_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     }
     files.sort();
     Ok(files)
-}
-
-/// Reads one file into a clip, returning its bytes too for the fingerprint.
-fn load_clip(
-    file: &Path,
-    name: &str,
-    behaviour: &str,
-    fps: f64,
-) -> Result<(Clip, Vec<u8>), ClipFileError> {
-    let bytes = fs::read(file)?;
-    Ok((clip_from_bytes(&bytes, name, behaviour, fps)?, bytes))
 }
 
 fn clip_from_bytes(
@@ -195,14 +218,14 @@ fn capture_rate(frame_time: f64) -> f64 {
 /// Hex of the first 8 bytes of a SHA-256 over each file's relative path and bytes,
 /// sorted by path: the same data gives the same fingerprint on any machine. Lengths
 /// prefix each part so no two different libraries can run together the same stream.
-fn fingerprint(files: &mut [(String, Vec<u8>)]) -> String {
-    files.sort_by(|a, b| a.0.cmp(&b.0));
+fn fingerprint(files: &mut [MotionFile]) -> String {
+    files.sort_by(|a, b| a.rel.cmp(&b.rel));
     let mut hash = Sha256::new();
-    for (path, bytes) in files.iter() {
-        hash.update((path.len() as u64).to_le_bytes());
-        hash.update(path.as_bytes());
-        hash.update((bytes.len() as u64).to_le_bytes());
-        hash.update(bytes);
+    for file in files.iter() {
+        hash.update((file.rel.len() as u64).to_le_bytes());
+        hash.update(file.rel.as_bytes());
+        hash.update((file.bytes.len() as u64).to_le_bytes());
+        hash.update(&file.bytes);
     }
     hash.finalize()[..8]
         .iter()

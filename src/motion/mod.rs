@@ -1,9 +1,9 @@
-//! Human motion: clips of motion capture (BVH) or a synthetic stand-in, and the motion
-//! graphs built from them.
+//! Human motion: clips of motion capture (BVH), and the motion graphs built from them.
 //!
 //! BVH files go through `bvh` (parse), `skeleton` (forward kinematics to metres),
-//! `resample` (to [`FPS`]) and `loader` (a directory of behaviour folders) into a
-//! [`MotionLibrary`] of [`Clip`]s; `synthetic` makes a stand-in library without data.
+//! `resample` (to [`FPS`]) and `loader` (behaviour folders of files) into a
+//! [`MotionLibrary`] of [`Clip`]s; `embedded` holds the CMU capture compiled into the
+//! binary, the default everywhere.
 //! `transitions` finds where clips can cut into each other (`alignment` is the ground
 //! alignment it uses), `graph` turns clips and transitions into a [`MotionGraph`], and
 //! `playback` plays a walk on it as a body, blending across transitions.
@@ -11,6 +11,7 @@
 mod alignment;
 mod bvh;
 mod clip;
+mod embedded;
 mod graph;
 mod library;
 mod loader;
@@ -18,7 +19,6 @@ mod playback;
 mod resample;
 mod skeleton;
 mod step;
-mod synthetic;
 mod transitions;
 mod walker;
 

@@ -40,13 +40,8 @@ pub fn failure(command_line: &str) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
-/// The CMU motion capture beside the project (or where `FIELDHOUSE_MOCAP_DIR` says).
-pub fn mocap() -> PathBuf {
-    let beside = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/mocap");
-    if beside.is_dir() {
-        return beside;
-    }
-    std::env::var_os("FIELDHOUSE_MOCAP_DIR")
-        .map(PathBuf::from)
-        .expect("no mocap data: put it in ../shared/mocap or set FIELDHOUSE_MOCAP_DIR")
+/// The repository's copy of the CMU motion capture (the files the binary embeds), for
+/// tests of `--mocap DIR`. Every other test runs on the embedded default, as users do.
+pub fn repository_mocap() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/mocap")
 }

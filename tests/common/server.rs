@@ -1,7 +1,6 @@
 //! A `fieldhouse serve` for integration tests, and the WebSocket helpers that talk to
 //! it: the real binary on a free loopback port, messages checked against proto/.
 
-use super::mocap;
 use futures_util::StreamExt;
 use serde_json::{json, Value};
 use std::io::{BufRead, BufReader};
@@ -39,14 +38,14 @@ impl Server {
             None => Command::new(binary),
         };
         let mut child = command
-            .args(["serve", "--addr", "127.0.0.1:0", "--mocap"])
-            .arg(mocap())
+            .args(["serve", "--addr", "127.0.0.1:0"])
             .arg("--cache-dir")
             .arg(&cache)
             .args(extra)
             .env("FIELDHOUSE_ADMIN_TOKEN", ADMIN)
             .env("FIELDHOUSE_LOG", log)
             .env_remove("FIELDHOUSE_ADDR")
+            .env_remove("FIELDHOUSE_MOCAP_DIR")
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
             .spawn()
