@@ -1,6 +1,6 @@
-//! Basketball benchmarks on the CMU motion capture beside the project (../shared/mocap,
-//! or FIELDHOUSE_MOCAP_DIR): one opponent-modelling decision, and a 10-minute 2-v-1
-//! match at 60 Hz once the maps are built.
+//! Basketball benchmarks on the CMU motion capture embedded in the binary: one
+//! opponent-modelling decision, and a 10-minute 2-v-1 match at 60 Hz once the maps are
+//! built.
 //!
 //! Run with `cargo bench --bench basketball`; results are written up in BENCHMARKS.md.
 
@@ -16,10 +16,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 fn capabilities() -> Arc<Capabilities> {
-    let dir = std::env::var_os("FIELDHOUSE_MOCAP_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/mocap"));
-    let library = MotionLibrary::load(&dir, FPS).expect("the CMU motion capture loads");
+    let library = MotionLibrary::embedded(FPS);
     let cache = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/bench-cache");
     Arc::new(Capabilities::build(&library, Some(&cache)).expect("the behaviours build"))
 }
