@@ -40,11 +40,11 @@ pub struct Movement {
     played: f64,
     /// What the move was planned for: the goal on the court and the behaviour.
     pub goal: DVec2,
-    pub behaviour: String,
+    pub behaviour: &'static str,
 }
 
 impl Movement {
-    pub fn new(strides: Vec<Stride>, goal: DVec2, behaviour: String) -> Movement {
+    pub fn new(strides: Vec<Stride>, goal: DVec2, behaviour: &'static str) -> Movement {
         debug_assert!(!strides.is_empty());
         Movement {
             strides,

@@ -31,6 +31,13 @@ enum Play {
     },
 }
 
+/// How far beyond the lines a player without the ball may go when no move within them
+/// gets it nearer its goal, m. FIBA asks for at least 2 m of clear floor around the
+/// court, and a player without the ball may use it; the ball handler never leaves the
+/// court (that would be a turnover). The motion capture's turns are wide (no clip turns
+/// on the spot), so a player near a line facing away from its goal needs some of it.
+pub const RUN_OFF_M: f64 = 1.0;
+
 /// How far a goal may move before an agent gives up the move it is playing for a new
 /// one, m.
 const RETARGET_M: f64 = 1.0;
@@ -92,12 +99,10 @@ impl Game {
                 chosen: None,
             },
             Order::MoveTo(goal) => {
-                let caps = self.caps.clone();
-                let mover = match self.agents[k].team {
-                    Team::Defense => caps.defender(self.params.defender.motion),
-                    Team::Offense => &caps.run,
-                };
-                self.head_for(k, mover, goal);
+                match self.agents[k].team {
+                    Team::Defense => self.defender_head_for(k, goal),
+                    Team::Offense => self.head_for(k, &[&self.caps.clone().run], goal),
+                }
                 return;
             }
             Order::Stand => {
@@ -131,7 +136,7 @@ impl Game {
                 reason,
                 chosen,
             } => {
-                self.head_for(k, &self.caps.clone().dribble, goal);
+                self.head_for(k, &[&self.caps.clone().dribble], goal);
                 (action, reason, chosen)
             }
         };
@@ -152,32 +157,63 @@ impl Game {
         }
     }
 
-    /// Heads agent `k` for `goal` with `mover`: plays the map's stored path to the goal's
-    /// cell if the map reaches it, else to the cell that is the cheapest way toward it on
-    /// the court (or stands if there is none).
+    /// Heads agent `k` for `goal` with the first of `movers` (behaviours in order of
+    /// preference) that has a way there: plays the map's stored path to the goal's cell if
+    /// the map reaches it by a path that stays on the court, else to the cell that is the
+    /// cheapest way nearer it on the court. A player without the ball tries the same again
+    /// with the run-off beyond the lines ([`RUN_OFF_M`]); one with the ball never leaves
+    /// the court. It stands if nothing gets it nearer.
+    ///
+    /// Every frame of a move is checked, not only where it ends: the stored paths are
+    /// human motion from the map's start pose, and the cheapest way to a square near a
+    /// line often swings wide of it (a turn is a curve), which would carry a player out
+    /// of bounds.
     ///
     /// A move in progress toward (nearly) the same goal with the same behaviour is kept:
     /// every stored path starts from the map's start pose, so restarting one a few times
     /// a second would replay its first steps for ever and never make a turn that takes
     /// longer than that.
-    fn head_for(&mut self, k: usize, mover: &Mover, goal: DVec2) {
+    fn head_for(&mut self, k: usize, movers: &[&Mover], goal: DVec2) {
         if let Some(m) = &self.agents[k].movement {
-            if m.behaviour == mover.map.behaviour && m.goal.distance(goal) <= RETARGET_M {
+            if movers.iter().any(|mover| mover.behaviour == m.behaviour)
+                && m.goal.distance(goal) <= RETARGET_M
+            {
                 return;
             }
         }
         let pose = self.agents[k].pose;
         let court = &self.params.court;
-        let cell = mover
-            .reachable_cell(&pose, goal)
-            .or_else(|| mover.cell_toward(&pose, goal, |p| court.contains(p)));
-        self.agents[k].movement = cell.map(|c| {
-            Movement::new(
-                mover.strides_to(&pose, c),
-                goal,
-                mover.map.behaviour.clone(),
-            )
+        let margins: &[f64] = if self.holder() == Some(k) {
+            &[0.0]
+        } else {
+            &[0.0, RUN_OFF_M]
+        };
+        self.agents[k].movement = margins.iter().find_map(|&margin_m| {
+            movers.iter().find_map(|mover| {
+                let cell = mover
+                    .reachable_cell(&pose, goal)
+                    .filter(|&c| mover.path_on_court(&pose, c, court, margin_m))
+                    .or_else(|| mover.cell_toward(&pose, goal, court, margin_m))?;
+                Some(Movement::new(
+                    mover.strides_to(&pose, cell),
+                    goal,
+                    mover.behaviour,
+                ))
+            })
         });
+    }
+
+    /// A defender heads for `goal` with its footwork, or runs where the footwork has no
+    /// way nearer on the court: the paper's defender "can use any form of nondribbling
+    /// movement", and the CMU footwork turns one way only, so near a line facing the wrong
+    /// way it could otherwise only stand.
+    fn defender_head_for(&mut self, k: usize, goal: DVec2) {
+        let caps = self.caps.clone();
+        self.head_for(
+            k,
+            &[caps.defender(self.params.defender.motion), &caps.run],
+            goal,
+        );
     }
 
     fn shot_clock_play(&self) -> Option<Play> {
@@ -335,7 +371,7 @@ impl Game {
                     .total_cmp(&self.spot_score(*b, ball))
             })
             .expect("there are spots");
-        self.head_for(k, &self.caps.clone().run, spot);
+        self.head_for(k, &[&self.caps.clone().run], spot);
         self.agents[k].action = Action::ReadyForPass;
     }
 
@@ -350,12 +386,7 @@ impl Game {
 
     /// The defender: toward the ball.
     fn defend(&mut self, k: usize) {
-        let caps = self.caps.clone();
-        self.head_for(
-            k,
-            caps.defender(self.params.defender.motion),
-            self.ball_position(),
-        );
+        self.defender_head_for(k, self.ball_position());
         self.agents[k].action = Action::Defend;
     }
 }

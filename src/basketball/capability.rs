@@ -1,6 +1,7 @@
 //! What each agent can do, as the paper's physical capability model: per behaviour, the
 //! motion graph and the cost map built from it, embedded at any agent's pose.
 
+use super::court::Court;
 use crate::costmap::{cache, AgentPose, BuildParams, CostMap, LocalFrame};
 use crate::motion::{
     GraphError, GraphParams, MotionGraph, MotionLibrary, MotionSource, RootStep, Walker,
@@ -11,8 +12,18 @@ use std::path::Path;
 /// One behaviour an agent moves with: its motion graph and cost map.
 #[derive(Debug, Clone)]
 pub struct Mover {
+    /// The behaviour's name (`dribble`, `run`, `defense`), as frames label a player.
+    pub behaviour: &'static str,
     pub graph: MotionGraph,
     pub map: CostMap,
+    /// Per map cell, the farthest the stored path to it strays from where it starts, m:
+    /// a move whose start is at least this far inside the court stays on it, with no
+    /// need to walk the path.
+    path_reach_m: Vec<f64>,
+    /// Per graph edge, how it is played: one root step (with its turn as cos, sin) per
+    /// data frame, and how many frames. Worked out once, since paths are walked for
+    /// every move an agent considers.
+    edge_frames: Vec<(RootStep, DVec2, usize)>,
 }
 
 /// One frame of a planned move: where the root is and which way it faces, and the
@@ -24,6 +35,44 @@ pub struct Stride {
 }
 
 impl Mover {
+    pub fn new(behaviour: &'static str, graph: MotionGraph, map: CostMap) -> Mover {
+        let edge_frames = graph
+            .edges
+            .iter()
+            .map(|e| {
+                // An edge of a graph built from clips takes one frame; split a longer one
+                // evenly so playback keeps the data's rate.
+                let k = e.frames.max(1);
+                let step = RootStep {
+                    dx: e.step.dx / f64::from(k),
+                    dz: e.step.dz / f64::from(k),
+                    dheading: e.step.dheading / f64::from(k),
+                };
+                (step, DVec2::from_angle(step.dheading), k as usize)
+            })
+            .collect();
+        let mut mover = Mover {
+            behaviour,
+            graph,
+            map,
+            path_reach_m: Vec::new(),
+            edge_frames,
+        };
+        let origin = AgentPose {
+            position: DVec2::ZERO,
+            heading: 0.0,
+        };
+        mover.path_reach_m = (0..mover.map.costs.len())
+            .map(|cell| {
+                mover
+                    .walk(&origin, cell)
+                    .map(|s| s.at.position.length())
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        mover
+    }
+
     /// Seconds for an agent whose frame is `frame` ([`AgentPose::frame`], prepared once
     /// for many look-ups) to reach the world point `world`; `None` beyond the map
     /// (farther than its horizon or its extent).
@@ -43,56 +92,90 @@ impl Mover {
     /// starting with the pose itself. Root motion is relative, so the path found from the
     /// map's start pose holds at any pose (the paper's TEAMBOTS agents did the same).
     pub fn strides_to(&self, pose: &AgentPose, cell: usize) -> Vec<Stride> {
-        let mut at = Walker {
-            position: pose.position,
-            facing: DVec2::from_angle(pose.heading),
-        };
-        let mut out = vec![Stride {
-            at,
-            node: self.map.start_node,
-        }];
-        for &id in &self.map.paths[cell] {
-            let e = &self.graph.edges[id as usize];
-            // An edge of a graph built from clips takes one frame; split a longer one
-            // evenly so playback keeps the data's rate.
-            let k = e.frames.max(1);
-            let step = RootStep {
-                dx: e.step.dx / f64::from(k),
-                dz: e.step.dz / f64::from(k),
-                dheading: e.step.dheading / f64::from(k),
-            };
-            for _ in 0..k {
-                at = at.step(&step);
-                out.push(Stride { at, node: e.to });
-            }
-        }
-        out
+        self.walk(pose, cell).collect()
     }
 
-    /// Of the cells this agent reaches, the one that gets it to `goal` soonest: the
-    /// frames to the cell plus the rest of the way at the behaviour's top speed. This is
-    /// the "cheapest heading" toward a goal the map itself may not reach.
+    /// Whether the stored path to `cell`, played from `pose`, keeps the body on `court`,
+    /// or at most `margin_m` beyond its lines, at every frame. The body moves in straight
+    /// lines between frames, so a convex region like the court that holds every frame
+    /// holds the whole move.
+    pub fn path_on_court(
+        &self,
+        pose: &AgentPose,
+        cell: usize,
+        court: &Court,
+        margin_m: f64,
+    ) -> bool {
+        court.inside_by(pose.position) + margin_m >= self.path_reach_m[cell]
+            || self
+                .walk(pose, cell)
+                .all(|s| court.inside_by(s.at.position) >= -margin_m)
+    }
+
+    /// The strides of the stored path to `cell` from `pose`, without collecting them.
+    fn walk<'a>(&'a self, pose: &AgentPose, cell: usize) -> impl Iterator<Item = Stride> + 'a {
+        let start = Stride {
+            at: Walker {
+                position: pose.position,
+                facing: DVec2::from_angle(pose.heading),
+            },
+            node: self.map.start_node,
+        };
+        let steps = self.map.paths[cell].iter().flat_map(move |&id| {
+            let (step, turn, k) = self.edge_frames[id as usize];
+            std::iter::repeat_n((step, turn, self.graph.edges[id as usize].to), k)
+        });
+        std::iter::once(start).chain(steps.scan(start.at, |at, (step, turn, node)| {
+            *at = at.after(&step, turn);
+            Some(Stride { at: *at, node })
+        }))
+    }
+
+    /// Of the cells this agent reaches along a path that stays on `court` (within
+    /// `margin_m` of its lines) and ends on it at least a cell nearer `goal`, the one that
+    /// gets it there soonest: the frames to the cell plus the rest of the way at the
+    /// behaviour's top speed. This is the "cheapest heading" toward a goal the map itself
+    /// may not reach, or reaches only by a path that leaves the court; `None` if no such
+    /// move gets nearer.
+    ///
+    /// A move must make progress: the rest of the way is counted at top speed, which no
+    /// real move beats, so the cell the agent stands in (no frames, the whole way at top
+    /// speed) would otherwise always win and the agent would never set off.
     pub fn cell_toward(
         &self,
         pose: &AgentPose,
         goal: DVec2,
-        allowed: impl Fn(DVec2) -> bool,
+        court: &Court,
+        margin_m: f64,
     ) -> Option<usize> {
         let grid = &self.map.grid;
         let speed = self.map.top_speed_m_s.max(0.1);
-        let mut best: Option<(f64, usize)> = None;
-        for (cell, cost) in self.map.costs.iter().enumerate() {
-            let Some(frames) = cost else { continue };
-            let world = pose.to_world(grid.centre(cell));
-            if !allowed(world) {
-                continue;
-            }
-            let eta = f64::from(*frames) / self.map.fps + world.distance(goal) / speed;
-            if best.is_none_or(|(b, _)| eta < b) {
-                best = Some((eta, cell));
-            }
+        let nearer_than = pose.position.distance(goal) - grid.cell_m;
+        let mut ranked: Vec<(f64, usize)> = self
+            .map
+            .costs
+            .iter()
+            .enumerate()
+            .filter_map(|(cell, cost)| {
+                let frames = (*cost)?;
+                let world = pose.to_world(grid.centre(cell));
+                let remaining = world.distance(goal);
+                let eta = f64::from(frames) / self.map.fps + remaining / speed;
+                (remaining <= nearer_than && court.contains(world)).then_some((eta, cell))
+            })
+            .collect();
+        let by_eta = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+        // Most of the time the best cell's path stays on the court: try it before
+        // sorting the rest.
+        let best = *ranked.iter().min_by(|a, b| by_eta(a, b))?;
+        if self.path_on_court(pose, best.1, court, margin_m) {
+            return Some(best.1);
         }
-        best.map(|(_, cell)| cell)
+        ranked.sort_unstable_by(by_eta);
+        ranked
+            .into_iter()
+            .map(|(_, cell)| cell)
+            .find(|&cell| self.path_on_court(pose, cell, court, margin_m))
     }
 
     /// The farthest an agent with this map gets from where it stands within `seconds`,
@@ -171,7 +254,7 @@ impl Capabilities {
         library: &MotionLibrary,
         cache_dir: Option<&Path>,
     ) -> Result<Capabilities, GraphError> {
-        let mover = |behaviour: &str| -> Result<Mover, GraphError> {
+        let mover = |behaviour: &'static str| -> Result<Mover, GraphError> {
             let clips: Vec<_> = library.clips_of(behaviour).collect();
             let window = GraphParams::default().window;
             let graph = match behaviour {
@@ -200,7 +283,7 @@ impl Capabilities {
                 &mut |_| {},
             );
             tracing::debug!(behaviour, from_cache, "cost map ready");
-            Ok(Mover { graph, map })
+            Ok(Mover::new(behaviour, graph, map))
         };
         Ok(Capabilities {
             dribble: mover("dribble")?,

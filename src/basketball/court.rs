@@ -37,6 +37,12 @@ impl Court {
         (0.0..=self.length_m).contains(&p.x) && p.y.abs() <= 0.5 * self.width_m
     }
 
+    /// How far `p` is inside the court from its nearest line, m (negative outside).
+    pub fn inside_by(&self, p: DVec2) -> f64 {
+        let half = 0.5 * self.width_m;
+        p.x.min(self.length_m - p.x).min(half - p.y.abs())
+    }
+
     /// The nearest point on the court.
     pub fn clamp(&self, p: DVec2) -> DVec2 {
         let half = 0.5 * self.width_m;

@@ -569,7 +569,10 @@ impl Game {
                 .map(|(k, a)| AgentView {
                     id: a.id.clone(),
                     team: a.team,
-                    behaviour: self.behaviour_of(k),
+                    behaviour: a
+                        .movement
+                        .as_ref()
+                        .map_or_else(|| self.behaviour_of(k), |m| m.behaviour),
                     position: a.pose.position.to_array(),
                     heading: a.pose.heading,
                     node: a.node,

@@ -21,7 +21,7 @@ fn isotropic() -> Mover {
         },
         &mut |_| {},
     );
-    Mover { graph, map }
+    Mover::new("run", graph, map)
 }
 
 fn pose(x: f64, z: f64, heading_deg: f64) -> AgentPose {
@@ -257,4 +257,62 @@ fn moves_play_the_maps_stored_paths_at_the_data_rate() {
     assert_eq!(strides.len() as u32, mover.map.costs[cell].unwrap() + 1);
     let end = strides.last().unwrap().at.position;
     assert_eq!(mover.map.grid.cell_of(start.to_local(end)), Some(cell));
+}
+
+#[test]
+fn a_move_toward_a_goal_beyond_the_map_sets_off_and_stays_on_the_court() {
+    let caps = fixtures::cmu_capabilities();
+    let court = Court::default();
+    for mover in [&caps.run, &caps.dribble, &caps.defense] {
+        // From the middle of the court toward a goal far beyond the map: the cell it
+        // stands in (no frames, the whole way at top speed) must not win.
+        let at = pose(7.0, 0.0, 180.0);
+        let goal = DVec2::new(-40.0, 0.0);
+        let cell = mover
+            .cell_toward(&at, goal, &court, 0.0)
+            .expect("some move gets nearer");
+        let end = mover.strides_to(&at, cell).last().unwrap().at.position;
+        assert!(
+            end.distance(goal) < at.position.distance(goal) - 0.25,
+            "{}: ends at {end}",
+            mover.behaviour
+        );
+        assert!(mover
+            .strides_to(&at, cell)
+            .iter()
+            .all(|s| court.contains(s.at.position)));
+    }
+}
+
+#[test]
+fn a_path_is_on_the_court_exactly_when_every_frame_is() {
+    // The shortcut (a start far enough inside) must agree with walking the path, from
+    // poses near every line and in the middle, facing every way.
+    let caps = fixtures::cmu_capabilities();
+    let court = Court::default();
+    let mover = &caps.run;
+    let mut checked = 0;
+    for (x, z) in [(0.5, 0.0), (13.5, 3.0), (7.0, 7.0), (7.0, -6.5), (7.0, 0.0)] {
+        for heading in (0..360).step_by(45) {
+            let at = pose(x, z, f64::from(heading));
+            for cell in (0..mover.map.costs.len()).step_by(7) {
+                if mover.map.costs[cell].is_none() {
+                    continue;
+                }
+                for margin in [0.0, 1.0] {
+                    let walked = mover
+                        .strides_to(&at, cell)
+                        .iter()
+                        .all(|s| court.inside_by(s.at.position) >= -margin);
+                    assert_eq!(
+                        mover.path_on_court(&at, cell, &court, margin),
+                        walked,
+                        "cell {cell} from {at:?}, margin {margin}"
+                    );
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked > 1000);
 }
