@@ -386,8 +386,8 @@ pub fn table(rounds: &[Round]) -> String {
             if ours.server == "fieldhouse" && peer.server != "fieldhouse" {
                 let _ = writeln!(
                     out,
-                    "at {} spectators, fieldhouse ÷ {}: server CPU per message {:.2}, delivered share {:.3}, RSS {:.2}, bytes per message {:.2}",
-                    ours.spectators,
+                    "at {}, fieldhouse ÷ {}: server CPU per message {:.2}, delivered share {:.3}, RSS {:.2}, bytes per message {:.2}",
+                    crate::words::plural(ours.spectators as u64, "spectator"),
                     peer.server,
                     ours.server_cpu_us_per_message / peer.server_cpu_us_per_message,
                     ours.delivered_share / peer.delivered_share,
