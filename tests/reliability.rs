@@ -282,6 +282,50 @@ fn addresses_are_read_as_people_write_them() {
     );
 }
 
+#[test]
+fn no_error_repeats_its_cause() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("error-chains");
+    std::fs::create_dir_all(dir.join("a-directory")).unwrap();
+    std::fs::write(dir.join("a-file"), "not a directory").unwrap();
+    let missing = dir.join("missing");
+    let (missing, a_dir, a_file) = (
+        missing.display(),
+        dir.join("a-directory").display().to_string(),
+        dir.join("a-file").display().to_string(),
+    );
+    let closed = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap();
+    for command in [
+        format!("replay info {missing}.jsonl"),
+        format!("replay export {missing}.jsonl"),
+        format!("run {missing}.toml"),
+        format!("serve --config {a_dir}"),
+        format!("serve --config {missing}.toml"),
+        format!("motion-graph --behaviour run --mocap {missing}"),
+        format!("costmap --behaviour run --mocap {a_file}"),
+        format!("bot --url ws://{closed}/ws/matches/x/play --token t"),
+    ] {
+        let err = common::failure(&command);
+        let message = err
+            .lines()
+            .find_map(|l| l.strip_prefix("error: "))
+            .unwrap_or_else(|| panic!("{command}: no error line in {err}"));
+        assert!(
+            message.matches("(os error").count() <= 1,
+            "{command}: {message}"
+        );
+        let segments: Vec<&str> = message.split(": ").collect();
+        for (i, segment) in segments.iter().enumerate() {
+            assert!(
+                !segments[i + 1..].contains(segment),
+                "{command}: \"{segment}\" repeats in {message}"
+            );
+        }
+    }
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn no_token_reaches_the_logs_even_at_trace_level() {
     let server = Server::launch(&[], "trace", &["--no-demo"]);
