@@ -121,6 +121,10 @@ impl Percentiles {
 
 /// Runs every round of the plan, fieldhouse then the peer at each count.
 pub fn run(plan: &Plan) -> anyhow::Result<Vec<Round>> {
+    // A peer that cannot start would otherwise fail only after fieldhouse's first round.
+    if let Some(peer) = &plan.peer {
+        peer.check()?;
+    }
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()
