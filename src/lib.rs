@@ -38,6 +38,7 @@
 //! * [`loadgen`]: a load generator for the server (and a peer, Colyseus) on loopback:
 //!   a client of the protocol, not part of the core.
 //! * [`names`]: the names users type for presets, and the error a wrong one gets.
+//! * [`words`]: how counts and figures read in text for people (`1 possession`, `2.82`).
 //!
 //! The `fieldhouse` binary (`src/main.rs`, `src/cli/`) is a thin shell: it parses the
 //! command line, runs the core or the server, prints text or JSON and draws pictures.
@@ -55,3 +56,4 @@ pub mod replay;
 pub mod server;
 pub mod session;
 pub mod sim;
+pub mod words;

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{failure, fieldhouse, json};
+use common::{assert_reads_well, failure, fieldhouse, json};
 use serde_json::Value;
 
 fn source() -> String {
@@ -130,4 +130,31 @@ fn both_offenses_are_compared_on_the_same_possessions() {
     ));
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("Welch"), "{text}");
+    assert_reads_well(&text);
+}
+
+#[test]
+fn one_possession_is_counted_in_the_singular() {
+    let out = fieldhouse(&format!(
+        "basketball-eval --offense simple --possessions 1 --seed 2 {}",
+        source()
+    ));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.starts_with("1 possession, seed 2"), "{text}");
+    assert_reads_well(&text);
+    let out = fieldhouse(&format!(
+        "basketball-decide --shooter 10,3,200 --defender 5,-1,20 {}",
+        source()
+    ));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_reads_well(&String::from_utf8(out.stdout).unwrap());
 }

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{fieldhouse, json};
+use common::{assert_reads_well, fieldhouse, json};
 use serde_json::Value;
 use std::process::Command;
 
@@ -102,6 +102,16 @@ fn catch_prints_a_readable_summary_without_json() {
         text.contains("lot-optical fielder from (105, 30): CAUGHT"),
         "{text}"
     );
+    assert_reads_well(&text);
+}
+
+#[test]
+fn a_sweep_of_one_launch_says_so_in_the_singular() {
+    let out = fieldhouse("catch-sweep --n 1 --seed 3");
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.starts_with("1 launch (seed 3), "), "{text}");
+    assert_reads_well(&text);
 }
 
 #[test]

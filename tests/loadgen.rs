@@ -60,14 +60,97 @@ fn loadgen_refuses_bad_arguments_and_a_missing_peer() {
         assert_eq!(out.status.code(), Some(2), "{args}");
         assert!(out.stdout.is_empty(), "{args}");
     }
-    let out =
-        fieldhouse("loadgen --spectators 1 --seconds 1 --peer colyseus --peer-dir /nonexistent");
-    assert!(!out.status.success());
-    assert!(
-        String::from_utf8_lossy(&out.stderr).contains("npm install --prefix /nonexistent"),
+}
+
+#[test]
+fn a_peer_that_cannot_start_fails_before_any_round_with_the_install_command() {
+    let root = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("peers");
+    let _ = std::fs::remove_dir_all(&root);
+    let peers = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("bench/peers");
+    // The tracked files without node_modules: what a fresh clone has.
+    let fresh = root.join("fresh");
+    std::fs::create_dir_all(&fresh).unwrap();
+    for file in ["package.json", "package-lock.json", "colyseus-server.mjs"] {
+        std::fs::copy(peers.join(file), fresh.join(file)).unwrap();
+    }
+    // Installed, but the server script is gone.
+    let scriptless = root.join("scriptless");
+    std::fs::create_dir_all(scriptless.join("node_modules/@colyseus/core")).unwrap();
+    std::fs::create_dir_all(scriptless.join("node_modules/.bin")).unwrap();
+    std::fs::copy(peers.join("package.json"), scriptless.join("package.json")).unwrap();
+    std::fs::write(
+        scriptless.join("node_modules/@colyseus/core/package.json"),
         "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    )
+    .unwrap();
+    std::fs::write(scriptless.join("node_modules/.bin/node"), "").unwrap();
+    let nowhere = root.join("nowhere");
+    for (dir, expected) in [
+        (&nowhere, format!("npm ci --prefix {}", nowhere.display())),
+        (&fresh, format!("npm ci --prefix {}", fresh.display())),
+        (&scriptless, "colyseus-server.mjs".to_string()),
+    ] {
+        let started = std::time::Instant::now();
+        let err = common::failure(&format!(
+            "loadgen --spectators 1 --seconds 1 --settle 0 --peer colyseus --peer-dir {}",
+            dir.display()
+        ));
+        assert!(err.contains(&expected), "{expected:?} not in {err}");
+        // No server was started and no spectator connected: fieldhouse's round would
+        // have taken seconds and logged them.
+        assert!(!err.contains("connecting"), "a round ran first: {err}");
+        assert!(
+            started.elapsed() < std::time::Duration::from_secs(5),
+            "{:?}",
+            started.elapsed()
+        );
+    }
+}
+
+/// `npm ci` installs only from a lock that lists every package the tree needs, optional
+/// builds for other systems included; a lock that lacks one is refused by `npm ci` and
+/// rewritten by `npm install` (it was, on every machine). Checked here without a network:
+/// every dependency of every package in bench/peers/package-lock.json resolves, as Node
+/// resolves it, to an entry of the lock.
+#[test]
+fn the_peers_lock_file_lists_every_package_so_npm_ci_accepts_it() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("bench/peers/package-lock.json");
+    let lock: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let packages = lock["packages"].as_object().unwrap();
+    let mut missing = Vec::new();
+    for (at, package) in packages {
+        for kind in ["dependencies", "optionalDependencies"] {
+            for name in package[kind]
+                .as_object()
+                .into_iter()
+                .flatten()
+                .map(|(n, _)| n)
+            {
+                // From the package's own node_modules up to the root's.
+                let mut base = at.as_str();
+                let found = loop {
+                    let candidate = if base.is_empty() {
+                        format!("node_modules/{name}")
+                    } else {
+                        format!("{base}/node_modules/{name}")
+                    };
+                    if packages.contains_key(&candidate) {
+                        break true;
+                    }
+                    if base.is_empty() {
+                        break false;
+                    }
+                    base = base.rsplit_once("/node_modules/").map_or("", |(up, _)| up);
+                };
+                if !found {
+                    missing.push(format!("{name} (needed by {at:?})"));
+                }
+            }
+        }
+    }
+    assert!(missing.is_empty(), "not in the lock: {missing:?}");
 }
 
 #[test]

@@ -7,6 +7,7 @@ mod common;
 
 use common::server::*;
 use serde_json::Value;
+use std::net::SocketAddr;
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::client::IntoClientRequest;
 use tokio_tungstenite::tungstenite::Error as WsError;
@@ -137,6 +138,191 @@ fn bad_limits_are_refused_naming_the_setting() {
         err.contains("server.toml") && err.contains("allowed_origins"),
         "{err}"
     );
+}
+
+/// `fieldhouse serve ARGS` with the test servers' cache and `env` set (and
+/// no FIELDHOUSE_ADMIN_TOKEN or FIELDHOUSE_ADDR unless `env` sets them): the address it
+/// listens on, once it says so (then it is stopped), or everything it wrote to stderr
+/// if it exits first.
+fn serve_until_listening(args: &[&str], env: &[(&str, &str)]) -> Result<SocketAddr, String> {
+    use std::io::{BufRead, BufReader};
+    let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("server-cache");
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"));
+    command
+        .arg("serve")
+        .args(args)
+        .arg("--cache-dir")
+        .arg(&cache)
+        .env_remove("FIELDHOUSE_ADMIN_TOKEN")
+        .env_remove("FIELDHOUSE_ADDR")
+        .env_remove("FIELDHOUSE_LOG")
+        .env_remove("FIELDHOUSE_MOCAP_DIR")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped());
+    for (name, value) in env {
+        command.env(name, value);
+    }
+    let mut child = command.spawn().expect("the binary starts");
+    let mut stderr = String::new();
+    for line in BufReader::new(child.stderr.take().unwrap()).lines() {
+        let line = line.unwrap();
+        if let Some(at) = line.find("http://") {
+            let addr: String = line[at + 7..].chars().take_while(|c| *c != '/').collect();
+            let _ = child.kill();
+            let _ = child.wait();
+            return Ok(addr.parse().expect("a socket address"));
+        }
+        stderr += &line;
+        stderr.push('\n');
+    }
+    assert!(
+        !child.wait().unwrap().success(),
+        "serve exited cleanly without listening"
+    );
+    Err(stderr)
+}
+
+#[test]
+fn serve_checks_its_port_and_settings_before_loading_motion() {
+    // A busy port: refused at once, naming the address and what to do, before motion is
+    // loaded and before an admin token is printed that could never be used.
+    let busy = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = busy.local_addr().unwrap().to_string();
+    let started = Instant::now();
+    let err = serve_until_listening(&["--no-demo", "--addr", &addr], &[]).unwrap_err();
+    assert!(err.contains(&format!("cannot listen on {addr}")), "{err}");
+    assert!(err.contains("in use") && err.contains("--addr"), "{err}");
+    assert!(
+        !err.contains("motion loaded"),
+        "motion was loaded first:\n{err}"
+    );
+    assert!(
+        !err.contains("admin token"),
+        "a token was printed first:\n{err}"
+    );
+    assert!(
+        started.elapsed() < Duration::from_secs(10),
+        "{:?}",
+        started.elapsed()
+    );
+    // An admin token too short to be a secret: the same.
+    let err = serve_until_listening(
+        &["--no-demo", "--addr", "127.0.0.1:0"],
+        &[("FIELDHOUSE_ADMIN_TOKEN", "short")],
+    )
+    .unwrap_err();
+    assert!(
+        err.contains("FIELDHOUSE_ADMIN_TOKEN must be at least 16"),
+        "{err}"
+    );
+    assert!(
+        !err.contains("motion loaded"),
+        "motion was loaded first:\n{err}"
+    );
+}
+
+/// Runs `serve` with `--addr VALUE` that must be refused as a usage error; its stderr.
+fn refused_addr(value: &str) -> String {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args(["serve", "--no-demo", "--addr", value])
+        .env_remove("FIELDHOUSE_ADDR")
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "--addr {value:?} was not refused"
+    );
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn addresses_are_read_as_people_write_them() {
+    // A host name that resolves, from the flag, the environment or the file; localhost
+    // stays on loopback.
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("addr-forms");
+    std::fs::create_dir_all(&dir).unwrap();
+    let config = dir.join("server.toml");
+    std::fs::write(&config, "addr = \"localhost:0\"\n").unwrap();
+    let config_arg = config.to_str().unwrap();
+    for (args, env) in [
+        (vec!["--no-demo", "--addr", "localhost:0"], vec![]),
+        (vec!["--no-demo"], vec![("FIELDHOUSE_ADDR", "localhost:0")]),
+        (vec!["--no-demo", "--config", config_arg], vec![]),
+    ] {
+        let addr = serve_until_listening(&args, &env)
+            .unwrap_or_else(|err| panic!("{args:?} {env:?} did not listen: {err}"));
+        assert!(addr.ip().is_loopback(), "{args:?} {env:?}: {addr}");
+    }
+    // A host alone means port 7878. (Held here, if free, so that the server fails at
+    // once naming it instead of serving on a port other tests might want.)
+    let _held = std::net::TcpListener::bind("127.0.0.1:7878");
+    let err = serve_until_listening(&["--no-demo", "--addr", "127.0.0.1"], &[]).unwrap_err();
+    assert!(err.contains("cannot listen on 127.0.0.1:7878"), "{err}");
+    // Anything else: refused before anything starts, saying what is expected.
+    for wrong in [
+        "localhost:port",
+        "127.0.0.1:99999",
+        "http://127.0.0.1:7878",
+        "127.0.0.1 7878",
+        "",
+    ] {
+        let err = refused_addr(wrong);
+        assert!(
+            err.contains("HOST:PORT, e.g. 127.0.0.1:7878"),
+            "{wrong:?}: {err}"
+        );
+    }
+    std::fs::write(&config, "addr = \"localhost:port\"\n").unwrap();
+    let err = common::failure(&format!("serve --config {}", config.display()));
+    assert!(
+        err.contains("server.toml: addr:") && err.contains("HOST:PORT, e.g. 127.0.0.1:7878"),
+        "{err}"
+    );
+}
+
+#[test]
+fn no_error_repeats_its_cause() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("error-chains");
+    std::fs::create_dir_all(dir.join("a-directory")).unwrap();
+    std::fs::write(dir.join("a-file"), "not a directory").unwrap();
+    let missing = dir.join("missing");
+    let (missing, a_dir, a_file) = (
+        missing.display(),
+        dir.join("a-directory").display().to_string(),
+        dir.join("a-file").display().to_string(),
+    );
+    let closed = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap();
+    for command in [
+        format!("replay info {missing}.jsonl"),
+        format!("replay export {missing}.jsonl"),
+        format!("run {missing}.toml"),
+        format!("serve --config {a_dir}"),
+        format!("serve --config {missing}.toml"),
+        format!("motion-graph --behaviour run --mocap {missing}"),
+        format!("costmap --behaviour run --mocap {a_file}"),
+        format!("bot --url ws://{closed}/ws/matches/x/play --token t"),
+    ] {
+        let err = common::failure(&command);
+        let message = err
+            .lines()
+            .find_map(|l| l.strip_prefix("error: "))
+            .unwrap_or_else(|| panic!("{command}: no error line in {err}"));
+        assert!(
+            message.matches("(os error").count() <= 1,
+            "{command}: {message}"
+        );
+        let segments: Vec<&str> = message.split(": ").collect();
+        for (i, segment) in segments.iter().enumerate() {
+            assert!(
+                !segments[i + 1..].contains(segment),
+                "{command}: \"{segment}\" repeats in {message}"
+            );
+        }
+    }
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{failure, fieldhouse, json};
+use common::{assert_reads_well, failure, fieldhouse, json};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -80,11 +80,97 @@ fn the_same_scenario_twice_gives_the_same_frames_and_verifies() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    // Export: a header and one row per agent and ball per frame.
-    let csv = fieldhouse(&format!("replay export {} --csv", a.display()));
-    let text = String::from_utf8(csv.stdout).unwrap();
-    assert!(text.starts_with("tick,time_s,agent,x,y,z,heading\n"));
-    assert_eq!(text.lines().count(), 1 + 3 * (la.len() - 2));
+}
+
+/// stdout of a command that must succeed.
+fn stdout(command_line: &str) -> String {
+    let out = fieldhouse(command_line);
+    assert!(
+        out.status.success(),
+        "{command_line}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+#[test]
+fn export_writes_csv_by_default_and_explains_its_formats() {
+    let dir = scratch("export");
+    let (file, _) = run(&dir, FIELDERS, "a.jsonl");
+    let frames: Vec<String> = lines(&file)
+        .into_iter()
+        .filter(|l| l.starts_with("{\"type\":\"frame\""))
+        .collect();
+    // No flag: CSV on stdout, the same as --csv and --format csv.
+    let csv = stdout(&format!("replay export {}", file.display()));
+    assert!(
+        csv.starts_with("tick,time_s,agent,x,y,z,heading\n"),
+        "{csv}"
+    );
+    assert_eq!(csv.lines().count(), 1 + 3 * frames.len());
+    assert_eq!(
+        stdout(&format!("replay export {} --csv", file.display())),
+        csv
+    );
+    assert_eq!(
+        stdout(&format!("replay export {} --format csv", file.display())),
+        csv
+    );
+    // jsonl: the frame messages as recorded, one a line.
+    let jsonl = stdout(&format!("replay export {} --format jsonl", file.display()));
+    assert_eq!(jsonl.lines().collect::<Vec<_>>(), frames);
+    let err = failure(&format!("replay export {} --format xml", file.display()));
+    assert!(err.contains("csv") && err.contains("jsonl"), "{err}");
+    // The help says what each format holds.
+    let help = stdout("replay export --help");
+    for expected in [
+        "--format",
+        "csv",
+        "jsonl",
+        "tick,time_s,agent,x,y,z,heading",
+        "heading (radians",
+    ] {
+        assert!(help.contains(expected), "{expected:?} not in:\n{help}");
+    }
+}
+
+#[test]
+fn run_and_replay_lines_round_their_figures_and_count_in_words() {
+    let dir = scratch("words");
+    // One ball and no duration: the run ends when the ball is settled, at a time that
+    // is no round number of seconds.
+    let one_ball = FIELDERS
+        .replace("duration_s = 30.0\n", "")
+        .replace("time_s = 0.5,", "time_s = 0.52,")
+        .replace(
+            "  { time_s = 8.0, speed_m_s = 30.0, elevation_deg = 55.0, azimuth_deg = 47.0 },\n",
+            "",
+        )
+        .replace(
+            "  { time_s = 16.0, speed_m_s = 40.0, elevation_deg = 35.0, azimuth_deg = 40.0, spin_rpm = 1500.0 },\n",
+            "",
+        );
+    let (file, doc) = run(&dir, &one_ball, "one.jsonl");
+    assert_eq!(doc["result"]["balls"], 1, "{doc}");
+    let simulated = doc["simulated_s"].as_f64().unwrap().to_string();
+    assert!(
+        simulated.split('.').nth(1).map_or(0, str::len) > 4,
+        "{simulated} s, printed unrounded, would pass for rounded"
+    );
+    let scenario = dir.join("scenario.toml");
+    let ran = stdout(&format!(
+        "run {} --out {}",
+        scenario.display(),
+        dir.join("again.jsonl").display()
+    ));
+    assert!(ran.contains("\n1 ball: "), "{ran}");
+    let info = stdout(&format!("replay info {}", file.display()));
+    assert!(info.contains("complete: finished; 1 ball: "), "{info}");
+    assert!(info.contains("0 bot log entries"), "{info}");
+    let verified = stdout(&format!("replay verify {}", file.display()));
+    for text in [&ran, &info, &verified] {
+        assert_reads_well(text);
+    }
 }
 
 #[test]

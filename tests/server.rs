@@ -574,6 +574,66 @@ async fn the_reference_bot_plays_a_match_to_its_end() {
     assert!(String::from_utf8_lossy(&refused.stderr).contains("refused"));
 }
 
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_reference_bot_refuses_a_spectator_socket_and_shows_its_progress() {
+    let server = Server::start(&["--no-demo"]);
+    let mut scenario = fielder_with_bot("realtime", 1000);
+    scenario["duration_s"] = json!(7.0);
+    scenario["options"]["pause_s"] = json!(0.5);
+    let (id, tokens) = server.create(scenario);
+    let token = tokens["cf"].as_str().unwrap();
+    let bot = |url: String, token: Option<&str>| {
+        let mut command = tokio::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"));
+        command
+            .args(["bot", "--url", &url])
+            .env_remove("FIELDHOUSE_BOT_TOKEN")
+            .env_remove("FIELDHOUSE_LOG");
+        if let Some(token) = token {
+            command.args(["--token", token]);
+        }
+        command.kill_on_drop(true).output()
+    };
+    // The spectators' URL: refused at its hello, naming the play URL, instead of
+    // waiting for ever for perceptions that never come.
+    let refused = tokio::time::timeout(
+        Duration::from_secs(20),
+        bot(server.ws(&format!("/ws/matches/{id}")), Some(token)),
+    )
+    .await
+    .expect("the bot gave up at once")
+    .unwrap();
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success(), "{err}");
+    assert!(refused.stdout.is_empty());
+    assert!(
+        err.contains(&server.ws(&format!("/ws/matches/{id}/play"))) && err.contains("--token"),
+        "{err}"
+    );
+    assert!(!err.contains(token), "the token was echoed: {err}");
+    // The play URL with the token in it (no --token): it plays to the end, and says how
+    // it goes on stderr every few seconds (the tick and the score) while stdout keeps
+    // the one JSON result.
+    let played = bot(
+        server.ws(&format!("/ws/matches/{id}/play?token={token}")),
+        None,
+    )
+    .await
+    .unwrap();
+    let log = String::from_utf8_lossy(&played.stderr);
+    assert!(played.status.success(), "{log}");
+    let result: Value = serde_json::from_slice(&played.stdout).unwrap();
+    assert_eq!(result["reason"], "finished", "{result}");
+    let progress: Vec<&str> = log
+        .lines()
+        .filter(|l| l.contains("tick ") && l.contains(" s of play"))
+        .collect();
+    assert!(!progress.is_empty(), "no progress in:\n{log}");
+    assert!(
+        progress.iter().any(|l| l.contains(" caught, ")),
+        "no score in the progress:\n{log}"
+    );
+}
+
 /// `fieldhouse replay verify FILE` must succeed.
 fn assert_verifies(file: &std::path::Path) {
     let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))

@@ -13,6 +13,7 @@ use fieldhouse::basketball::{
     GameParams, Mover, ShotModel, Situation,
 };
 use fieldhouse::costmap::AgentPose;
+use fieldhouse::words::{figure, plural};
 use glam::DVec2;
 use serde_json::json;
 use std::io::Write;
@@ -139,11 +140,16 @@ pub fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<()> {
         .count();
     writeln!(
         out,
-        "{} of {} reachable squares satisfy C_o > C_d + T_s + ε (T_s {} s, ε {} s; motion: {})",
+        "{} of {} {} C_o > C_d + T_s + ε (T_s {} s, ε {} s; motion: {})",
         qualifying,
-        decision.candidates.len(),
-        params.shot_time_s,
-        params.epsilon_s,
+        plural(decision.candidates.len() as u64, "reachable square"),
+        if qualifying == 1 {
+            "satisfies"
+        } else {
+            "satisfy"
+        },
+        figure(params.shot_time_s, 3),
+        figure(params.epsilon_s, 3),
         caps.source
     )?;
     match decision.chosen {
@@ -156,8 +162,8 @@ pub fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<()> {
             c.success,
             c.c_o,
             c.c_d,
-            c.t_s,
-            c.epsilon
+            figure(c.t_s, 3),
+            figure(c.epsilon, 3)
         )?,
         None => writeln!(out, "no square qualifies: fall back to the plan (maneuver, pass when pressed)")?,
     }
@@ -340,8 +346,8 @@ pub fn eval(args: EvalArgs, out: &mut impl Write) -> anyhow::Result<()> {
     }
     writeln!(
         out,
-        "{} possessions, seed {}, defender moving with {} (motion: {})",
-        args.possessions,
+        "{}, seed {}, defender moving with {} (motion: {})",
+        plural(args.possessions, "possession"),
         args.seed,
         args.defense.name(),
         caps.source

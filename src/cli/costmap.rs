@@ -7,6 +7,7 @@ use anyhow::Context;
 use clap::Args;
 use fieldhouse::costmap::{cache, BuildParams, Grid, Method, Obstacle, WATCHED_POINTS};
 use fieldhouse::motion::MotionGraph;
+use fieldhouse::words::{figure, plural};
 use glam::DVec2;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
@@ -216,13 +217,13 @@ pub fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
     }
     writeln!(
         out,
-        "{} cost map of \"{}\" ({}), {:.0} m × {:.0} m in {} m cells, from {} frame {} ({:.1} m/s forward)",
+        "{} cost map of \"{}\" ({}), {} m × {} m in {} m cells, from {} frame {} ({:.1} m/s forward)",
         map.method.name(),
         map.behaviour,
         library.source,
-        map.grid.size_m,
-        map.grid.size_m,
-        map.grid.cell_m,
+        figure(map.grid.size_m, 2),
+        figure(map.grid.size_m, 2),
+        figure(map.grid.cell_m, 3),
         graph.clip_names[start_node.clip],
         start_node.frame,
         start_node.forward_speed
@@ -244,7 +245,11 @@ pub fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
         let cost = map
             .cost(DVec2::new(x, z))
             .map_or("unreachable".to_string(), |f| {
-                format!("{f} frames ({:.2} s)", f as f64 / map.fps)
+                format!(
+                    "{} ({:.2} s)",
+                    plural(f.into(), "frame"),
+                    f as f64 / map.fps
+                )
             });
         writeln!(out, "  to ({x:+}, {z:+}): {cost}")?;
     }

@@ -9,7 +9,8 @@ use std::path::PathBuf;
 #[derive(Args, Debug)]
 #[command(
     after_help = "Starts `fieldhouse serve --no-demo --stamp-frames` (this binary) and, with \
-    --peer colyseus, the Colyseus server in bench/peers (run `npm install --prefix bench/peers` once), \
+    --peer colyseus, the Colyseus server in bench/peers (run `npm ci --prefix bench/peers` once; it \
+    installs exactly what bench/peers/package-lock.json lists, and loadgen checks it before the first round), \
     each on a free loopback port; spreads the spectators over --matches 60 Hz matches (30 frames a \
     second; the peer has one room); \
     measures a window; stops everything. Needs a file-descriptor limit above the spectator count \

@@ -98,14 +98,60 @@ pub fn main() -> ExitCode {
         // A reader that stopped reading (`| head`) is not an error of ours.
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", causes(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes, joined by ": " as `{e:#}` joins them, but without a cause
+/// whose text the error wrapping it already shows. Many errors put their source in
+/// their own message and also return it from `source()` (ureq's and tungstenite's do,
+/// and so do `#[error("...: {source}")]` enums), which `{e:#}` prints twice: "cannot
+/// read X: No such file or directory (os error 2): No such file or directory (os error
+/// 2)". Our own errors leave their source out of their message; this keeps the rest
+/// from repeating one.
+fn causes(e: &anyhow::Error) -> String {
+    let texts: Vec<String> = e.chain().map(ToString::to_string).collect();
+    let mut shown = vec![texts[0].as_str()];
+    for pair in texts.windows(2) {
+        if !pair[0].contains(pair[1].as_str()) {
+            shown.push(&pair[1]);
+        }
+    }
+    shown.join(": ")
 }
 
 fn is_broken_pipe(e: &anyhow::Error) -> bool {
     e.chain()
         .filter_map(|cause| cause.downcast_ref::<std::io::Error>())
         .any(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::causes;
+
+    #[test]
+    fn a_cause_already_in_its_wrapper_is_not_repeated() {
+        let os = || std::io::Error::from(std::io::ErrorKind::NotFound);
+        // A wrapper that shows its source and also returns it, like ureq's errors.
+        #[derive(Debug)]
+        struct Shows(std::io::Error);
+        impl std::fmt::Display for Shows {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(f, "cannot read X: {}", self.0)
+            }
+        }
+        impl std::error::Error for Shows {
+            fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+                Some(&self.0)
+            }
+        }
+        let e = anyhow::Error::new(Shows(os())).context("loading Y");
+        assert_eq!(causes(&e), format!("loading Y: cannot read X: {}", os()));
+        // A plain chain keeps every cause.
+        let e = anyhow::Error::new(os()).context("cannot read X");
+        assert_eq!(causes(&e), format!("cannot read X: {}", os()));
+    }
 }

@@ -4,6 +4,7 @@
 use anyhow::Context;
 use clap::Args;
 use fieldhouse::motion::{GraphParams, MotionGraph, MotionLibrary, FPS};
+use fieldhouse::words::{figure, plural};
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
@@ -133,10 +134,10 @@ pub fn run(args: MotionGraphArgs, out: &mut impl Write) -> anyhow::Result<()> {
     writeln!(out, "  frames:       {}", s.frames)?;
     writeln!(
         out,
-        "  transitions:  {} found (RMS ≤ {} m over {} frames), {} kept after pruning",
+        "  transitions:  {} found (RMS ≤ {} m over {}), {} kept after pruning",
         s.transitions_before_pruning,
-        graph.params.threshold_m,
-        graph.params.window,
+        figure(graph.params.threshold_m, 3),
+        plural(graph.params.window as u64, "frame"),
         s.transitions_after_pruning
     )?;
     writeln!(

@@ -3,6 +3,7 @@
 
 use anyhow::{anyhow, Result};
 use fieldhouse::fielding::{SweepCase, SweepReport, TrialResult};
+use fieldhouse::words::plural;
 use glam::DVec2;
 use plotters::prelude::*;
 use std::path::Path;
@@ -264,8 +265,9 @@ pub fn draw_rates(dir: &Path, report: &SweepReport) -> Result<()> {
     let mut chart = ChartBuilder::on(&root)
         .caption(
             format!(
-                "Catch rate on catchable balls ({} launches, seed {})",
-                report.n, report.seed
+                "Catch rate on catchable balls ({}, seed {})",
+                plural(report.n as u64, "launch"),
+                report.seed
             ),
             ("sans-serif", 18),
         )

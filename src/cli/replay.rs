@@ -1,10 +1,11 @@
 //! `fieldhouse replay info | verify | export`: what a replay file holds, whether it plays
-//! back identically, and its positions as CSV.
+//! back identically, and its positions for other tools.
 
 use super::basketball::CapabilityArgs;
-use clap::{Args, Subcommand};
+use clap::{Args, Subcommand, ValueEnum};
 use fieldhouse::replay::{self, Replay};
 use fieldhouse::sim::Sport;
+use fieldhouse::words::{figure, plural};
 use serde_json::{json, Value};
 use std::io::Write;
 use std::path::PathBuf;
@@ -31,13 +32,32 @@ enum ReplayCommand {
         #[command(flatten)]
         capability: CapabilityArgs,
     },
-    /// Positions for other tools: one CSV row per agent (and one for the ball) per frame.
+    /// Positions for other tools, on stdout: CSV by default, or the frames as JSON lines.
+    #[command(after_help = "Formats (--format):\n  \
+        csv    one row per frame for the ball and one for each agent, under the header \
+        tick,time_s,agent,x,y,z,heading: the ball's row has agent \"ball\", its x, y (height) \
+        and z, and no heading; an agent's row has its id, its ground position x and z, no y, \
+        and its heading (radians from +x toward +z). Metres and seconds. --csv is the same.\n  \
+        jsonl  the frame messages exactly as the WebSocket protocol sends them (PROTOCOL.md), \
+        one a line, with every field: for jq and other JSON tools.\n\
+        Example: fieldhouse replay export papers.jsonl > papers.csv")]
     Export {
         file: PathBuf,
-        /// Write CSV (the only format).
-        #[arg(long, required = true)]
+        /// What to write: csv or jsonl (see below).
+        #[arg(long, value_enum, default_value_t = ExportFormat::Csv)]
+        format: ExportFormat,
+        /// The same as --format csv (the default), kept for scripts that pass it.
+        #[arg(long, conflicts_with = "format")]
         csv: bool,
     },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ExportFormat {
+    /// Positions, a row per ball or agent per frame.
+    Csv,
+    /// The frame messages, one a line.
+    Jsonl,
 }
 
 pub fn run(args: ReplayArgs, out: &mut impl Write) -> anyhow::Result<()> {
@@ -63,10 +83,10 @@ pub fn run(args: ReplayArgs, out: &mut impl Write) -> anyhow::Result<()> {
                 .map_err(|m| anyhow::anyhow!("{}: {m}", file.display()))?;
             writeln!(
                 out,
-                "{}: verified: {} frames over {} ticks re-simulate identically{}",
+                "{}: verified: {} over {} re-simulate identically{}",
                 file.display(),
-                verified.frames,
-                verified.ticks,
+                plural(verified.frames as u64, "frame"),
+                plural(verified.ticks, "tick"),
                 if replay.complete() {
                     ""
                 } else {
@@ -75,7 +95,13 @@ pub fn run(args: ReplayArgs, out: &mut impl Write) -> anyhow::Result<()> {
             )?;
             Ok(())
         }
-        ReplayCommand::Export { file, .. } => export(&replay::read(&file)?, out),
+        ReplayCommand::Export { file, format, .. } => {
+            let replay = replay::read(&file)?;
+            match format {
+                ExportFormat::Csv => export_csv(&replay, out),
+                ExportFormat::Jsonl => export_frames(&replay, out),
+            }
+        }
     }
 }
 
@@ -117,15 +143,20 @@ fn info(replay: &Replay, as_json: bool, out: &mut impl Write) -> anyhow::Result<
     )?;
     writeln!(
         out,
-        "  {} frames, {} bot log entries, {:.1} s of play ({} ticks at {} Hz)",
-        replay.frames.len(),
-        replay.log.len(),
-        doc["duration_s"].as_f64().unwrap_or(0.0),
-        last_tick,
-        tick_hz
+        "  {}, {}, {} s of play ({} at {} Hz)",
+        plural(replay.frames.len() as u64, "frame"),
+        plural(replay.log.len() as u64, "bot log entry"),
+        figure(doc["duration_s"].as_f64().unwrap_or(0.0), 2),
+        plural(last_tick, "tick"),
+        figure(tick_hz, 2)
     )?;
     match (&replay.footer, &replay.problem) {
-        (Some(f), None) => writeln!(out, "  complete: {} with {}", f["reason"], f["result"])?,
+        (Some(f), None) => writeln!(
+            out,
+            "  complete: {}; {}",
+            f["reason"].as_str().unwrap_or("ended"),
+            super::run::summary(&f["result"])
+        )?,
         (_, Some(problem)) => writeln!(
             out,
             "  INCOMPLETE: {problem}; the records before it read back"
@@ -138,7 +169,15 @@ fn info(replay: &Replay, as_json: bool, out: &mut impl Write) -> anyhow::Result<
     Ok(())
 }
 
-fn export(replay: &Replay, out: &mut impl Write) -> anyhow::Result<()> {
+/// The frames as recorded, which are the very messages spectators were sent.
+fn export_frames(replay: &Replay, out: &mut impl Write) -> anyhow::Result<()> {
+    for (_, line) in &replay.frames {
+        writeln!(out, "{line}")?;
+    }
+    Ok(())
+}
+
+fn export_csv(replay: &Replay, out: &mut impl Write) -> anyhow::Result<()> {
     writeln!(out, "tick,time_s,agent,x,y,z,heading")?;
     for (_, line) in &replay.frames {
         let frame: Value = serde_json::from_str(line)?;

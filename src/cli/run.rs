@@ -7,6 +7,7 @@ use clap::Args;
 use fieldhouse::replay::Recorder;
 use fieldhouse::session::Session;
 use fieldhouse::sim::{Scenario, Sport, World};
+use fieldhouse::words::{figure, plural};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::{json, Value};
 use std::io::Write;
@@ -157,7 +158,7 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
         .finish(tick, "finished", &result)
         .map_err(write_error)?;
     let simulated_s = session.world.time_s();
-    let summary = summary(scenario.sport, &result);
+    let summary = summary(&result);
     if args.json {
         let doc = json!({
             "file": path,
@@ -175,32 +176,36 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     }
     writeln!(
         out,
-        "{}: {} simulated s in {:.2} s ({:.0}× real time); {} frames to {}",
+        "{}: {} simulated s in {} s ({}× real time); {} to {}",
         scenario.sport.name(),
-        simulated_s,
-        elapsed_s,
-        simulated_s / elapsed_s.max(1e-9),
-        frames,
+        figure(simulated_s, 2),
+        figure(elapsed_s, 2),
+        figure(simulated_s / elapsed_s.max(1e-9), 0),
+        plural(frames, "frame"),
         path.display()
     )?;
     writeln!(out, "{summary}")?;
     Ok(())
 }
 
-/// The result in words: catches, or points per possession.
-fn summary(sport: Sport, result: &Value) -> String {
-    match sport {
-        Sport::Basketball => {
-            let points = result["points"].as_u64().unwrap_or(0);
-            let possessions = result["possession"].as_u64().unwrap_or(0);
-            format!(
-                "{points} points in {possessions} possessions ({:.3} per possession)",
-                points as f64 / possessions.max(1) as f64
-            )
-        }
-        _ => format!(
-            "{} balls: {} caught, {} landed",
-            result["balls"], result["caught"], result["dropped"]
-        ),
+/// A match's result (or score so far) in words: points per possession for basketball,
+/// catches for fly balls; what a replay's footer and a bot's progress say too.
+pub fn summary(result: &Value) -> String {
+    let count = |key: &str| result[key].as_u64().unwrap_or(0);
+    if result.get("points").is_some() {
+        let (points, possessions) = (count("points"), count("possession"));
+        format!(
+            "{} in {} ({:.3} per possession)",
+            plural(points, "point"),
+            plural(possessions, "possession"),
+            points as f64 / possessions.max(1) as f64
+        )
+    } else {
+        format!(
+            "{}: {} caught, {} landed",
+            plural(count("balls"), "ball"),
+            count("caught"),
+            count("dropped")
+        )
     }
 }

@@ -3,8 +3,10 @@
 use super::basketball::CapabilityArgs;
 use anyhow::Context;
 use clap::Args;
+use fieldhouse::server::config::{listen_addr, DEFAULT_PORT};
 use fieldhouse::server::{self, auth, ServerConfig};
-use std::net::SocketAddr;
+use std::io::ErrorKind;
+use std::net::{SocketAddr, TcpListener};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -14,8 +16,10 @@ use std::path::PathBuf;
     Example: fieldhouse serve --mocap ../shared/mocap"
 )]
 pub struct ServeArgs {
-    /// Address to listen on (default 127.0.0.1:7878; loopback unless told otherwise).
-    #[arg(long, env = "FIELDHOUSE_ADDR")]
+    /// Address to listen on: HOST:PORT, where HOST is an IP address or a host name
+    /// (127.0.0.1:7878, localhost:8080, [::1]:7878; 0.0.0.0:7878 for every interface),
+    /// or a HOST alone for port 7878. Default 127.0.0.1:7878: loopback only.
+    #[arg(long, env = "FIELDHOUSE_ADDR", value_name = "HOST:PORT", value_parser = listen_addr)]
     addr: Option<SocketAddr>,
     /// Do not start the built-in demo matches.
     #[arg(long)]
@@ -58,6 +62,40 @@ pub struct ServeArgs {
 }
 
 pub fn run(args: ServeArgs) -> anyhow::Result<()> {
+    // Everything a newcomer can get wrong (settings, the admin token, a busy port) is
+    // checked before motion is loaded and cost maps are built, which takes seconds, and
+    // before an admin token is printed that a failed start would make useless.
+    let config = settings(&args)?;
+    let chosen_token = admin_token_from_env()?;
+    if let Some(dir) = &config.replay_dir {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the replay directory {}", dir.display()))?;
+    }
+    let listener = listen(config.addr)?;
+    let caps = args.capability.load()?;
+    tracing::info!(motion = %caps.source, "motion source");
+    let admin_token = chosen_token.unwrap_or_else(|| {
+        let t = auth::new_token();
+        // Printed once, on the terminal only: never into the logs.
+        eprintln!("admin token (set FIELDHOUSE_ADMIN_TOKEN to choose one): {t}");
+        t
+    });
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .context("starting the async runtime")?;
+    runtime.block_on(async move {
+        let listener = tokio::net::TcpListener::from_std(listener)?;
+        let addr = listener.local_addr()?;
+        tracing::info!(%addr, "listening: open http://{addr}/");
+        server::serve(listener, config, admin_token, caps, shutdown_signal()).await?;
+        tracing::info!("stopped");
+        Ok(())
+    })
+}
+
+/// The settings: defaults, then the file, then the flags; checked.
+fn settings(args: &ServeArgs) -> anyhow::Result<ServerConfig> {
     let mut config = match &args.config {
         Some(path) => ServerConfig::load(path).map_err(anyhow::Error::msg)?,
         None => ServerConfig::default(),
@@ -71,45 +109,64 @@ pub fn run(args: ServeArgs) -> anyhow::Result<()> {
     if args.stamp_frames {
         config.stamp_frames = true;
     }
-    if let Some(dir) = args.replay_dir {
-        config.replay_dir = Some(dir);
+    if let Some(dir) = &args.replay_dir {
+        config.replay_dir = Some(dir.clone());
     }
-    config.allowed_origins.extend(args.allow_origins);
+    config
+        .allowed_origins
+        .extend(args.allow_origins.iter().cloned());
     config.agones_sdk_port = args.agones.then_some(args.agones_sdk_port);
     if let Some(n) = args.max_connections_per_ip {
         config.max_connections_per_ip = n;
     }
     config.check().map_err(anyhow::Error::msg)?;
-    if let Some(dir) = &config.replay_dir {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create the replay directory {}", dir.display()))?;
-    }
-    let caps = args.capability.load()?;
-    tracing::info!(motion = %caps.source, "motion source");
-    let admin_token = match std::env::var("FIELDHOUSE_ADMIN_TOKEN") {
-        Ok(t) if t.len() >= 16 => t,
-        Ok(_) => anyhow::bail!("FIELDHOUSE_ADMIN_TOKEN must be at least 16 characters"),
-        Err(_) => {
-            let t = auth::new_token();
-            // Printed once, on the terminal only: never into the logs.
-            eprintln!("admin token (set FIELDHOUSE_ADMIN_TOKEN to choose one): {t}");
-            t
+    Ok(config)
+}
+
+/// The admin token FIELDHOUSE_ADMIN_TOKEN chooses, if it is set; one that is too short
+/// to be a secret is refused.
+fn admin_token_from_env() -> anyhow::Result<Option<String>> {
+    match std::env::var("FIELDHOUSE_ADMIN_TOKEN") {
+        Ok(t) if t.len() >= 16 => Ok(Some(t)),
+        Ok(t) => anyhow::bail!(
+            "FIELDHOUSE_ADMIN_TOKEN must be at least 16 characters (it has {}); \
+             unset it to have one made for you",
+            t.chars().count()
+        ),
+        Err(std::env::VarError::NotPresent) => Ok(None),
+        Err(std::env::VarError::NotUnicode(_)) => {
+            anyhow::bail!("FIELDHOUSE_ADMIN_TOKEN is not valid UTF-8")
         }
-    };
-    let runtime = tokio::runtime::Builder::new_multi_thread()
-        .enable_all()
-        .build()
-        .context("starting the async runtime")?;
-    runtime.block_on(async move {
-        let listener = tokio::net::TcpListener::bind(config.addr)
-            .await
-            .with_context(|| format!("cannot listen on {}", config.addr))?;
-        let addr = listener.local_addr()?;
-        tracing::info!(%addr, "listening: open http://{addr}/");
-        server::serve(listener, config, admin_token, caps, shutdown_signal()).await?;
-        tracing::info!("stopped");
-        Ok(())
-    })
+    }
+}
+
+/// Binds the listening socket, with a message that says what to do when it cannot.
+fn listen(addr: SocketAddr) -> anyhow::Result<TcpListener> {
+    let listener = TcpListener::bind(addr).map_err(|e| {
+        let next = SocketAddr::new(addr.ip(), addr.port().checked_add(1).unwrap_or(0));
+        let hint = match e.kind() {
+            ErrorKind::AddrInUse => format!(
+                "another process (another fieldhouse serve?) is listening there; pass \
+                 --addr with another port, e.g. --addr {next} (port 0 takes any free one)"
+            ),
+            ErrorKind::PermissionDenied => format!(
+                "ports below 1024 need privileges; pass --addr with another port, e.g. --addr {}",
+                SocketAddr::new(addr.ip(), DEFAULT_PORT)
+            ),
+            ErrorKind::AddrNotAvailable => format!(
+                "no interface of this machine has the address {}; pass --addr with one of \
+                 its own (127.0.0.1, or 0.0.0.0 for every interface)",
+                addr.ip()
+            ),
+            _ => "pass --addr with another address or port".to_string(),
+        };
+        anyhow::anyhow!("cannot listen on {addr}: {e}; {hint}")
+    })?;
+    // Tokio takes over a socket only in non-blocking mode.
+    listener
+        .set_nonblocking(true)
+        .with_context(|| format!("cannot listen on {addr}"))?;
+    Ok(listener)
 }
 
 /// SIGINT (Ctrl-C) or SIGTERM.

@@ -5,6 +5,7 @@ use super::plots;
 use anyhow::Context;
 use clap::Args;
 use fieldhouse::fielding::{LaunchDistribution, StrategyKind, StrategySummary, Sweep, SweepReport};
+use fieldhouse::words::plural;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -87,8 +88,10 @@ fn print_table(report: &SweepReport, out: &mut impl Write) -> std::io::Result<()
     let catchable = report.strategies.first().map_or(0, |s| s.catchable);
     writeln!(
         out,
-        "{} launches (seed {}), {} catchable by the predictive baseline",
-        report.n, report.seed, catchable
+        "{} (seed {}), {} catchable by the predictive baseline",
+        plural(report.n as u64, "launch"),
+        report.seed,
+        catchable
     )?;
     writeln!(
         out,

@@ -20,6 +20,7 @@
 use super::client::number_after;
 use super::servers::Running;
 use super::{Audience, Percentiles, Round, Window};
+use crate::words::plural;
 use futures_util::{SinkExt, StreamExt};
 use serde::Serialize;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -217,13 +218,13 @@ pub fn table(r: &BotRound) -> String {
         )
     });
     let bots = format!(
-        "bots: {} in {} lock-step matches ({} connected), thinking {:.0} ms, {:.0} s window\n\
+        "{} in {} ({} connected), thinking {:.0} ms, {:.0} s window\n\
          ticks per match per second (median): {:.0}\n\
          tick turnaround (a match's last command sent -> its next perception) p50/p99/max: {:.2}/{:.2}/{:.2} ms\n\
          a bot's wait (its command sent -> its next perception) p50/p99/max: {:.2}/{:.2}/{:.2} ms\n\
          commands: {}; server CPU {:.2} s ({:.1} µs per command); server RSS {:.1} MB; load generator CPU {:.2} s\n",
-        r.bots,
-        r.matches,
+        plural(r.bots as u64, "bot"),
+        plural(r.matches as u64, "lock-step match"),
         r.connected,
         r.think_ms,
         r.window_s,

@@ -121,6 +121,10 @@ impl Percentiles {
 
 /// Runs every round of the plan, fieldhouse then the peer at each count.
 pub fn run(plan: &Plan) -> anyhow::Result<Vec<Round>> {
+    // A peer that cannot start would otherwise fail only after fieldhouse's first round.
+    if let Some(peer) = &plan.peer {
+        peer.check()?;
+    }
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()
@@ -386,8 +390,8 @@ pub fn table(rounds: &[Round]) -> String {
             if ours.server == "fieldhouse" && peer.server != "fieldhouse" {
                 let _ = writeln!(
                     out,
-                    "at {} spectators, fieldhouse ÷ {}: server CPU per message {:.2}, delivered share {:.3}, RSS {:.2}, bytes per message {:.2}",
-                    ours.spectators,
+                    "at {}, fieldhouse ÷ {}: server CPU per message {:.2}, delivered share {:.3}, RSS {:.2}, bytes per message {:.2}",
+                    crate::words::plural(ours.spectators as u64, "spectator"),
                     peer.server,
                     ours.server_cpu_us_per_message / peer.server_cpu_us_per_message,
                     ours.delivered_share / peer.delivered_share,

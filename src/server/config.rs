@@ -2,14 +2,23 @@
 //! (`serve --config FILE`) and by flags.
 
 use super::admission::valid_origin;
-use serde::Deserialize;
-use std::net::SocketAddr;
+use serde::{Deserialize, Deserializer};
+use std::net::{IpAddr, SocketAddr, ToSocketAddrs};
 use std::path::Path;
+
+/// The port `serve` listens on when the address names none.
+pub const DEFAULT_PORT: u16 = 7878;
+
+/// What an address to listen on looks like, for every message about a wrong one.
+const ADDR_FORM: &str = "expected HOST:PORT, e.g. 127.0.0.1:7878, where HOST is an IP address \
+    or a host name (localhost); a HOST alone listens on port 7878";
 
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ServerConfig {
-    /// Where to listen. Loopback unless told otherwise.
+    /// Where to listen. Loopback unless told otherwise. In the file it is written as on
+    /// the command line (see [`listen_addr`]).
+    #[serde(deserialize_with = "listen_addr_setting")]
     pub addr: SocketAddr,
     /// Start the built-in demo matches.
     pub demo: bool,
@@ -49,7 +58,7 @@ pub struct ServerConfig {
 impl Default for ServerConfig {
     fn default() -> Self {
         ServerConfig {
-            addr: SocketAddr::from(([127, 0, 0, 1], 7878)),
+            addr: SocketAddr::from(([127, 0, 0, 1], DEFAULT_PORT)),
             demo: true,
             max_matches: 64,
             max_message_bytes: 4096,
@@ -65,6 +74,67 @@ impl Default for ServerConfig {
             agones_sdk_port: None,
         }
     }
+}
+
+/// An address to listen on, as people write it: `HOST:PORT` where HOST is an IP address
+/// (`127.0.0.1:7878`, `[::1]:7878`, `0.0.0.0:7878`) or a host name that resolves
+/// (`localhost:7878`), or a HOST alone, meaning port [`DEFAULT_PORT`]. A name that
+/// resolves to several addresses listens on a loopback one if it has one (so
+/// `localhost` never opens the server to the network), else on its first IPv4
+/// address, else on its first. Anything else is refused with what is expected.
+pub fn listen_addr(text: &str) -> Result<SocketAddr, String> {
+    let text = text.trim();
+    if let Ok(addr) = text.parse::<SocketAddr>() {
+        return Ok(addr);
+    }
+    // An IP address alone, IPv6 with or without brackets.
+    let bare = text
+        .strip_prefix('[')
+        .and_then(|t| t.strip_suffix(']'))
+        .unwrap_or(text);
+    if let Ok(ip) = bare.parse::<IpAddr>() {
+        return Ok(SocketAddr::new(ip, DEFAULT_PORT));
+    }
+    // Only what a host, an IP address and a port are written with: a URL, a path or a
+    // stray space is refused here rather than mistaken for a strange host name.
+    let allowed = |c: char| c.is_ascii_alphanumeric() || matches!(c, '-' | '.' | ':' | '[' | ']');
+    if text.is_empty() || !text.chars().all(allowed) {
+        return Err(format!("not an address to listen on; {ADDR_FORM}"));
+    }
+    let (host, port) = match text.rsplit_once(':') {
+        Some((host, port)) => {
+            let port = port.parse::<u16>().map_err(|_| {
+                format!("the port \"{port}\" is not a number from 0 to 65535; {ADDR_FORM}")
+            })?;
+            (host, port)
+        }
+        None => (text, DEFAULT_PORT),
+    };
+    // What is left must be a host name (an IPv6 address with a port needs brackets).
+    let name = |c: char| c.is_ascii_alphanumeric() || c == '-' || c == '.';
+    if host.is_empty() || !host.chars().all(name) {
+        return Err(format!(
+            "\"{host}\" is neither an IP address nor a host name (an IPv6 address with a \
+             port is written in brackets: [::1]:7878); {ADDR_FORM}"
+        ));
+    }
+    let resolved: Vec<SocketAddr> = (host, port)
+        .to_socket_addrs()
+        .map_err(|e| format!("cannot resolve the host name \"{host}\" ({e}); {ADDR_FORM}"))?
+        .collect();
+    resolved
+        .iter()
+        .find(|a| a.ip().is_loopback())
+        .or_else(|| resolved.iter().find(|a| a.is_ipv4()))
+        .or(resolved.first())
+        .copied()
+        .ok_or_else(|| format!("the host name \"{host}\" has no address; {ADDR_FORM}"))
+}
+
+/// `addr` in the settings file, read as [`listen_addr`] reads the flag.
+fn listen_addr_setting<'de, D: Deserializer<'de>>(d: D) -> Result<SocketAddr, D::Error> {
+    let text = String::deserialize(d)?;
+    listen_addr(&text).map_err(|e| serde::de::Error::custom(format!("\"{text}\": {e}")))
 }
 
 impl ServerConfig {
@@ -114,7 +184,40 @@ impl ServerConfig {
 
 #[cfg(test)]
 mod tests {
-    use super::ServerConfig;
+    use super::{listen_addr, ServerConfig};
+    use std::net::SocketAddr;
+
+    #[test]
+    fn addresses_are_read_as_people_write_them() {
+        let at = |s: &str| listen_addr(s).unwrap();
+        assert_eq!(
+            at("127.0.0.1:7892"),
+            SocketAddr::from(([127, 0, 0, 1], 7892))
+        );
+        assert_eq!(at("127.0.0.1"), SocketAddr::from(([127, 0, 0, 1], 7878)));
+        assert_eq!(at("0.0.0.0:0"), SocketAddr::from(([0, 0, 0, 0], 0)));
+        assert_eq!(at("[::1]:80"), "[::1]:80".parse().unwrap());
+        assert_eq!(at("::1"), "[::1]:7878".parse().unwrap());
+        assert_eq!(at("[::1]"), "[::1]:7878".parse().unwrap());
+        let local = at("localhost:7892");
+        assert!(local.ip().is_loopback(), "{local}");
+        assert_eq!(local.port(), 7892);
+        assert_eq!(at("localhost").port(), 7878);
+        for wrong in [
+            "",
+            "localhost:port",
+            "127.0.0.1:99999",
+            "http://127.0.0.1:7878",
+            "127.0.0.1:7878/",
+            "fe80::1:7878x",
+        ] {
+            let message = listen_addr(wrong).unwrap_err();
+            assert!(
+                message.contains("HOST:PORT, e.g. 127.0.0.1:7878"),
+                "{wrong:?}: {message}"
+            );
+        }
+    }
 
     #[test]
     fn the_defaults_listen_on_loopback_and_pass_their_own_check() {

@@ -45,3 +45,48 @@ pub fn failure(command_line: &str) -> String {
 pub fn repository_mocap() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("data/mocap")
 }
+
+/// Nouns the binary counts in its human-readable lines, in the plural.
+const COUNTED: [&str; 18] = [
+    "possessions",
+    "passes",
+    "launches",
+    "balls",
+    "frames",
+    "ticks",
+    "points",
+    "entries",
+    "matches",
+    "bots",
+    "commands",
+    "squares",
+    "spectators",
+    "sessions",
+    "failures",
+    "clips",
+    "cells",
+    "walks",
+];
+
+/// Asserts that text meant for people rounds its figures (at most four decimals) and
+/// counts in words ("1 possession", never "1 possessions").
+pub fn assert_reads_well(text: &str) {
+    for token in text.split(|c: char| !(c.is_ascii_digit() || c == '.')) {
+        if let Some((whole, decimals)) = token.split_once('.') {
+            let number = !whole.is_empty() && decimals.chars().all(|c| c.is_ascii_digit());
+            assert!(
+                !(number && decimals.len() > 4),
+                "an unrounded figure, {token}, in:\n{text}"
+            );
+        }
+    }
+    let words: Vec<&str> = text.split_whitespace().collect();
+    for pair in words.windows(2) {
+        let count = pair[0].trim_start_matches('(');
+        let noun = pair[1].trim_end_matches(|c: char| !c.is_alphabetic());
+        assert!(
+            !(count == "1" && COUNTED.contains(&noun)),
+            "\"1 {noun}\" in:\n{text}"
+        );
+    }
+}
