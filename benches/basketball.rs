@@ -18,7 +18,9 @@ use std::sync::Arc;
 fn capabilities() -> Arc<Capabilities> {
     let library = MotionLibrary::embedded(FPS);
     let cache = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/bench-cache");
-    Arc::new(Capabilities::build(&library, Some(&cache)).expect("the behaviours build"))
+    Arc::new(
+        Capabilities::build(&library, Some(&cache), &mut |_| {}).expect("the behaviours build"),
+    )
 }
 
 /// Target: a decision over a 20 m × 20 m map of 0.5 m cells in under 50 µs.

@@ -158,3 +158,38 @@ fn one_possession_is_counted_in_the_singular() {
     );
     assert_reads_well(&String::from_utf8(out.stdout).unwrap());
 }
+
+#[test]
+fn a_first_start_shows_each_stage_and_the_next_start_reads_the_cache() {
+    let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("first-start-cache");
+    let _ = std::fs::remove_dir_all(&cache);
+    let stages = || {
+        let out = fieldhouse(&format!(
+            "basketball-eval --offense simple --possessions 1 --cache-dir {}",
+            cache.display()
+        ));
+        assert!(out.status.success());
+        String::from_utf8(out.stderr).unwrap()
+    };
+    let first = stages();
+    for behaviour in ["run", "dribble", "defense"] {
+        for stage in [
+            "motion graph of",
+            "searching its cost map",
+            "cost map built",
+        ] {
+            assert!(
+                first.contains(&format!("{behaviour}: {stage}")),
+                "no '{behaviour}: {stage}' in:\n{first}"
+            );
+        }
+    }
+    let second = stages();
+    assert!(!second.contains("searching"), "{second}");
+    for behaviour in ["run", "dribble", "defense"] {
+        assert!(
+            second.contains(&format!("{behaviour}: cost map read from the cache")),
+            "{second}"
+        );
+    }
+}

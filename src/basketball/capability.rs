@@ -234,6 +234,43 @@ pub const HORIZON_FRAMES: u32 = 240;
 /// Transition threshold of the dribbling graph, RMS metres.
 pub const DRIBBLE_THRESHOLD_M: f64 = 0.12;
 
+/// What building the capabilities is busy with, for a progress display: on first start
+/// the graphs and maps take seconds, and a user should see why.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Building a behaviour's motion graph from this many frames of capture.
+    Graph {
+        behaviour: &'static str,
+        frames: usize,
+    },
+    /// Searching a behaviour's cost map (none was cached).
+    Map { behaviour: &'static str },
+    /// A behaviour's cost map is ready: read from the cache, or just built.
+    Ready {
+        behaviour: &'static str,
+        cached: bool,
+    },
+}
+
+impl std::fmt::Display for Stage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Stage::Graph { behaviour, frames } => {
+                write!(f, "{behaviour}: motion graph of {frames} frames")
+            }
+            Stage::Map { behaviour } => write!(
+                f,
+                "{behaviour}: searching its cost map ({HORIZON_FRAMES} frames ahead; cached for next time)"
+            ),
+            Stage::Ready { behaviour, cached } => write!(
+                f,
+                "{behaviour}: cost map {}",
+                if *cached { "read from the cache" } else { "built" }
+            ),
+        }
+    }
+}
+
 /// The three behaviours of the basketball domain.
 #[derive(Debug, Clone)]
 pub struct Capabilities {
@@ -249,13 +286,18 @@ pub struct Capabilities {
 
 impl Capabilities {
     /// Builds (or reads from the cache under `cache_dir`) the graphs and `search` maps of
-    /// `run`, `dribble` and `defense` from `library`.
+    /// `run`, `dribble` and `defense` from `library`, telling `progress` what it is doing.
     pub fn build(
         library: &MotionLibrary,
         cache_dir: Option<&Path>,
+        progress: &mut dyn FnMut(Stage),
     ) -> Result<Capabilities, GraphError> {
-        let mover = |behaviour: &'static str| -> Result<Mover, GraphError> {
+        let mut mover = |behaviour: &'static str| -> Result<Mover, GraphError> {
             let clips: Vec<_> = library.clips_of(behaviour).collect();
+            progress(Stage::Graph {
+                behaviour,
+                frames: clips.iter().map(|c| c.frame_count()).sum(),
+            });
             let window = GraphParams::default().window;
             let graph = match behaviour {
                 // The automatic threshold keeps the CMU dribbling at 0.08 m, where its two
@@ -275,14 +317,20 @@ impl Capabilities {
                 depth: HORIZON_FRAMES,
                 ..BuildParams::default()
             };
-            let (map, from_cache) = cache::build_or_load(
+            let mut searching = false;
+            let (map, cached) = cache::build_or_load(
                 cache_dir,
                 library.source.fingerprint(),
                 &graph,
                 &params,
-                &mut |_| {},
+                &mut |_| {
+                    if !searching {
+                        searching = true;
+                        progress(Stage::Map { behaviour });
+                    }
+                },
             );
-            tracing::debug!(behaviour, from_cache, "cost map ready");
+            progress(Stage::Ready { behaviour, cached });
             Ok(Mover::new(behaviour, graph, map))
         };
         Ok(Capabilities {

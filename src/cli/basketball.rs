@@ -34,11 +34,20 @@ impl CapabilityArgs {
     pub fn load(&self) -> anyhow::Result<Arc<Capabilities>> {
         let library = self.source.load()?;
         let started = Instant::now();
-        let caps = Capabilities::build(&library, self.cache.dir().as_deref())
-            .context("building the basketball behaviours (run, dribble, defense)")?;
+        let cache = self.cache.dir();
+        // A line per stage: on first start the graphs and maps take seconds, and a user
+        // (or a container's log) should see what is happening.
+        let caps = Capabilities::build(&library, cache.as_deref(), &mut |stage| {
+            tracing::info!(
+                elapsed_s = %figure(started.elapsed().as_secs_f64(), 2),
+                "{stage}"
+            );
+        })
+        .context("building the basketball behaviours (run, dribble, defense)")?;
         tracing::info!(
-            elapsed_s = started.elapsed().as_secs_f64(),
-            "cost maps of run, dribble and defense ready"
+            elapsed_s = %figure(started.elapsed().as_secs_f64(), 2),
+            cache = %cache.map_or_else(|| "none".to_string(), |d| d.display().to_string()),
+            "motion graphs and cost maps of run, dribble and defense ready"
         );
         Ok(Arc::new(caps))
     }

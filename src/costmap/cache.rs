@@ -62,9 +62,9 @@ pub fn default_dir() -> Option<PathBuf> {
 }
 
 /// The map of `graph` with `params`: read from the cache under `dir` if it holds one,
-/// else built (telling `progress` as [`CostMap::build`] does) and stored there. A cache
-/// that cannot be written is logged and otherwise ignored: the map is still good.
-/// Returns the map and whether it came from the cache.
+/// else built (telling `progress` 0 as it starts, then as [`CostMap::build`] does) and
+/// stored there. A cache that cannot be written is logged and otherwise ignored: the map
+/// is still good. Returns the map and whether it came from the cache.
 pub fn build_or_load(
     dir: Option<&Path>,
     motion_fingerprint: &str,
@@ -84,6 +84,7 @@ pub fn build_or_load(
     if let Some(map) = file.as_deref().and_then(load) {
         return (map, true);
     }
+    progress(0);
     let map = CostMap::build(graph, params, progress);
     if let Some(file) = &file {
         if let Err(e) = store(file, &map) {

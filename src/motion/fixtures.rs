@@ -103,7 +103,7 @@ pub fn cmu_capabilities() -> std::sync::Arc<crate::basketball::Capabilities> {
     CAPS.get_or_init(|| {
         let cache = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-cache");
         std::sync::Arc::new(
-            crate::basketball::Capabilities::build(cmu_library(), Some(&cache))
+            crate::basketball::Capabilities::build(cmu_library(), Some(&cache), &mut |_| {})
                 .expect("the CMU behaviours build"),
         )
     })
