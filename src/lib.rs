@@ -16,9 +16,10 @@
 //! * [`fielding`]: fielders with human limits, the sub-tick catch test, the catching
 //!   strategies (Chapman/OAC with Tresilian's lateral term, Gillies & Dodgson's LOT,
 //!   McBeath's optical LOT, trajectory prediction), single trials and sweeps.
-//! * [`motion`]: human motion: BVH motion capture (or a synthetic stand-in) loaded into
-//!   clips, and the motion graph of a behaviour (Kovar et al. 2002): transitions between
-//!   similar frames, pruned to the largest strongly connected component.
+//! * [`motion`]: human motion: BVH motion capture (the CMU clips embedded in the binary,
+//!   or a user's own directory) loaded into clips, and the motion graph of a behaviour
+//!   (Kovar et al. 2002): transitions between similar frames, pruned to the largest
+//!   strongly connected component.
 //! * [`costmap`]: Sukthankar et al.'s physical capability model: the frames a human needs
 //!   to reach each square around it, by Monte Carlo walks, search, or grassfire.
 //! * [`basketball`]: the paper's basketball domain: a half court, agents that move with

@@ -59,7 +59,7 @@ impl CapabilityArgs {
     after_help = "The court is FIBA's half court: x from the baseline (0) to the half-court line (14 m), \
         z across it (−7.5 to 7.5 m), the basket at (1.575, 0). Headings are degrees from +x toward +z \
         (180 faces the basket from midcourt).\n\
-        Example: fieldhouse basketball-decide --mocap ../shared/mocap --shooter 9,2,180 --defender 4,0,0 --json"
+        Example: fieldhouse basketball-decide --shooter 9,2,180 --defender 4,0,0 --json"
 )]
 pub struct DecideArgs {
     /// The shooter's pose, X,Z,HEADING_DEG.
@@ -282,7 +282,7 @@ fn picture(
     after_help = "Possession k starts from the same random positions whatever the offense (seeded by --seed and k): \
         the ball handler at x 8–12 m, z ±5 m; the teammate 5–10 m out on the other side; the defender 3 m \
         from the ball handler toward the basket.\n\
-        Example: fieldhouse basketball-eval --mocap ../shared/mocap --offense both --possessions 2000 --seed 1"
+        Example: fieldhouse basketball-eval --offense both --possessions 2000 --seed 1"
 )]
 pub struct EvalArgs {
     /// simple, costmap, or both (the same possessions for each, compared by Welch's test).

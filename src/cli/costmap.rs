@@ -21,7 +21,7 @@ use std::time::Instant;
     allow_negative_numbers = true,
     args_override_self = true,
     after_help = "The agent stands at (0, 0) facing +x; y is up, so +z is on its right.\n\
-        Example: fieldhouse costmap --mocap ../shared/mocap --behaviour run --method search --png run.png"
+        Example: fieldhouse costmap --behaviour run --method search --png run.png"
 )]
 pub struct CostmapArgs {
     /// mc (the paper's Monte Carlo), search (systematic minimum time) or grassfire

@@ -13,7 +13,7 @@ use std::path::PathBuf;
 #[command(
     after_help = "Open http://127.0.0.1:7878/ to watch. Creating and deleting matches needs the admin token: \
     set FIELDHOUSE_ADMIN_TOKEN, or use the one printed at start.\n\
-    Example: fieldhouse serve --mocap ../shared/mocap"
+    Example: fieldhouse serve"
 )]
 pub struct ServeArgs {
     /// Address to listen on: HOST:PORT, where HOST is an IP address or a host name

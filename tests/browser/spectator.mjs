@@ -1,7 +1,6 @@
 // The spectator page end to end: the real `fieldhouse serve` on a loopback port, Debian's
 // chromium (headless) driven by playwright-core. Run by tests/browser.rs, which passes:
-//   FIELDHOUSE_BIN       the binary
-//   FIELDHOUSE_MOCAP_DIR motion capture for basketball
+//   FIELDHOUSE_BIN       the binary (its embedded motion capture drives basketball)
 //   FIELDHOUSE_CACHE_DIR cost-map cache shared with the other tests
 //   ARTIFACTS            where screenshots go
 //   CHROMIUM             the browser (default /usr/bin/chromium)
@@ -21,7 +20,6 @@ const env = (name, fallback) => {
   return v;
 };
 const BIN = env("FIELDHOUSE_BIN");
-const MOCAP = env("FIELDHOUSE_MOCAP_DIR");
 const CACHE = env("FIELDHOUSE_CACHE_DIR");
 const ARTIFACTS = env("ARTIFACTS");
 const CHROMIUM = env("CHROMIUM", "/usr/bin/chromium");
@@ -57,7 +55,7 @@ async function freePort() {
 /** Starts the server on `port` and resolves once it listens. */
 function startServer(port) {
   return new Promise((resolve, reject) => {
-    const child = spawn(BIN, ["serve", "--addr", `127.0.0.1:${port}`, "--mocap", MOCAP, "--cache-dir", CACHE, "--replay-dir", replayDir], {
+    const child = spawn(BIN, ["serve", "--addr", `127.0.0.1:${port}`, "--cache-dir", CACHE, "--replay-dir", replayDir], {
       env: { ...process.env, FIELDHOUSE_ADMIN_TOKEN: "browser-test-admin-token", FIELDHOUSE_LOG: "info" },
       stdio: ["ignore", "ignore", "pipe"],
     });
@@ -98,6 +96,9 @@ async function main() {
   passed("lobby: lists the demo matches' replays");
   const scoreText = await page.locator(`#matches tr:has(a[href="#/matches/demo-basketball"])`).textContent();
   check(/pts in \d+ possessions/.test(scoreText), `lobby: shows the basketball score: ${scoreText}`);
+  // The motion source is named for visitors without any path of the server's.
+  const source = await page.locator("#source").textContent();
+  check(/^motion: CMU motion capture, embedded: \d+ clips$/.test(source), `lobby: names the motion source without a path: ${source}`);
   await shot("lobby");
 
   // A live match: the HUD's tick rises and the canvas changes.
@@ -124,7 +125,7 @@ async function main() {
       { text, ink, side };
   }, 30_000, "eye: the fielder's-eye panel explains tan ψ and both plots are drawn");
   passed(`eye: the fielder's-eye panel is drawn (${eye.ink} pixels inked) and explained: ${eye.text}`);
-  await page.waitForTimeout(1500);
+  // The README's picture: the ball in flight, the fielders converging on it.
   await shot("baseball-flight");
   // The flight ends caught or on the ground, and the panel and the log say which.
   const outcome = await until(async () => {
