@@ -6,7 +6,7 @@
 //! `target/browser-artifacts/`.
 //!
 //! Needs `node`, `/usr/bin/chromium` (or `CHROMIUM`) and `npm ci` in `tests/browser`;
-//! `.ci/run` and `scripts/test` see to them.
+//! `scripts/prerequisites` (run by `scripts/test`) sees to them.
 
 mod common;
 
@@ -37,12 +37,12 @@ fn spectator_page_in_chromium() {
     let driver = here.join("tests/browser");
     assert!(
         driver.join("node_modules/playwright-core").is_dir(),
-        "playwright-core is not installed: run `npm ci --prefix tests/browser` (scripts/test does)"
+        "playwright-core is not installed: run `npm ci --prefix tests/browser` (scripts/prerequisites does)"
     );
     let chromium = std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
     assert!(
         Path::new(&chromium).exists(),
-        "no browser at {chromium}: install Debian's chromium (.ci/run does) or set CHROMIUM"
+        "no browser at {chromium}: install Debian's chromium (scripts/prerequisites does) or set CHROMIUM"
     );
     let artifacts = here.join("target/browser-artifacts");
     let out = Command::new("node")

@@ -176,6 +176,32 @@ fn the_container_files_use_flags_and_settings_the_binary_has() {
     assert!(
         dockerfile.contains("FIELDHOUSE_ADDR=0.0.0.0:7878") && dockerfile.contains("EXPOSE 7878")
     );
+    // The image builds from what it copies: the build script packs data/mocap into the
+    // binary, and the page and schemas are included from web/ and proto/.
+    let copied: Vec<&str> = dockerfile
+        .lines()
+        .filter_map(|l| l.strip_prefix("COPY "))
+        .filter(|l| !l.starts_with("--from"))
+        .flat_map(|l| l.split_whitespace())
+        .collect();
+    for input in [
+        "Cargo.toml",
+        "Cargo.lock",
+        "build.rs",
+        "data",
+        "src",
+        "web",
+        "proto",
+    ] {
+        assert!(
+            copied.contains(&input),
+            "the Dockerfile does not copy {input}"
+        );
+        assert!(
+            root.join(input).exists(),
+            "{input} is not in the repository"
+        );
+    }
     assert!(
         compose.contains("FIELDHOUSE_ADMIN_TOKEN")
             && compose.contains("/var/lib/fieldhouse/replays")

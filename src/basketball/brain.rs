@@ -182,6 +182,7 @@ impl Game {
             }
         }
         let pose = self.agents[k].pose;
+        let frame = pose.frame();
         let court = &self.params.court;
         let margins: &[f64] = if self.holder() == Some(k) {
             &[0.0]
@@ -192,7 +193,7 @@ impl Game {
             movers.iter().find_map(|mover| {
                 let cell = mover
                     .reachable_cell(&pose, goal)
-                    .filter(|&c| mover.path_on_court(&pose, c, court, margin_m))
+                    .filter(|&c| mover.path_on_court(&frame, c, court, margin_m))
                     .or_else(|| mover.cell_toward(&pose, goal, court, margin_m))?;
                 Some(Movement::new(
                     mover.strides_to(&pose, cell),

@@ -2,6 +2,7 @@
 //! motion graph and the cost map built from it, embedded at any agent's pose.
 
 use super::court::Court;
+use super::footprint::Footprint;
 use crate::costmap::{cache, AgentPose, BuildParams, CostMap, LocalFrame};
 use crate::motion::{
     GraphError, GraphParams, MotionGraph, MotionLibrary, MotionSource, RootStep, Walker,
@@ -16,10 +17,9 @@ pub struct Mover {
     pub behaviour: &'static str,
     pub graph: MotionGraph,
     pub map: CostMap,
-    /// Per map cell, the farthest the stored path to it strays from where it starts, m:
-    /// a move whose start is at least this far inside the court stays on it, with no
-    /// need to walk the path.
-    path_reach_m: Vec<f64>,
+    /// Per map cell, the ground its stored path covers: checking a move against the
+    /// court costs a few hull vertices instead of a walk of every frame.
+    footprints: Vec<Footprint>,
     /// Per graph edge, how it is played: one root step (with its turn as cos, sin) per
     /// data frame, and how many frames. Worked out once, since paths are walked for
     /// every move an agent considers.
@@ -55,20 +55,15 @@ impl Mover {
             behaviour,
             graph,
             map,
-            path_reach_m: Vec::new(),
+            footprints: Vec::new(),
             edge_frames,
         };
         let origin = AgentPose {
             position: DVec2::ZERO,
             heading: 0.0,
         };
-        mover.path_reach_m = (0..mover.map.costs.len())
-            .map(|cell| {
-                mover
-                    .walk(&origin, cell)
-                    .map(|s| s.at.position.length())
-                    .fold(0.0, f64::max)
-            })
+        mover.footprints = (0..mover.map.costs.len())
+            .map(|cell| Footprint::of(mover.walk(&origin, cell).map(|s| s.at.position)))
             .collect();
         mover
     }
@@ -95,21 +90,17 @@ impl Mover {
         self.walk(pose, cell).collect()
     }
 
-    /// Whether the stored path to `cell`, played from `pose`, keeps the body on `court`,
-    /// or at most `margin_m` beyond its lines, at every frame. The body moves in straight
-    /// lines between frames, so a convex region like the court that holds every frame
-    /// holds the whole move.
+    /// Whether the stored path to `cell`, played by the agent whose frame is `frame`
+    /// ([`AgentPose::frame`]), keeps the body on `court`, or at most `margin_m` beyond its
+    /// lines, at every frame (and between frames, where the body moves in straight lines).
     pub fn path_on_court(
         &self,
-        pose: &AgentPose,
+        frame: &LocalFrame,
         cell: usize,
         court: &Court,
         margin_m: f64,
     ) -> bool {
-        court.inside_by(pose.position) + margin_m >= self.path_reach_m[cell]
-            || self
-                .walk(pose, cell)
-                .all(|s| court.inside_by(s.at.position) >= -margin_m)
+        self.footprints[cell].within(frame, court, margin_m)
     }
 
     /// The strides of the stored path to `cell` from `pose`, without collecting them.
@@ -151,31 +142,24 @@ impl Mover {
         let grid = &self.map.grid;
         let speed = self.map.top_speed_m_s.max(0.1);
         let nearer_than = pose.position.distance(goal) - grid.cell_m;
-        let mut ranked: Vec<(f64, usize)> = self
-            .map
-            .costs
-            .iter()
-            .enumerate()
-            .filter_map(|(cell, cost)| {
-                let frames = (*cost)?;
-                let world = pose.to_world(grid.centre(cell));
-                let remaining = world.distance(goal);
-                let eta = f64::from(frames) / self.map.fps + remaining / speed;
-                (remaining <= nearer_than && court.contains(world)).then_some((eta, cell))
-            })
-            .collect();
-        let by_eta = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
-        // Most of the time the best cell's path stays on the court: try it before
-        // sorting the rest.
-        let best = *ranked.iter().min_by(|a, b| by_eta(a, b))?;
-        if self.path_on_court(pose, best.1, court, margin_m) {
-            return Some(best.1);
+        let frame = pose.frame();
+        let mut best: Option<(f64, usize)> = None;
+        for (cell, cost) in self.map.costs.iter().enumerate() {
+            let Some(frames) = cost else { continue };
+            let world = frame.to_world(grid.centre(cell));
+            let remaining = world.distance(goal);
+            let eta = f64::from(*frames) / self.map.fps + remaining / speed;
+            // The path check costs most: only a cell that would win is checked.
+            if best.is_some_and(|(b, _)| eta >= b)
+                || remaining > nearer_than
+                || !court.contains(world)
+                || !self.path_on_court(&frame, cell, court, margin_m)
+            {
+                continue;
+            }
+            best = Some((eta, cell));
         }
-        ranked.sort_unstable_by(by_eta);
-        ranked
-            .into_iter()
-            .map(|(_, cell)| cell)
-            .find(|&cell| self.path_on_court(pose, cell, court, margin_m))
+        best.map(|(_, cell)| cell)
     }
 
     /// The farthest an agent with this map gets from where it stands within `seconds`,

@@ -5,6 +5,7 @@
 //! * [`shot`]: shot success against distance.
 //! * [`capability`]: each behaviour's motion graph and cost map (the physical
 //!   capability model), embedded at an agent's pose; moves play a map's stored path.
+//!   `footprint`: the ground a stored path covers, to keep moves on the court.
 //! * [`decision`]: opponent modelling, `C_o > C_d + T_s + ε`.
 //! * [`agent`], `brain`, [`game`]: the game as a deterministic state machine; the
 //!   offense's `simple` and `costmap` brains; the defender.
@@ -18,6 +19,7 @@ pub mod court;
 pub mod decision;
 pub mod eval;
 pub mod event;
+mod footprint;
 pub mod game;
 pub mod params;
 pub mod safe;

@@ -305,7 +305,7 @@ fn a_path_is_on_the_court_exactly_when_every_frame_is() {
                         .iter()
                         .all(|s| court.inside_by(s.at.position) >= -margin);
                     assert_eq!(
-                        mover.path_on_court(&at, cell, &court, margin),
+                        mover.path_on_court(&at.frame(), cell, &court, margin),
                         walked,
                         "cell {cell} from {at:?}, margin {margin}"
                     );

@@ -136,6 +136,19 @@ impl LocalFrame {
     pub fn to_local(&self, world: DVec2) -> DVec2 {
         (world - self.position).rotate(self.unrotate)
     }
+
+    /// A point of the agent's frame in the world: [`AgentPose::to_world`] without the
+    /// trigonometry.
+    #[inline]
+    pub fn to_world(&self, local: DVec2) -> DVec2 {
+        // Rotating back by the heading is rotating by the conjugate of `unrotate`.
+        self.position + local.rotate(DVec2::new(self.unrotate.x, -self.unrotate.y))
+    }
+
+    /// Where the agent stands.
+    pub fn origin(&self) -> DVec2 {
+        self.position
+    }
 }
 
 #[cfg(test)]
