@@ -26,8 +26,8 @@ pub struct MatchInfo {
     pub perception_every_ticks: u64,
     pub field: Value,
     pub agents: Vec<Value>,
-    /// Where the motion data came from (`synthetic` or the mocap directory and its
-    /// fingerprint).
+    /// Where the motion data came from, named without any path of the server's
+    /// ([`crate::motion::MotionSource`]'s `Display`).
     pub motion_source: String,
 }
 

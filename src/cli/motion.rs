@@ -13,7 +13,8 @@ use std::path::PathBuf;
 pub struct MotionSourceArgs {
     /// Your own BVH motion capture instead of the CMU capture built into fieldhouse: a
     /// directory with one folder per behaviour (DIR/run/*.bvh, DIR/dribble/*.bvh,
-    /// DIR/defense/*.bvh). Default: the embedded CMU capture (data/mocap/README.md).
+    /// DIR/defense/*.bvh). Default: the CMU capture embedded in the binary (data/mocap in
+    /// the repository lists its clips, sources and terms).
     #[arg(long, value_name = "DIR", env = "FIELDHOUSE_MOCAP_DIR")]
     pub mocap: Option<PathBuf>,
 }
@@ -33,7 +34,13 @@ impl MotionSourceArgs {
             })?,
             None => MotionLibrary::embedded(FPS),
         };
-        tracing::info!(source = %library.source, "motion loaded");
+        match library.source.dir() {
+            // The operator's own log may name the directory; visitors never see it.
+            Some(dir) => {
+                tracing::info!(source = %library.source, dir = %dir.display(), skipped = library.problems.len(), "motion loaded")
+            }
+            None => tracing::info!(source = %library.source, "motion loaded"),
+        }
         Ok(library)
     }
 }

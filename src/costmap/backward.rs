@@ -96,8 +96,8 @@ pub(crate) fn build(
         // Far enough for anything reachable in `depth` frames, but no further than a
         // point of the map can be from a body that is still on it.
         let half = (depth as f64 * max_step).min(grid.size_m) + grid.cell_m;
-        // A densely connected graph (the synthetic library's has thousands of branch
-        // nodes) would need gigabytes at full resolution: coarsen the local cells to
+        // A densely connected graph (with thousands of branch nodes, as a synthetic
+        // library the project once had) would need gigabytes at full resolution: coarsen the local cells to
         // keep within the state budget rather than exhaust memory.
         let budget_cell = 2.0 * half * (branch_count as f64 / STATE_BUDGET as f64).sqrt();
         let cell = (grid.cell_m / LOCAL_CELLS_PER_MAP_CELL).max(budget_cell);
@@ -303,8 +303,8 @@ pub(crate) fn build(
 const EXACT_LEVELS: usize = 6;
 
 /// The most exact walks kept: levels stop before they would pass it. (CMU running has
-/// 107 at six levels; the synthetic library's graph, with thousands of branch nodes,
-/// would have hundreds of thousands.)
+/// 107 at six levels; a graph with thousands of branch nodes would have hundreds of
+/// thousands.)
 const CHAIN_BUDGET: usize = 400;
 
 /// An exact walk from the start to a branch node: where it stands on arriving (in the
@@ -376,7 +376,7 @@ const EXHAUSTIVE_STEPS: f64 = 200_000.0;
 /// The longest horizon (in frames, at most `depth`) within which every walk from `start`
 /// fits in [`EXHAUSTIVE_STEPS`] steps, counted without walking them: the number of walks
 /// of each length, by dynamic programming over the nodes. On CMU running that is 28
-/// frames; a densely connected graph (the synthetic library's) gets a shorter one.
+/// frames; a densely connected graph gets a shorter one.
 fn exhaustive_horizon(graph: &Prepared, start: u32, nodes: usize, depth: u32) -> u32 {
     // Walks ending at frame t, by node, for the frames an edge can still reach: a ring
     // of rows, so a long horizon costs no more memory than a short one.

@@ -86,15 +86,13 @@ pub(super) fn load_library(dir: &Path, fps: f64) -> Result<MotionLibrary, Librar
             }
         }
     }
-    let library = from_files(files, problems, fps, dir, |clips, fingerprint| {
+    from_files(files, problems, fps, dir, |clips, fingerprint| {
         MotionSource::Directory {
             dir: dir.to_path_buf(),
             clips,
             fingerprint,
         }
-    })?;
-    tracing::info!(dir = %dir.display(), source = %library.source, skipped = library.problems.len(), "loaded motion capture");
-    Ok(library)
+    })
 }
 
 /// Parses `files` into a library whose source `source(clips, fingerprint)` names. A file
