@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{assert_reads_well, failure, fieldhouse, json};
+use common::{assert_reads_well, failure, json, success};
 use serde_json::Value;
 
 fn source() -> String {
@@ -124,39 +124,27 @@ fn both_offenses_are_compared_on_the_same_possessions() {
     let diff =
         num(&reports[1]["points_per_possession"]) - num(&reports[0]["points_per_possession"]);
     assert!((num(&doc["comparison"]["difference"]) - diff).abs() < 1e-12);
-    let out = fieldhouse(&format!(
+    let (text, _) = success(&format!(
         "basketball-eval --possessions 30 --seed 2 {}",
         source()
     ));
-    let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("Welch"), "{text}");
     assert_reads_well(&text);
 }
 
 #[test]
 fn one_possession_is_counted_in_the_singular() {
-    let out = fieldhouse(&format!(
+    let (text, _) = success(&format!(
         "basketball-eval --offense simple --possessions 1 --seed 2 {}",
         source()
     ));
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.starts_with("1 possession, seed 2"), "{text}");
     assert_reads_well(&text);
-    let out = fieldhouse(&format!(
+    let (text, _) = success(&format!(
         "basketball-decide --shooter 10,3,200 --defender 5,-1,20 {}",
         source()
     ));
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert_reads_well(&String::from_utf8(out.stdout).unwrap());
+    assert_reads_well(&text);
 }
 
 #[test]
@@ -164,12 +152,11 @@ fn a_first_start_shows_each_stage_and_the_next_start_reads_the_cache() {
     let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("first-start-cache");
     let _ = std::fs::remove_dir_all(&cache);
     let stages = || {
-        let out = fieldhouse(&format!(
+        success(&format!(
             "basketball-eval --offense simple --possessions 1 --cache-dir {}",
             cache.display()
-        ));
-        assert!(out.status.success());
-        String::from_utf8(out.stderr).unwrap()
+        ))
+        .1
     };
     let first = stages();
     for behaviour in ["run", "dribble", "defense"] {

@@ -21,15 +21,20 @@ pub fn fieldhouse(command_line: &str) -> Output {
         .expect("the binary runs")
 }
 
+/// Runs a command that must succeed; returns what it wrote to stdout and to stderr.
+pub fn success(command_line: &str) -> (String, String) {
+    let out = fieldhouse(command_line);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{command_line} failed: {stderr}");
+    (
+        String::from_utf8(out.stdout).expect("stdout is text"),
+        stderr,
+    )
+}
+
 /// Runs a command that must succeed and print exactly one JSON document.
 pub fn json(command_line: &str) -> Value {
-    let out = fieldhouse(command_line);
-    assert!(
-        out.status.success(),
-        "{command_line} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("stdout is exactly one JSON document")
+    serde_json::from_str(&success(command_line).0).expect("stdout is exactly one JSON document")
 }
 
 /// Runs a command that must fail without printing to stdout; returns its stderr.
