@@ -1,20 +1,22 @@
 //! Basketball players stay on the court: every agent-frame of long headless runs of every
 //! shipped basketball scenario, on the embedded capture and on a sparse capture of a
 //! user's, is inside the court's lines for the ball handler and within the run-off
-//! (1 m beyond the lines, `RUN_OFF_M`) for everyone else. The replay's own frames are
+//! (`basketball::RUN_OFF_M`, 1 m beyond the lines) for everyone else. The replay's own frames are
 //! read back, so this checks what spectators see.
 
 mod common;
 
 use common::{json, repository_mocap};
+use fieldhouse::basketball::RUN_OFF_M;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
-/// How far beyond the lines a player without the ball may be, m: the game's run-off
-/// (`basketball::brain::RUN_OFF_M`), plus the millimetre frames round to.
-const RUN_OFF_M: f64 = 1.0 + 0.001;
-/// The ball handler's allowance: the millimetre frames round to.
-const ON_THE_LINE_M: f64 = 0.001;
+/// The millimetre positions are rounded to on the wire.
+const ROUNDING_M: f64 = 0.001;
+/// How far beyond the lines a player without the ball may be, m: the game's run-off.
+const BEYOND_M: f64 = RUN_OFF_M + ROUNDING_M;
+/// The ball handler's allowance: only the rounding.
+const ON_THE_LINE_M: f64 = ROUNDING_M;
 /// Possessions per run: long enough that every start region and every way a possession
 /// ends comes up many times.
 const POSSESSIONS: i64 = 300;
@@ -87,7 +89,7 @@ fn assert_stays_on_court(name: &str, mut scenario: toml::Table, extra: &str) {
             let (allowed, worst) = if holder == agent["id"].as_str() {
                 (ON_THE_LINE_M, &mut worst_handler)
             } else {
-                (RUN_OFF_M, &mut worst_other)
+                (BEYOND_M, &mut worst_other)
             };
             *worst = worst.max(out);
             assert!(

@@ -534,13 +534,19 @@ async fn flooding_is_rate_limited_then_closed_with_1008() {
     assert!(server.tick(&id) > before);
 }
 
+/// A realtime match of `duration_s` whose one fielder, `cf`, a bot plays: its id and
+/// bot tokens.
+fn realtime_bot_match(server: &Server, duration_s: f64) -> (String, Value) {
+    let mut scenario = fielder_with_bot("realtime", 1000);
+    scenario["duration_s"] = json!(duration_s);
+    scenario["options"]["pause_s"] = json!(0.5);
+    server.create(scenario)
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_reference_bot_plays_a_match_to_its_end() {
     let server = Server::start(&["--no-demo"]);
-    let mut scenario = fielder_with_bot("realtime", 1000);
-    scenario["duration_s"] = json!(3.0);
-    scenario["options"]["pause_s"] = json!(0.5);
-    let (id, tokens) = server.create(scenario);
+    let (id, tokens) = realtime_bot_match(&server, 3.0);
     let output = tokio::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
         .args(["bot", "--strategy", "chapman", "--url"])
         .arg(server.ws(&format!("/ws/matches/{id}/play")))
@@ -577,10 +583,7 @@ async fn the_reference_bot_plays_a_match_to_its_end() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_reference_bot_refuses_a_spectator_socket_and_shows_its_progress() {
     let server = Server::start(&["--no-demo"]);
-    let mut scenario = fielder_with_bot("realtime", 1000);
-    scenario["duration_s"] = json!(7.0);
-    scenario["options"]["pause_s"] = json!(0.5);
-    let (id, tokens) = server.create(scenario);
+    let (id, tokens) = realtime_bot_match(&server, 7.0);
     let token = tokens["cf"].as_str().unwrap();
     let bot = |url: String, token: Option<&str>| {
         let mut command = tokio::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"));

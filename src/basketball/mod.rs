@@ -26,6 +26,7 @@ pub mod safe;
 pub mod shot;
 
 pub use agent::{Action, Agent, Team};
+pub use brain::RUN_OFF_M;
 pub use capability::{Capabilities, DefenderMotion, Mover, Stride};
 pub use court::Court;
 pub use decision::{Candidate, Chosen, Decision, DecisionParams, Keep, Situation};

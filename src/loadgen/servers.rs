@@ -168,8 +168,9 @@ impl Running {
         })
     }
 
+    /// The peer, started; [`Peer::check`] has said it can start (the plan checks it once,
+    /// before any round).
     pub fn peer(peer: &Peer) -> anyhow::Result<Running> {
-        peer.check()?;
         let Peer::Colyseus { dir } = peer;
         let node = dir.join("node_modules/.bin/node");
         let port = free_port()?;
