@@ -5,7 +5,7 @@ use super::court::Court;
 use super::footprint::Footprint;
 use crate::costmap::{cache, AgentPose, BuildParams, CostMap, LocalFrame};
 use crate::motion::{
-    GraphError, GraphParams, MotionGraph, MotionLibrary, MotionSource, RootStep, Walker,
+    GraphError, MotionGraph, MotionLibrary, MotionSource, RootStep, Walker, AUTO_WINDOWS,
 };
 use glam::DVec2;
 use std::path::Path;
@@ -215,8 +215,6 @@ impl std::str::FromStr for DefenderMotion {
 /// How far ahead the basketball maps look, frames at 30 fps (8 s): a slow dribbler
 /// must be able to cross most of the half court within a map.
 pub const HORIZON_FRAMES: u32 = 240;
-/// Transition threshold of the dribbling graph, RMS metres.
-pub const DRIBBLE_THRESHOLD_M: f64 = 0.12;
 
 /// What building the capabilities is busy with, for a progress display: on first start
 /// the graphs and maps take seconds, and a user should see why.
@@ -277,26 +275,13 @@ impl Capabilities {
         progress: &mut dyn FnMut(Stage),
     ) -> Result<Capabilities, GraphError> {
         let mut mover = |behaviour: &'static str| -> Result<Mover, GraphError> {
-            let clips: Vec<_> = library.clips_of(behaviour).collect();
+            let owned = library.ground_clips(behaviour);
+            let clips: Vec<_> = owned.iter().collect();
             progress(Stage::Graph {
                 behaviour,
                 frames: clips.iter().map(|c| c.frame_count()).sum(),
             });
-            let window = GraphParams::default().window;
-            let graph = match behaviour {
-                // The automatic threshold keeps the CMU dribbling at 0.08 m, where its two
-                // clips barely meet: the map then reaches 46 cells in 5 s. At 0.12 m it
-                // reaches most of the court.
-                "dribble" => MotionGraph::build(
-                    behaviour,
-                    &clips,
-                    GraphParams {
-                        window,
-                        threshold_m: DRIBBLE_THRESHOLD_M,
-                    },
-                )?,
-                _ => MotionGraph::build_auto(behaviour, &clips, window)?,
-            };
+            let graph = MotionGraph::build_auto(behaviour, &clips, &AUTO_WINDOWS)?;
             let params = BuildParams {
                 depth: HORIZON_FRAMES,
                 ..BuildParams::default()

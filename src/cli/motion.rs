@@ -3,7 +3,7 @@
 
 use anyhow::Context;
 use clap::Args;
-use fieldhouse::motion::{GraphParams, MotionGraph, MotionLibrary, FPS};
+use fieldhouse::motion::{GraphParams, MotionGraph, MotionLibrary, AUTO_WINDOWS, FPS};
 use fieldhouse::words::{figure, plural};
 use serde_json::json;
 use std::io::Write;
@@ -51,13 +51,14 @@ pub struct GraphArgs {
     #[arg(long)]
     pub behaviour: String,
     /// Largest RMS joint distance (metres) a transition may have: lower is smoother,
-    /// higher is better connected. Default: the lowest of 0.08–0.40 m that keeps at least
-    /// half the frames in the largest strongly connected component.
+    /// higher is better connected. Default: the lowest of 0.06–0.50 m at which every clip
+    /// keeps at least half its frames in the graph.
     #[arg(long, value_parser = super::args::positive)]
     pub threshold: Option<f64>,
-    /// Frames compared on each side of a transition (and blended at playback).
-    #[arg(long, default_value_t = GraphParams::default().window as u32, value_parser = clap::value_parser!(u32).range(1..=120))]
-    pub window: u32,
+    /// Frames compared on each side of a transition (and blended at playback). Default:
+    /// with --threshold, 10 (⅓ s); without, the automatic choice also tries 10, 8 and 6.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=120))]
+    pub window: Option<u32>,
     #[command(flatten)]
     pub source: MotionSourceArgs,
 }
@@ -65,7 +66,8 @@ pub struct GraphArgs {
 impl GraphArgs {
     pub fn build(&self) -> anyhow::Result<(MotionLibrary, MotionGraph)> {
         let library = self.source.load()?;
-        let clips: Vec<_> = library.clips_of(&self.behaviour).collect();
+        let owned = library.ground_clips(&self.behaviour);
+        let clips: Vec<_> = owned.iter().collect();
         if clips.is_empty() {
             anyhow::bail!(
                 "no clips of behaviour \"{}\" in {}; it has: {}",
@@ -74,17 +76,20 @@ impl GraphArgs {
                 library.behaviours().join(", ")
             );
         }
-        let window = self.window as usize;
+        let window = self.window.map(|w| w as usize);
         let graph = match self.threshold {
             Some(threshold_m) => MotionGraph::build(
                 &self.behaviour,
                 &clips,
                 GraphParams {
-                    window,
+                    window: window.unwrap_or(GraphParams::default().window),
                     threshold_m,
                 },
             )?,
-            None => MotionGraph::build_auto(&self.behaviour, &clips, window)?,
+            None => match window {
+                Some(w) => MotionGraph::build_auto(&self.behaviour, &clips, &[w])?,
+                None => MotionGraph::build_auto(&self.behaviour, &clips, &AUTO_WINDOWS)?,
+            },
         };
         Ok((library, graph))
     }
@@ -121,6 +126,9 @@ pub fn run(args: MotionGraphArgs, out: &mut impl Write) -> anyhow::Result<()> {
             "transitions_after_pruning": s.transitions_after_pruning,
             "largest_scc": s.largest_scc,
             "top_speed_m_s": s.top_speed_m_s,
+            "transition_worst_m": s.transition_worst_m,
+            "transition_p95_m": s.transition_p95_m,
+            "coverage": graph.coverage,
             "nodes": graph.nodes.iter().map(|n| json!([graph.clip_names[n.clip], n.frame])).collect::<Vec<_>>(),
             "edges": graph.edges.iter().map(|e| [e.from, e.to]).collect::<Vec<_>>(),
         });
@@ -154,7 +162,38 @@ pub fn run(args: MotionGraphArgs, out: &mut impl Write) -> anyhow::Result<()> {
         s.frames,
         100.0 * s.largest_scc as f64 / s.frames as f64
     )?;
+    writeln!(
+        out,
+        "  cuts:         RMS {} m at the 95th percentile, {} m at worst",
+        figure(s.transition_p95_m, 3),
+        figure(s.transition_worst_m, 3)
+    )?;
     writeln!(out, "  edges:        {}", graph.edges.len())?;
-    writeln!(out, "  top speed:    {:.2} m/s", s.top_speed_m_s)?;
+    writeln!(
+        out,
+        "  top speed:    {:.2} m/s (over the frames kept)",
+        s.top_speed_m_s
+    )?;
+    writeln!(
+        out,
+        "  per clip:     frames kept of frames, transitions in / out"
+    )?;
+    for c in &graph.coverage {
+        let left_out = if c.joined() {
+            String::new()
+        } else {
+            format!(
+                "  (under half: its best transition to another clip is {})",
+                c.best_transition_m
+                    .map(|d| format!("{} m", figure(d, 3)))
+                    .unwrap_or_else(|| "none".into())
+            )
+        };
+        writeln!(
+            out,
+            "    {:<10} {:>5} of {:<5} {:>4} / {:<4}{left_out}",
+            c.name, c.kept, c.frames, c.transitions_in, c.transitions_out
+        )?;
+    }
     Ok(())
 }

@@ -97,26 +97,20 @@ impl Moments {
         }
     }
 
-    /// Σw·|p − T(p′)|² for the best alignment T, from the sums alone.
+    /// Σw·|p − T(p′)|² for the best alignment T, from the sums alone, without finding T.
     ///
-    /// Expanding the square with T(p′) = R·p′ + t (R about y, t on the ground):
-    /// Σw|p|² + Σw|p′|² + W|t|² − 2·Σw p·Rp′ − 2·t·Σw p + 2·t·R·Σw p′, where
-    /// Σw p·Rp′ = cos θ·Σw(x x′ + z z′) + sin θ·Σw(x z′ − x′ z) + Σw y y′.
+    /// With both clouds centred on the ground (the best offset brings their weighted
+    /// centres together), what is left is Σw|p̄|² + Σw|p̄′|² − 2·Σw p̄·Rp̄′, and
+    /// Σw p̄·Rp̄′ = cos θ·a + sin θ·b + Σw y y′ with a, b the centred cross sums below:
+    /// at its best θ that is √(a² + b²) + Σw y y′. No angle is needed, which matters when
+    /// every pair of windows of a behaviour is compared.
     pub fn aligned_distance(&self) -> f64 {
-        let t = self.alignment();
-        let (sin, cos) = t.theta.sin_cos();
-        let p_rq = cos * self.dot + sin * self.cross + self.yy;
-        // R·Σw p′ on the ground.
-        let rq = DVec2::new(
-            self.x2 * cos + self.z2 * sin,
-            -self.x2 * sin + self.z2 * cos,
-        );
-        let sum_p = DVec2::new(self.x, self.z);
-        let d = self.norm + self.norm2 + self.w * t.offset.length_squared()
-            - 2.0 * p_rq
-            - 2.0 * t.offset.dot(sum_p)
-            + 2.0 * t.offset.dot(rq);
-        d.max(0.0)
+        let w = self.w;
+        let a = self.dot - (self.x * self.x2 + self.z * self.z2) / w;
+        let b = self.cross - (self.x * self.z2 - self.x2 * self.z) / w;
+        let centred = self.norm - (self.x * self.x + self.z * self.z) / w + self.norm2
+            - (self.x2 * self.x2 + self.z2 * self.z2) / w;
+        (centred - 2.0 * ((a * a + b * b).sqrt() + self.yy)).max(0.0)
     }
 }
 

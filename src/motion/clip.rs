@@ -116,6 +116,16 @@ impl Clip {
         self.headings[f]
     }
 
+    /// The clip's first `frames` frames.
+    pub fn head(&self, frames: usize) -> Clip {
+        let frames = frames.clamp(1, self.frame_count());
+        Clip {
+            positions: self.positions[..frames * self.joint_count()].to_vec(),
+            headings: self.headings[..frames].to_vec(),
+            ..self.clone()
+        }
+    }
+
     pub fn duration_s(&self) -> f64 {
         self.frame_count() as f64 / self.fps
     }

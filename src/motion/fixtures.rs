@@ -90,8 +90,9 @@ pub fn mocap_dir() -> std::path::PathBuf {
 /// The motion graph of a CMU behaviour, with the automatic threshold.
 pub fn cmu_graph(behaviour: &str) -> MotionGraph {
     let library = cmu_library();
-    let clips: Vec<&Clip> = library.clips_of(behaviour).collect();
-    MotionGraph::build_auto(behaviour, &clips, GraphParams::default().window).unwrap()
+    let owned = library.ground_clips(behaviour);
+    let clips: Vec<&Clip> = owned.iter().collect();
+    MotionGraph::build_auto(behaviour, &clips, &super::AUTO_WINDOWS).unwrap()
 }
 
 /// The basketball behaviours of the CMU data, built once per test binary; their maps

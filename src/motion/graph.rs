@@ -23,7 +23,15 @@ pub struct GraphParams {
 }
 
 /// Thresholds (RMS metres) [`MotionGraph::build_auto`] tries, smoothest first.
-pub const AUTO_THRESHOLDS_M: [f64; 9] = [0.08, 0.10, 0.12, 0.15, 0.18, 0.22, 0.26, 0.32, 0.40];
+pub const AUTO_THRESHOLDS_M: [f64; 11] = [
+    0.06, 0.08, 0.10, 0.12, 0.15, 0.18, 0.22, 0.26, 0.32, 0.40, 0.50,
+];
+
+/// Windows (frames) [`MotionGraph::build_auto`] tries, longest first: Kovar's ⅓ s down
+/// to ⅕ s. The CMU running and footwork clips last 1.1–2.2 s, and a cut needs a whole
+/// window of its clip after it, so a ⅓ s window leaves little of a short clip that a
+/// transition can reach; a shorter window compares (and blends) less.
+pub const AUTO_WINDOWS: [usize; 3] = [10, 8, 6];
 
 impl Default for GraphParams {
     fn default() -> Self {
@@ -62,9 +70,35 @@ pub struct GraphStats {
     pub transitions_after_pruning: usize,
     /// Nodes in the largest strongly connected component: the nodes kept.
     pub largest_scc: usize,
-    /// Fastest root speed in the behaviour's clips (over ⅓ s, so the hips' sway within a
-    /// stride does not count as speed), m/s.
+    /// Fastest root speed over the frames the graph kept (over ⅓ s, so the hips' sway
+    /// within a stride does not count as speed), m/s: a walk on the graph can never be
+    /// faster, whatever the clips it pruned did.
     pub top_speed_m_s: f64,
+    /// The roughest kept transition and the 95th percentile of them: RMS joint distance
+    /// after alignment, m (0 when no transition is kept).
+    pub transition_worst_m: f64,
+    pub transition_p95_m: f64,
+}
+
+/// How much of one clip the graph kept, and how it is joined to the rest.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ClipCoverage {
+    pub name: String,
+    pub frames: usize,
+    pub kept: usize,
+    /// Kept transitions into and out of the clip's frames (from any clip, itself included).
+    pub transitions_in: usize,
+    pub transitions_out: usize,
+    /// The smallest distance of any transition (found at the loosest threshold tried)
+    /// between this clip and another, m: what a threshold must allow to join it at all.
+    pub best_transition_m: Option<f64>,
+}
+
+impl ClipCoverage {
+    /// At least half its frames kept: the bar [`MotionGraph::build_auto`] sets.
+    pub fn joined(&self) -> bool {
+        2 * self.kept >= self.frames
+    }
 }
 
 /// Constraints that disable edges before a cost map is built.
@@ -80,6 +114,8 @@ pub struct MotionGraph {
     pub fps: f64,
     pub params: GraphParams,
     pub clip_names: Vec<String>,
+    /// Per clip, in the order of `clip_names`: frames kept and transitions.
+    pub coverage: Vec<ClipCoverage>,
     /// Kept nodes; node ids are indices here.
     pub nodes: Vec<Node>,
     /// Edges sorted by `from`, then `to`.
@@ -94,50 +130,54 @@ pub struct MotionGraph {
 }
 
 impl MotionGraph {
-    /// Builds the graph with the lowest threshold of [`AUTO_THRESHOLDS_M`] whose largest
-    /// strongly connected component keeps at least half the frames (or the best-connected
-    /// one if none does). How similar two frames must be depends on the data (three short
-    /// defensive clips need a far looser threshold than seven jogs), so a fixed default
-    /// would leave some behaviours with a useless graph.
+    /// Builds the graph with the lowest threshold of [`AUTO_THRESHOLDS_M`] (trying each of
+    /// `windows`; a longer window wins a tie) at which *every* clip keeps at least half
+    /// its frames in the largest strongly connected component. How similar two frames
+    /// must be depends on the data (three short footwork clips need a far looser
+    /// threshold than fourteen dribbles), and a bar on the total would let a behaviour
+    /// drop its rarest motion — the fastest runs, the sideways shuffle — which is the
+    /// motion that matters most. If no threshold joins every clip, the graph that joins
+    /// the most clips (then keeps the most frames) is built, and
+    /// [`MotionGraph::coverage`] says which clip is left out and its best transition.
     pub fn build_auto(
         behaviour: &str,
         clips: &[&Clip],
-        window: usize,
+        windows: &[usize],
     ) -> Result<MotionGraph, GraphError> {
         require_clips(behaviour, clips)?;
         let loosest = AUTO_THRESHOLDS_M[AUTO_THRESHOLDS_M.len() - 1];
-        let all = transitions::find(clips, window, loosest);
-        let mut best: Option<MotionGraph> = None;
+        let by_window = transitions::find_windows(clips, windows, loosest);
+        let mut best: Option<(usize, MotionGraph)> = None;
         for threshold_m in AUTO_THRESHOLDS_M {
-            let found: Vec<Transition> = all
-                .iter()
-                .copied()
-                .filter(|t| t.rms_m < threshold_m)
-                .collect();
-            let Ok(graph) = Self::from_transitions(
-                behaviour,
-                clips,
-                GraphParams {
+            for (&window, all) in windows.iter().zip(&by_window) {
+                let found: Vec<Transition> = all
+                    .iter()
+                    .copied()
+                    .filter(|t| t.rms_m < threshold_m)
+                    .collect();
+                let params = GraphParams {
                     window,
                     threshold_m,
-                },
-                &found,
-            ) else {
-                continue;
-            };
-            if 2 * graph.stats.largest_scc >= graph.stats.frames {
-                return Ok(graph);
-            }
-            if best
-                .as_ref()
-                .is_none_or(|b| graph.stats.largest_scc > b.stats.largest_scc)
-            {
-                best = Some(graph);
+                };
+                let Ok(mut graph) = Self::from_transitions(behaviour, clips, params, &found) else {
+                    continue;
+                };
+                set_best_transitions(&mut graph.coverage, all);
+                let joined = graph.coverage.iter().filter(|c| c.joined()).count();
+                if joined == clips.len() {
+                    return Ok(graph);
+                }
+                let better = best.as_ref().is_none_or(|(j, b)| {
+                    (joined, graph.stats.largest_scc) > (*j, b.stats.largest_scc)
+                });
+                if better {
+                    best = Some((joined, graph));
+                }
             }
         }
-        best.ok_or(GraphError::TooShort {
+        best.map(|(_, g)| g).ok_or(GraphError::TooShort {
             behaviour: behaviour.to_string(),
-            window,
+            window: windows.iter().copied().max().unwrap_or(0),
         })
     }
 
@@ -148,8 +188,16 @@ impl MotionGraph {
         params: GraphParams,
     ) -> Result<MotionGraph, GraphError> {
         require_clips(behaviour, clips)?;
-        let found = transitions::find(clips, params.window, params.threshold_m);
-        Self::from_transitions(behaviour, clips, params, &found)
+        let loosest = AUTO_THRESHOLDS_M[AUTO_THRESHOLDS_M.len() - 1].max(params.threshold_m);
+        let all = transitions::find(clips, params.window, loosest);
+        let found: Vec<Transition> = all
+            .iter()
+            .copied()
+            .filter(|t| t.rms_m < params.threshold_m)
+            .collect();
+        let mut graph = Self::from_transitions(behaviour, clips, params, &found)?;
+        set_best_transitions(&mut graph.coverage, &all);
+        Ok(graph)
     }
 
     fn from_transitions(
@@ -224,19 +272,50 @@ impl MotionGraph {
             .iter()
             .flat_map(|r| local_pose(clips[r.clip], r.frame))
             .collect();
+        let kept_at = |c: usize, f: usize| keep[offsets[c] + f].is_some();
+        let kept_rms: Vec<f64> = found
+            .iter()
+            .filter(|t| kept_at(t.from_clip, t.from) && kept_at(t.to_clip, t.to))
+            .map(|t| t.rms_m)
+            .collect();
+        let coverage = clips
+            .iter()
+            .enumerate()
+            .map(|(c, clip)| ClipCoverage {
+                name: clip.name.clone(),
+                frames: clip.frame_count(),
+                kept: (0..clip.frame_count()).filter(|&f| kept_at(c, f)).count(),
+                transitions_in: found
+                    .iter()
+                    .filter(|t| t.to_clip == c && kept_at(c, t.to) && kept_at(t.from_clip, t.from))
+                    .count(),
+                transitions_out: found
+                    .iter()
+                    .filter(|t| t.from_clip == c && kept_at(c, t.from) && kept_at(t.to_clip, t.to))
+                    .count(),
+                best_transition_m: None,
+            })
+            .collect();
         let stats = GraphStats {
             frames,
             clips: clips.len(),
             transitions_before_pruning: found.len(),
             transitions_after_pruning: edges.iter().filter(|e| e.transition).count(),
             largest_scc: nodes.len(),
-            top_speed_m_s: clips.iter().map(|c| top_speed(c)).fold(0.0, f64::max),
+            top_speed_m_s: clips
+                .iter()
+                .enumerate()
+                .map(|(c, clip)| top_speed(clip, |f| kept_at(c, f)))
+                .fold(0.0, f64::max),
+            transition_worst_m: kept_rms.iter().copied().fold(0.0, f64::max),
+            transition_p95_m: percentile(&kept_rms, 0.95),
         };
         Ok(MotionGraph {
             behaviour: behaviour.to_string(),
             fps: clips[0].fps,
             params,
             clip_names: clips.iter().map(|c| c.name.clone()).collect(),
+            coverage,
             nodes,
             edges,
             out_start,
@@ -363,10 +442,35 @@ fn local_pose(clip: &Clip, f: usize) -> Vec<DVec3> {
         .collect()
 }
 
-/// Fastest root speed over a ⅓ s span, which averages out the sway within a stride.
-fn top_speed(clip: &Clip) -> f64 {
+/// Fastest root speed over a ⅓ s span of frames all `kept`, which averages out the
+/// sway within a stride.
+fn top_speed(clip: &Clip, kept: impl Fn(usize) -> bool) -> f64 {
     let span = ((clip.fps / 3.0).round() as usize).max(1);
     (0..clip.frame_count().saturating_sub(span))
+        .filter(|&f| (f..=f + span).all(&kept))
         .map(|f| (clip.root(f + span) - clip.root(f)).length() * clip.fps / span as f64)
         .fold(0.0, f64::max)
+}
+
+/// The `q` quantile of `values` (nearest rank), 0 when empty.
+fn percentile(values: &[f64], q: f64) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    sorted[rank - 1]
+}
+
+/// Fills each clip's best transition to or from another clip, from every transition
+/// found at the loosest threshold.
+fn set_best_transitions(coverage: &mut [ClipCoverage], all: &[Transition]) {
+    for (c, cov) in coverage.iter_mut().enumerate() {
+        cov.best_transition_m = all
+            .iter()
+            .filter(|t| t.from_clip != t.to_clip && (t.from_clip == c || t.to_clip == c))
+            .map(|t| t.rms_m)
+            .min_by(f64::total_cmp);
+    }
 }

@@ -127,3 +127,77 @@ fn the_default_start_runs_forward_at_a_moderate_speed() {
     let pose = g.pose(n);
     assert!(pose[1].z < -0.05 && pose[2].z > 0.05 && pose[0].x.abs() < 1e-9);
 }
+
+/// A clip that no transition can join (a sprint whose stride differs from everything
+/// else) leaves no trace in the graph: not its frames, not its speed.
+#[test]
+fn top_speed_comes_from_the_kept_frames() {
+    let clips = [
+        clip("jog", 4.0, straight(3.5)),
+        clip("jog_again", 4.0, straight(3.5)),
+        // Far above the joggers' height, so nothing aligns with it.
+        {
+            let sprint = clip("sprint", 2.0, straight(8.0));
+            let lifted: Vec<glam::DVec3> = (0..sprint.frame_count())
+                .flat_map(|f| sprint.frame(f).iter().map(|p| *p + glam::DVec3::Y * 3.0))
+                .collect();
+            Clip::new("sprint", "run", FPS, sprint.joint_names.clone(), lifted).unwrap()
+        },
+    ];
+    let refs: Vec<&Clip> = clips.iter().collect();
+    let g = MotionGraph::build("run", &refs, GraphParams::default()).unwrap();
+    let sprint = &g.coverage[2];
+    assert_eq!((sprint.name.as_str(), sprint.kept), ("sprint", 0));
+    assert!(!sprint.joined() && g.coverage[0].joined());
+    assert!((g.stats.top_speed_m_s - 3.5).abs() < 0.1, "{:?}", g.stats);
+    // Its best transition is as far as the lift: about 3 m RMS.
+    assert!(
+        sprint.best_transition_m.is_none_or(|d| d > 2.0),
+        "{sprint:?}"
+    );
+}
+
+/// Every clip of the CMU capture keeps at least half its frames (the bar the automatic
+/// choice sets), the behaviours' transitions are reported, and no walk on a graph is
+/// faster than its top speed.
+#[test]
+fn every_cmu_clip_is_in_its_behaviours_graph() {
+    for behaviour in ["run", "dribble", "defense"] {
+        let g = super::fixtures::cmu_graph(behaviour);
+        for c in &g.coverage {
+            assert!(2 * c.kept >= c.frames, "{behaviour}: {c:?}");
+            assert!(c.transitions_in > 0 && c.transitions_out > 0, "{c:?}");
+        }
+        assert_eq!(
+            g.coverage.iter().map(|c| c.kept).sum::<usize>(),
+            g.node_count()
+        );
+        let s = &g.stats;
+        assert!(s.transition_p95_m <= s.transition_worst_m);
+        assert!(s.transition_worst_m < g.params.threshold_m);
+        // Over any ⅓ s of a walk, clip frames or cuts, the root is no faster than the
+        // top speed, give or take the sway a cut can add within one frame.
+        let span = 10;
+        let mut rng = 1u64;
+        for _ in 0..200 {
+            let mut node = (rng % g.node_count() as u64) as u32;
+            let mut at = crate::motion::Walker::START;
+            let mut trail = vec![at.position];
+            for _ in 0..span {
+                rng = rng
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                let out = g.out_edges(node);
+                let e = &g.edges[out.start + (rng >> 33) as usize % out.len()];
+                at = at.step(&e.step);
+                trail.push(at.position);
+                node = e.to;
+            }
+            let speed = (trail[span] - trail[0]).length() * FPS / span as f64;
+            assert!(
+                speed <= s.top_speed_m_s * 1.1,
+                "{behaviour}: {speed} > {s:?}"
+            );
+        }
+    }
+}

@@ -1,7 +1,7 @@
 //! A behaviour-labelled collection of clips: the CMU motion capture embedded in the
 //! binary, or a user's own capture read from a directory (one folder per behaviour).
 
-use super::{embedded, loader, Clip};
+use super::{embedded, loader, Clip, Jump};
 use std::fmt;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -119,6 +119,19 @@ impl MotionLibrary {
         let mut names: Vec<&str> = self.clips.iter().map(|c| c.behaviour.as_str()).collect();
         names.dedup();
         names
+    }
+
+    /// A behaviour's clips as its motion graph uses them: each cut at the crouch before
+    /// its first jump, if it has one (see [`Jump`]). The graphs are of moving on the
+    /// ground; in the CMU dribbling the jumps are the jump shots that end 06_14 and 06_15,
+    /// and what follows them is the shooter standing without the ball.
+    pub fn ground_clips(&self, behaviour: &str) -> Vec<Clip> {
+        self.clips_of(behaviour)
+            .map(|c| match Jump::find(c) {
+                Some(jump) => c.head(jump.crouch),
+                None => c.clone(),
+            })
+            .collect()
     }
 
     pub fn clips_of<'a>(&'a self, behaviour: &'a str) -> impl Iterator<Item = &'a Clip> + 'a {

@@ -13,6 +13,7 @@ mod bvh;
 mod clip;
 mod embedded;
 mod graph;
+mod jump;
 mod library;
 mod loader;
 mod playback;
@@ -25,8 +26,10 @@ mod walker;
 pub use alignment::{GroundTransform, Moments};
 pub use clip::{Clip, ClipError, LEFT_HIP, RIGHT_HIP};
 pub use graph::{
-    Constraints, Edge, GraphError, GraphParams, GraphStats, MotionGraph, AUTO_THRESHOLDS_M,
+    ClipCoverage, Constraints, Edge, GraphError, GraphParams, GraphStats, MotionGraph,
+    AUTO_THRESHOLDS_M, AUTO_WINDOWS,
 };
+pub use jump::Jump;
 pub use library::{LibraryError, LoadProblem, MotionLibrary, MotionSource};
 pub use loader::parse_clip;
 pub use playback::PlaybackFrame;

@@ -23,26 +23,38 @@ pub struct Transition {
 /// the ground alignment that best matches them. Clips should come from one subject (the
 /// caller compares a behaviour's clips only, and each behaviour is one CMU subject), so
 /// skeleton size never masquerades as a pose difference.
-///
-/// Cost: per pair of clips, the per-frame cross sums are computed once (frames² ×
-/// joints) and summed along diagonals into windows, not recomputed per window.
 pub fn find(clips: &[&Clip], window: usize, threshold_m: f64) -> Vec<Transition> {
-    let mut found = Vec::new();
+    find_windows(clips, &[window], threshold_m)
+        .pop()
+        .unwrap_or_default()
+}
+
+/// [`find`] for several windows at once, one list per window in the order given: the
+/// per-frame cross sums (frames² × joints per pair of clips, most of the work) do not
+/// depend on the window, so they are computed once and summed along diagonals into
+/// windows of each length.
+pub fn find_windows(clips: &[&Clip], windows: &[usize], threshold_m: f64) -> Vec<Vec<Transition>> {
+    let mut found = vec![Vec::new(); windows.len()];
     for (ca, a) in clips.iter().enumerate() {
         for (cb, b) in clips.iter().enumerate() {
-            find_between(a, b, window, threshold_m, |from, to, rms_m| {
-                // A cut to (nearly) the very next frames is the clip itself.
-                let trivial = ca == cb && to.abs_diff(from + 1) <= window;
-                if !trivial {
-                    found.push(Transition {
-                        from_clip: ca,
-                        from,
-                        to_clip: cb,
-                        to,
-                        rms_m,
-                    });
-                }
-            });
+            let Some(cross) = Cross::of(a, b) else {
+                continue;
+            };
+            for (w, &window) in windows.iter().enumerate() {
+                cross.minima(a, b, window, threshold_m, |from, to, rms_m| {
+                    // A cut to (nearly) the very next frames is the clip itself.
+                    let trivial = ca == cb && to.abs_diff(from + 1) <= window;
+                    if !trivial {
+                        found[w].push(Transition {
+                            from_clip: ca,
+                            from,
+                            to_clip: cb,
+                            to,
+                            rms_m,
+                        });
+                    }
+                });
+            }
         }
     }
     found
@@ -80,64 +92,99 @@ fn window_sums(clip: &Clip, window: usize) -> Vec<FrameSums> {
         .collect()
 }
 
-fn find_between(
-    a: &Clip,
-    b: &Clip,
-    window: usize,
-    threshold_m: f64,
-    mut emit: impl FnMut(usize, usize, f64),
-) {
-    let (la, lb, joints) = (a.frame_count(), b.frame_count(), a.joint_count());
-    // Windows start at s_a = from + 1 in a and s_b = to in b.
-    if la < window + 1 || lb < window || joints != b.joint_count() {
-        return;
-    }
-    let (wa, wb) = (window_sums(a, window), window_sums(b, window));
-    // Cross sums per frame pair: Σ(x x′ + z z′), Σ(x z′ − x′ z), Σ y y′.
-    let mut cross = vec![[0.0f64; 3]; la * lb];
-    for fa in 0..la {
-        let pa = a.frame(fa);
-        for fb in 0..lb {
-            let pb = b.frame(fb);
-            let mut c = [0.0; 3];
-            for (p, q) in pa.iter().zip(pb) {
-                c[0] += p.x * q.x + p.z * q.z;
-                c[1] += p.x * q.z - q.x * p.z;
-                c[2] += p.y * q.y;
-            }
-            cross[fa * lb + fb] = c;
+/// Cross sums of the frame pairs of two clips, Σ(x x′ + z z′), Σ(x z′ − x′ z), Σ y y′
+/// over joints, accumulated along each diagonal (frame pairs (fa, fb), (fa − 1, fb − 1),
+/// …), so the sum over any window of pairs is one difference whatever its length.
+struct Cross {
+    lb: usize,
+    diagonal: Vec<[f64; 3]>,
+}
+
+impl Cross {
+    fn of(a: &Clip, b: &Clip) -> Option<Cross> {
+        let (la, lb) = (a.frame_count(), b.frame_count());
+        if a.joint_count() != b.joint_count() {
+            return None;
         }
-    }
-    let (na, nb) = (la - window + 1, lb - window + 1);
-    // D over every (s_a, s_b), s_a ≥ 1; NaN marks "no window here".
-    let mut d = vec![f64::NAN; na * nb];
-    let weight = (window * joints) as f64;
-    for sa in 1..na {
-        for sb in 0..nb {
-            let m = Moments::from_sums(
-                weight,
-                [wa[sa].x, wa[sa].z, wa[sa].norm],
-                [wb[sb].x, wb[sb].z, wb[sb].norm],
-                (0..window).fold([0.0; 3], |acc, k| {
-                    let c = cross[(sa + k) * lb + sb + k];
-                    [acc[0] + c[0], acc[1] + c[1], acc[2] + c[2]]
-                }),
-            );
-            d[sa * nb + sb] = (m.aligned_distance() / weight).sqrt();
-        }
-    }
-    let at = |sa: usize, sb: usize| d[sa * nb + sb];
-    for sa in 1..na {
-        for sb in 0..nb {
-            let v = at(sa, sb);
-            if v.is_nan() || v >= threshold_m {
-                continue;
+        let mut sums = vec![[0.0f64; 3]; la * lb];
+        for fa in 0..la {
+            let pa = a.frame(fa);
+            for fb in 0..lb {
+                let pb = b.frame(fb);
+                let mut c = [0.0; 3];
+                for (p, q) in pa.iter().zip(pb) {
+                    c[0] += p.x * q.x + p.z * q.z;
+                    c[1] += p.x * q.z - q.x * p.z;
+                    c[2] += p.y * q.y;
+                }
+                if fa > 0 && fb > 0 {
+                    let before = sums[(fa - 1) * lb + fb - 1];
+                    c = [c[0] + before[0], c[1] + before[1], c[2] + before[2]];
+                }
+                sums[fa * lb + fb] = c;
             }
-            let is_minimum = (sa.saturating_sub(1)..=(sa + 1).min(na - 1))
-                .flat_map(|i| (sb.saturating_sub(1)..=(sb + 1).min(nb - 1)).map(move |j| (i, j)))
-                .all(|(i, j)| (i, j) == (sa, sb) || at(i, j).is_nan() || v <= at(i, j));
-            if is_minimum {
-                emit(sa - 1, sb, v);
+        }
+        Some(Cross { lb, diagonal: sums })
+    }
+
+    /// The cross sums over the `window` frame pairs starting at (sa, sb).
+    fn window(&self, sa: usize, sb: usize, window: usize) -> [f64; 3] {
+        let lb = self.lb;
+        let end = self.diagonal[(sa + window - 1) * lb + sb + window - 1];
+        if sa == 0 || sb == 0 {
+            return end;
+        }
+        let before = self.diagonal[(sa - 1) * lb + sb - 1];
+        [end[0] - before[0], end[1] - before[1], end[2] - before[2]]
+    }
+
+    /// Emits (from, to, rms) for every local minimum of D below `threshold_m`.
+    fn minima(
+        &self,
+        a: &Clip,
+        b: &Clip,
+        window: usize,
+        threshold_m: f64,
+        mut emit: impl FnMut(usize, usize, f64),
+    ) {
+        let (la, lb, joints) = (a.frame_count(), self.lb, a.joint_count());
+        // Windows start at s_a = from + 1 in a and s_b = to in b.
+        if window == 0 || la < window + 1 || lb < window {
+            return;
+        }
+        let (wa, wb) = (window_sums(a, window), window_sums(b, window));
+        let (na, nb) = (la - window + 1, lb - window + 1);
+        // D over every (s_a, s_b), s_a ≥ 1; NaN marks "no window here".
+        let mut d = vec![f64::NAN; na * nb];
+        let weight = (window * joints) as f64;
+        for sa in 1..na {
+            for sb in 0..nb {
+                let m = Moments::from_sums(
+                    weight,
+                    [wa[sa].x, wa[sa].z, wa[sa].norm],
+                    [wb[sb].x, wb[sb].z, wb[sb].norm],
+                    self.window(sa, sb, window),
+                );
+                // Rounding in the diagonal differences can take a perfect match a hair
+                // below zero.
+                d[sa * nb + sb] = (m.aligned_distance() / weight).max(0.0).sqrt();
+            }
+        }
+        let at = |sa: usize, sb: usize| d[sa * nb + sb];
+        for sa in 1..na {
+            for sb in 0..nb {
+                let v = at(sa, sb);
+                if v.is_nan() || v >= threshold_m {
+                    continue;
+                }
+                let is_minimum = (sa.saturating_sub(1)..=(sa + 1).min(na - 1))
+                    .flat_map(|i| {
+                        (sb.saturating_sub(1)..=(sb + 1).min(nb - 1)).map(move |j| (i, j))
+                    })
+                    .all(|(i, j)| (i, j) == (sa, sb) || at(i, j).is_nan() || v <= at(i, j));
+                if is_minimum {
+                    emit(sa - 1, sb, v);
+                }
             }
         }
     }
