@@ -267,11 +267,11 @@ fn costmap_arguments_are_checked() {
         err.contains("expected one of mc, search, grassfire"),
         "{err}"
     );
-    let err = failure(&format!("{base} --start-frame 99999"));
+    let err = failure(&format!("{base} --start 99999"));
     assert!(err.contains("the graph has nodes 0 to"), "{err}");
-    let err = failure(&format!("{base} --start-frame 16_36:x"));
+    let err = failure(&format!("{base} --start 16_36:x"));
     assert!(err.contains("CLIP:FRAME"), "{err}");
-    let err = failure(&format!("{base} --start-frame 99_99:3"));
+    let err = failure(&format!("{base} --start 99_99:3"));
     assert!(err.contains("no clip 99_99"), "{err}");
     let err = failure(&format!("{base} --cell 0"));
     assert!(err.contains("greater than 0"), "{err}");

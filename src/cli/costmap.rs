@@ -5,7 +5,9 @@ use super::heatmap;
 use super::motion::GraphArgs;
 use anyhow::Context;
 use clap::Args;
-use fieldhouse::costmap::{cache, BuildParams, Grid, Method, Obstacle, WATCHED_POINTS};
+use fieldhouse::costmap::{
+    cache, root_speed, BuildParams, Grid, Method, Obstacle, Start, WATCHED_POINTS,
+};
 use fieldhouse::motion::MotionGraph;
 use fieldhouse::words::{figure, plural};
 use glam::DVec2;
@@ -17,7 +19,7 @@ use std::time::Instant;
 
 #[derive(Args, Debug)]
 #[command(
-    about = "Build a behaviour's cost map: frames to reach each cell from a running start",
+    about = "Build a behaviour's cost map: frames to reach each cell from a start state",
     allow_negative_numbers = true,
     args_override_self = true,
     after_help = "The agent stands at (0, 0) facing +x; y is up, so +z is on its right.\n\
@@ -43,10 +45,17 @@ pub struct CostmapArgs {
     /// A rectangle no path may enter, corners X0,Z0,X1,Z1 in metres (repeatable).
     #[arg(long, value_name = "X0,Z0,X1,Z1", value_parser = rectangle, allow_hyphen_values = true)]
     obstacle: Vec<Obstacle>,
-    /// Start pose: a node id of the pruned graph (see motion-graph --json) or CLIP:FRAME.
-    /// Default: a frame running forward at about half the behaviour's top speed.
-    #[arg(long, value_name = "NODE|CLIP:FRAME")]
-    start_frame: Option<String>,
+    /// Where the body starts in the motion graph: default (running forward at about half
+    /// the behaviour's top speed), standing (the slowest state the data offers), moving
+    /// (the most common running state), a node id of the pruned graph (see motion-graph
+    /// --json) or CLIP:FRAME.
+    #[arg(
+        long,
+        visible_alias = "start-frame",
+        value_name = "S",
+        default_value = "default"
+    )]
+    start: String,
     /// Disable motion-graph edges faster than this, m/s.
     #[arg(long, value_name = "M_PER_S", value_parser = positive)]
     max_speed: Option<f64>,
@@ -102,27 +111,29 @@ fn rectangle(s: &str) -> Result<Obstacle, String> {
     }
 }
 
-/// The graph node a `--start-frame` names.
+/// The graph node a `--start` names.
 fn start_node(graph: &MotionGraph, given: &str) -> anyhow::Result<u32> {
-    if let Ok(id) = given.parse::<u32>() {
-        anyhow::ensure!(
-            (id as usize) < graph.node_count(),
-            "start frame {id}: the graph has nodes 0 to {}",
-            graph.node_count() - 1
-        );
-        return Ok(id);
+    if let Ok(start) = given.parse::<Start>() {
+        return start.node(graph).with_context(|| {
+            format!(
+                "start {given}: the graph has nodes 0 to {}",
+                graph.node_count() - 1
+            )
+        });
     }
     let (clip, frame) = given
         .split_once(':')
         .and_then(|(c, f)| Some((c, f.parse::<usize>().ok()?)))
-        .with_context(|| format!("start frame \"{given}\": write a node id or CLIP:FRAME"))?;
+        .with_context(|| {
+            format!("start \"{given}\": write default, standing, moving, a node id or CLIP:FRAME")
+        })?;
     let c = graph
         .clip_names
         .iter()
         .position(|n| n == clip)
         .with_context(|| {
             format!(
-                "start frame \"{given}\": no clip {clip}; clips: {}",
+                "start \"{given}\": no clip {clip}; clips: {}",
                 graph.clip_names.join(", ")
             )
         })?;
@@ -131,16 +142,12 @@ fn start_node(graph: &MotionGraph, given: &str) -> anyhow::Result<u32> {
         .iter()
         .position(|n| n.clip == c && n.frame == frame)
         .map(|i| i as u32)
-        .with_context(|| format!("start frame \"{given}\" was pruned from the graph (not in its largest strongly connected component)"))
+        .with_context(|| format!("start \"{given}\" was pruned from the graph (not in its largest strongly connected component)"))
 }
 
 pub fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let (library, graph) = args.graph.build()?;
-    let start = args
-        .start_frame
-        .as_deref()
-        .map(|s| start_node(&graph, s))
-        .transpose()?;
+    let start = start_node(&graph, &args.start)?;
     let params = BuildParams {
         method: args.method,
         grid: Grid::new(args.size, args.cell),
@@ -148,7 +155,7 @@ pub fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
         depth: args.depth,
         seed: args.seed,
         max_speed: args.max_speed,
-        start_node: Some(start.unwrap_or_else(|| graph.default_start())),
+        start_node: Some(start),
         obstacles: args.obstacle.clone(),
         ..BuildParams::default()
     };
@@ -207,7 +214,16 @@ pub fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
             "from_cache": from_cache,
             "behaviour": map.behaviour,
             "motion_source": library.source.to_string(),
-            "start": {"node": map.start_node, "clip": graph.clip_names[start_node.clip], "frame": start_node.frame},
+            "start": {
+                "given": args.start,
+                "node": map.start_node,
+                "clip": graph.clip_names[start_node.clip],
+                "frame": start_node.frame,
+                "root_speed_m_s": root_speed(&start_node),
+                "forward_speed_m_s": start_node.forward_speed,
+                "lateral_speed_m_s": start_node.lateral_speed,
+                "turn_rate_rad_s": start_node.turn_rate,
+            },
             "obstacles": map.obstacles,
             "memory_bytes": map.memory_bytes(),
             "convergence": {"points": WATCHED_POINTS, "samples": map.convergence},
@@ -217,7 +233,7 @@ pub fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
     }
     writeln!(
         out,
-        "{} cost map of \"{}\" ({}), {} m × {} m in {} m cells, from {} frame {} ({:.1} m/s forward)",
+        "{} cost map of \"{}\" ({}), {} m × {} m in {} m cells, from {} frame {} ({}: {:.1} m/s forward, {:.1} m/s to the right)",
         map.method.name(),
         map.behaviour,
         library.source,
@@ -226,7 +242,9 @@ pub fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
         figure(map.grid.cell_m, 3),
         graph.clip_names[start_node.clip],
         start_node.frame,
-        start_node.forward_speed
+        args.start,
+        start_node.forward_speed,
+        start_node.lateral_speed
     )?;
     writeln!(
         out,

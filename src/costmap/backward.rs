@@ -28,7 +28,7 @@
 
 use super::grid::cell_index;
 use super::prepared::{Prepared, Segments};
-use super::BuildInput;
+use super::Grid;
 use crate::motion::Walker;
 use glam::DVec2;
 
@@ -79,26 +79,28 @@ pub(crate) struct BackwardResult {
     pub paths: Vec<Vec<u32>>,
 }
 
+/// The maps from each of `starts` (nodes of the graph), from one backward pass: the
+/// cost-to-go of every branch node does not depend on where a walk began, so several
+/// start states cost one pass plus their own exact walks.
 pub(crate) fn build(
-    input: &BuildInput,
+    grid: &Grid,
     graph: &Prepared,
     nodes: usize,
     depth: u32,
-) -> BackwardResult {
-    let grid = &input.grid;
+    starts: &[u32],
+) -> Vec<BackwardResult> {
     let segs = graph.segments(nodes);
     let segments = walk_segments(graph, &segs, nodes);
-    let max_step = (0..graph.edge_count())
-        .map(|i| graph.edge(i).step.length())
-        .fold(0.0, f64::max);
     let branch_count = (0..nodes).filter(|&n| segs.branch[n]).count().max(1);
     let local = {
-        // Far enough for anything reachable in `depth` frames, but no further than a
-        // point of the map can be from a body that is still on it.
-        let half = (depth as f64 * max_step).min(grid.size_m) + grid.cell_m;
-        // A densely connected graph (with thousands of branch nodes, as a synthetic
-        // library the project once had) would need gigabytes at full resolution: coarsen the local cells to
-        // keep within the state budget rather than exhaust memory.
+        // As far as a point of the map can be from a body that is still on it. Not
+        // narrowed to what `depth` frames can reach: the local cells, and so which walks
+        // merge, must not depend on the horizon, or a longer horizon could merge a walk
+        // a shorter one kept and make a cell dearer.
+        let half = grid.size_m + grid.cell_m;
+        // A densely connected graph (thousands of branch nodes) would need gigabytes at
+        // full resolution: coarsen the local cells to keep within the state budget
+        // rather than exhaust memory.
         let budget_cell = 2.0 * half * (branch_count as f64 / STATE_BUDGET as f64).sqrt();
         let cell = (grid.cell_m / LOCAL_CELLS_PER_MAP_CELL).max(budget_cell);
         LocalGrid {
@@ -136,73 +138,83 @@ pub(crate) fn build(
         };
         branches * per_node
     ];
-    // A value at node n only matters if the start reaches n with that many frames to
-    // spare: an exact bound that skips most of the plane of nodes far from the start.
-    let spare: Vec<u32> = frames_from(graph, input.start, nodes)
-        .into_iter()
-        .map(|f| depth.saturating_sub(f.unwrap_or(u32::MAX)))
-        .collect();
-    let mut costs = vec![None; grid.cells()];
-    let mut paths = vec![Vec::new(); grid.cells()];
-    if let Some(c) = grid.cell_of(Walker::START.position) {
-        costs[c] = Some(0);
+    // A value at node n only matters if a start reaches n with that many frames to
+    // spare: an exact bound that skips most of the plane of nodes far from the starts.
+    let mut spare = vec![0u32; nodes];
+    for &start in starts {
+        for (n, f) in frames_from(graph, start, nodes).into_iter().enumerate() {
+            spare[n] = spare[n].max(depth.saturating_sub(f.unwrap_or(u32::MAX)));
+        }
     }
-    // Every short walk, exactly. That includes the lead from the start node to the first
-    // branch node (a single walk, so always within the horizon) and places its cells.
-    let horizon = exhaustive_horizon(graph, input.start, nodes, depth);
-    exhaust(graph, grid, input.start, horizon, &mut costs, &mut paths);
-    // The lead, where the exact walks through the first choices begin.
-    let mut lead = Vec::new();
-    let (mut node, mut at, mut frames) = (input.start, Walker::START, 0u32);
-    while !segs.branch[node as usize] && frames < depth {
-        let Some(e) = graph.out(node).first() else {
-            break;
-        };
-        at = at.after(&e.step, e.turn);
-        frames += e.frames;
-        node = e.to;
-        lead.push(e.id);
+    let mut costs = vec![vec![None; grid.cells()]; starts.len()];
+    let mut paths = vec![vec![Vec::new(); grid.cells()]; starts.len()];
+    let mut chains: Vec<(usize, Chain)> = Vec::new();
+    for (k, &start) in starts.iter().enumerate() {
+        if let Some(c) = grid.cell_of(Walker::START.position) {
+            costs[k][c] = Some(0);
+        }
+        // Every short walk, exactly. That includes the lead from the start node to the
+        // first branch node (a single walk, so always within the horizon) and places its
+        // cells.
+        let horizon = exhaustive_horizon(graph, start, nodes, depth);
+        exhaust(graph, grid, start, horizon, &mut costs[k], &mut paths[k]);
+        // The lead, where the exact walks through the first choices begin.
+        let mut lead = Vec::new();
+        let (mut node, mut at, mut frames) = (start, Walker::START, 0u32);
+        while !segs.branch[node as usize] && frames < depth {
+            let Some(e) = graph.out(node).first() else {
+                break;
+            };
+            at = at.after(&e.step, e.turn);
+            frames += e.frames;
+            node = e.to;
+            lead.push(e.id);
+        }
+        // Every walk offered to a node near the start is placed in the map as it is
+        // offered, through every exact walk from the start to that node, whether or not
+        // it improves the node's local cell: the local cell keeps one walk, but the map
+        // wants the cheapest in each of *its* cells, and a walk that only grazes a map
+        // cell must not lose to a cheaper one elsewhere in the same local cell.
+        if segs.branch[node as usize] {
+            let root = Chain {
+                node,
+                at,
+                frames,
+                edges: lead,
+            };
+            chains.extend(
+                chains_from(graph, &segs, &segments, root)
+                    .into_iter()
+                    .map(|c| (k, c)),
+            );
+        }
     }
-    // Every walk offered to a node near the start is placed in the map as it is offered,
-    // through every exact walk from the start to that node, whether or not it improves
-    // the node's local cell: the local cell keeps one walk, but the map wants the cheapest
-    // in each of *its* cells, and a walk that only grazes a map cell must not lose to a
-    // cheaper one elsewhere in the same local cell.
-    let chains = if segs.branch[node as usize] {
-        let root = Chain {
-            node,
-            at,
-            frames,
-            edges: lead.clone(),
-        };
-        chains_from(graph, &segs, &segments, root, depth)
-    } else {
-        Vec::new()
-    };
     let mut chains_at: Vec<Vec<u32>> = vec![Vec::new(); nodes];
-    for (i, c) in chains.iter().enumerate() {
+    for (i, (_, c)) in chains.iter().enumerate() {
         chains_at[c.node as usize].push(i as u32);
     }
     // Cheapest first, so placing an offer stops at the first chain it would take past
     // the horizon.
     for at_node in &mut chains_at {
-        at_node.sort_by_key(|&i| chains[i as usize].frames);
+        at_node.sort_by_key(|&i| chains[i as usize].1.frames);
     }
-    let mut placed: Vec<Option<(u32, u32, Via)>> = vec![None; grid.cells()];
+    let mut placed: Vec<Vec<Option<(u32, u32, Via)>>> =
+        vec![vec![None; grid.cells()]; starts.len()];
     // Places an offer through each chain to its node, cheapest chain first, until the
     // horizon.
     let mut place = |node: u32, local_point: DVec2, offered: u32, how: Via| {
         for &chain in &chains_at[node as usize] {
-            let from = &chains[chain as usize];
+            let (k, from) = &chains[chain as usize];
             let total = from.frames + offered;
             if total > depth {
                 break;
             }
             let world = from.at.position + local_point.rotate(from.at.facing);
             if let Some(c) = grid.cell_of(world) {
-                if costs[c].is_none_or(|v| total < v) && placed[c].is_none_or(|(v, _, _)| total < v)
+                if costs[*k][c].is_none_or(|v| total < v)
+                    && placed[*k][c].is_none_or(|(v, _, _)| total < v)
                 {
-                    placed[c] = Some((total, chain, how));
+                    placed[*k][c] = Some((total, chain, how));
                 }
             }
         }
@@ -265,32 +277,36 @@ pub(crate) fn build(
         }
     }
 
-    for (c, entry) in placed.iter().enumerate() {
-        let Some((total, chain, how)) = *entry else {
-            continue;
-        };
-        if costs[c].is_some_and(|v| v <= total) {
-            continue;
-        }
-        costs[c] = Some(total);
-        let mut path = chains[chain as usize].edges.clone();
-        let mut v = how;
-        loop {
-            let seg = &segments[v.segment as usize];
-            let len = if v.next & BASE != 0 {
-                (v.next & !BASE) as usize
-            } else {
-                seg.stops.len()
+    let mut results = Vec::with_capacity(starts.len());
+    for (k, (mut costs, mut paths)) in costs.into_iter().zip(paths).enumerate() {
+        for (c, entry) in placed[k].iter().enumerate() {
+            let Some((total, chain, how)) = *entry else {
+                continue;
             };
-            path.extend((0..len).map(|k| graph.edge(segs.step(seg.first_step + k)).id));
-            if v.next & BASE != 0 {
-                break;
+            if costs[c].is_some_and(|v| v <= total) {
+                continue;
             }
-            v = via[v.next as usize];
+            costs[c] = Some(total);
+            let mut path = chains[chain as usize].1.edges.clone();
+            let mut v = how;
+            loop {
+                let seg = &segments[v.segment as usize];
+                let len = if v.next & BASE != 0 {
+                    (v.next & !BASE) as usize
+                } else {
+                    seg.stops.len()
+                };
+                path.extend((0..len).map(|k| graph.edge(segs.step(seg.first_step + k)).id));
+                if v.next & BASE != 0 {
+                    break;
+                }
+                v = via[v.next as usize];
+            }
+            paths[c] = path;
         }
-        paths[c] = path;
+        results.push(BackwardResult { costs, paths });
     }
-    BackwardResult { costs, paths }
+    results
 }
 
 /// Branch levels from the start walked exactly (every choice followed, nothing merged)
@@ -317,20 +333,16 @@ struct Chain {
 }
 
 /// Every walk from the start through the first [`EXACT_LEVELS`] choices: from `root`
-/// (the lead to the first branch node), each segment in turn, up to `depth` frames.
-fn chains_from(
-    graph: &Prepared,
-    segs: &Segments,
-    segments: &[Segment],
-    root: Chain,
-    depth: u32,
-) -> Vec<Chain> {
+/// (the lead to the first branch node), each segment in turn.
+fn chains_from(graph: &Prepared, segs: &Segments, segments: &[Segment], root: Chain) -> Vec<Chain> {
     let mut out_of: Vec<Vec<usize>> = vec![Vec::new(); segs.branch.len()];
     for (i, s) in segments.iter().enumerate() {
         out_of[s.from as usize].push(i);
     }
     let mut chains = vec![root];
     let mut level = 0..1;
+    // Levels are counted whatever the horizon, so the same walks are exact at any depth
+    // (a chain past the horizon places nothing: offers stop at the first chain too long).
     for _ in 0..EXACT_LEVELS {
         // Each offer is placed through every chain to its node: on a densely connected
         // graph the chains of the next level would cost more than they find.
@@ -347,9 +359,6 @@ fn chains_from(
                 let seg = &segments[s];
                 let from = &chains[i];
                 let frames = from.frames + seg.frames;
-                if frames > depth {
-                    continue;
-                }
                 let mut at = from.at;
                 let mut edges = from.edges.clone();
                 for k in 0..seg.stops.len() {

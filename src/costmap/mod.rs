@@ -11,10 +11,12 @@ mod grid;
 mod mc;
 mod prepared;
 mod search;
+mod start;
 
 pub use crate::motion::Walker;
 pub use grid::{AgentPose, Grid, LocalFrame, Obstacle};
 pub use search::SearchParams;
+pub use start::{root_speed, start_states, Start, StartState};
 
 use crate::motion::{Constraints, MotionGraph};
 use crate::names::{lookup, UnknownName};
@@ -144,59 +146,26 @@ impl CostMap {
         progress: &mut dyn FnMut(u64),
     ) -> CostMap {
         let start = params.start_node.unwrap_or_else(|| graph.default_start());
-        let input = BuildInput {
-            grid: params.grid,
-            obstacles: params.obstacles.clone(),
-            start,
-        };
+        Self::build_from(graph, params, &[start], progress)
+            .pop()
+            .expect("one map per start")
+    }
+
+    /// The maps of `graph` from each of `starts` (nodes), in order, with `params` (whose
+    /// `start_node` is ignored). `search` without obstacles finds them all in one
+    /// backward pass; the other methods build one after another.
+    pub fn build_from(
+        graph: &MotionGraph,
+        params: &BuildParams,
+        starts: &[u32],
+        progress: &mut dyn FnMut(u64),
+    ) -> Vec<CostMap> {
         let enabled = graph.enabled(&Constraints {
             max_speed: params.max_speed,
         });
         let prepared = Prepared::new(graph, &enabled);
         let grid = &params.grid;
-        let (costs, paths, convergence) = match params.method {
-            Method::Mc => {
-                let watch: Vec<usize> = WATCHED_POINTS
-                    .iter()
-                    .filter_map(|&(x, z)| grid.cell_of(DVec2::new(x, z)))
-                    .collect();
-                let r = mc::build(
-                    &input,
-                    &prepared,
-                    params.iterations,
-                    params.depth,
-                    params.seed,
-                    &watch,
-                    progress,
-                );
-                (r.costs, r.paths, r.convergence)
-            }
-            Method::Search if params.obstacles.is_empty() => {
-                let r = backward::build(&input, &prepared, graph.node_count(), params.depth);
-                (r.costs, r.paths, Vec::new())
-            }
-            Method::Search => {
-                let r = search::build(
-                    &input,
-                    &prepared,
-                    graph.node_count(),
-                    params.depth,
-                    params.search,
-                );
-                let paths = (0..grid.cells()).map(|c| r.path(c)).collect();
-                (r.costs, paths, Vec::new())
-            }
-            Method::Grassfire => {
-                let costs = grassfire::build(
-                    grid,
-                    &params.obstacles,
-                    graph.stats.top_speed_m_s,
-                    graph.fps,
-                );
-                (costs, vec![Vec::new(); grid.cells()], Vec::new())
-            }
-        };
-        CostMap {
+        let map = |start: u32, costs, paths, convergence| CostMap {
             method: params.method,
             behaviour: graph.behaviour.clone(),
             grid: *grid,
@@ -208,7 +177,63 @@ impl CostMap {
             costs,
             paths,
             convergence,
+        };
+        if params.method == Method::Search && params.obstacles.is_empty() {
+            let found = backward::build(grid, &prepared, graph.node_count(), params.depth, starts);
+            return starts
+                .iter()
+                .zip(found)
+                .map(|(&start, r)| map(start, r.costs, r.paths, Vec::new()))
+                .collect();
         }
+        let mut maps = Vec::with_capacity(starts.len());
+        for &start in starts {
+            let input = BuildInput {
+                grid: params.grid,
+                obstacles: params.obstacles.clone(),
+                start,
+            };
+            let (costs, paths, convergence) = match params.method {
+                Method::Mc => {
+                    let watch: Vec<usize> = WATCHED_POINTS
+                        .iter()
+                        .filter_map(|&(x, z)| grid.cell_of(DVec2::new(x, z)))
+                        .collect();
+                    let r = mc::build(
+                        &input,
+                        &prepared,
+                        params.iterations,
+                        params.depth,
+                        params.seed,
+                        &watch,
+                        progress,
+                    );
+                    (r.costs, r.paths, r.convergence)
+                }
+                Method::Search => {
+                    let r = search::build(
+                        &input,
+                        &prepared,
+                        graph.node_count(),
+                        params.depth,
+                        params.search,
+                    );
+                    let paths = (0..grid.cells()).map(|c| r.path(c)).collect();
+                    (r.costs, paths, Vec::new())
+                }
+                Method::Grassfire => {
+                    let costs = grassfire::build(
+                        grid,
+                        &params.obstacles,
+                        graph.stats.top_speed_m_s,
+                        graph.fps,
+                    );
+                    (costs, vec![Vec::new(); grid.cells()], Vec::new())
+                }
+            };
+            maps.push(map(start, costs, paths, convergence));
+        }
+        maps
     }
 
     /// Cost in frames of the cell holding `local` (agent frame).
