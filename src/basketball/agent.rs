@@ -88,6 +88,8 @@ pub struct Agent {
     pub pose: AgentPose,
     /// The motion-graph node playing, for drawing the body; `None` before it first moves.
     pub node: Option<u32>,
+    /// The behaviour whose graph `node` is of: a move with it goes on from `node`.
+    pub playing: Option<&'static str>,
     pub action: Action,
     pub(super) movement: Option<Movement>,
     /// When it next decides (the agents re-plan a few times a second).
@@ -106,6 +108,7 @@ impl Agent {
             team,
             pose: AgentPose { position, heading },
             node: None,
+            playing: None,
             action: Action::Standing,
             movement: None,
             next_plan_s: 0.0,
@@ -123,6 +126,7 @@ impl Agent {
                 heading: at.heading(),
             };
             self.node = Some(node);
+            self.playing = Some(m.behaviour);
             if m.finished() {
                 self.movement = None;
             }

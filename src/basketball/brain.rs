@@ -4,13 +4,13 @@
 //! "simply tries to move toward the ball".
 
 use super::agent::{Action, Movement, Team};
-use super::capability::Mover;
+use super::capability::{Motion, Mover, Reach};
 use super::decision::{Chosen, Keep, Situation};
 use super::event::Event;
 use super::game::{Game, Order};
 use super::params::Brain;
 use super::safe::SafeSquares;
-use crate::costmap::AgentPose;
+use crate::costmap::root_speed;
 use glam::DVec2;
 
 /// What the ball handler does next, and why (in words a spectator reads).
@@ -182,26 +182,41 @@ impl Game {
             }
         }
         let pose = self.agents[k].pose;
-        let frame = pose.frame();
         let court = &self.params.court;
         let margins: &[f64] = if self.holder() == Some(k) {
             &[0.0]
         } else {
             &[0.0, RUN_OFF_M]
         };
+        let reaches: Vec<Reach> = movers
+            .iter()
+            .map(|mover| mover.reach(&pose, self.motion_of(k, mover)))
+            .collect();
         self.agents[k].movement = margins.iter().find_map(|&margin_m| {
-            movers.iter().find_map(|mover| {
-                let cell = mover
-                    .reachable_cell(&pose, goal)
-                    .filter(|&c| mover.path_on_court(&frame, c, court, margin_m))
-                    .or_else(|| mover.cell_toward(&pose, goal, court, margin_m))?;
-                Some(Movement::new(
-                    mover.strides_to(&pose, cell),
-                    goal,
-                    mover.behaviour,
-                ))
+            movers.iter().zip(&reaches).find_map(|(mover, reach)| {
+                let cell = reach
+                    .cell(goal)
+                    .filter(|&c| reach.on_court(c, court, margin_m))
+                    .or_else(|| reach.toward(goal, court, margin_m))?;
+                Some(Movement::new(reach.strides(cell), goal, mover.behaviour))
             })
         });
+    }
+
+    /// How agent `k` is moving, as `mover` plans from: the node it plays if that is on
+    /// `mover`'s graph (the move goes on from it), else the speed of the node it plays
+    /// with another behaviour, else standing.
+    pub(super) fn motion_of(&self, k: usize, mover: &Mover) -> Motion {
+        let a = &self.agents[k];
+        match (a.node, a.playing) {
+            (Some(n), Some(b)) if b == mover.behaviour => Motion::Node(n),
+            (Some(n), Some(b)) => self
+                .caps
+                .by_behaviour(b)
+                .and_then(|m| m.graph.nodes.get(n as usize))
+                .map_or(Motion::Still, |node| Motion::Speed(root_speed(node))),
+            _ => Motion::Still,
+        }
     }
 
     /// A defender heads for `goal` with its footwork, or runs where the footwork has no
@@ -288,12 +303,17 @@ impl Game {
             return play;
         }
         let caps = self.caps.clone();
-        let shooter = self.agents[k].pose;
+        let shooter = caps
+            .dribble
+            .reach(&self.agents[k].pose, self.motion_of(k, &caps.dribble));
         // Without prior knowledge of the defender, the shooter models it with its own
-        // non-dribbling map (the paper).
-        let defenders: Vec<(AgentPose, &Mover)> = self
+        // non-dribbling maps (the paper), at the state the defender is moving in.
+        let defenders: Vec<Reach> = self
             .defenders()
-            .map(|d| (self.agents[d].pose, &caps.run))
+            .map(|d| {
+                caps.run
+                    .reach(&self.agents[d].pose, self.motion_of(d, &caps.run))
+            })
             .collect();
         let mut candidates = std::mem::take(&mut self.candidates);
         let chosen = Situation {
@@ -301,7 +321,6 @@ impl Game {
             shot: &self.params.shot,
             params: &self.params.decision,
             shooter,
-            dribble: &caps.dribble,
             defenders: &defenders,
         }
         .decide_into(&mut candidates, Keep::Qualifying);

@@ -3,27 +3,63 @@
 
 use super::court::Court;
 use super::footprint::Footprint;
-use crate::costmap::{cache, AgentPose, BuildParams, CostMap, LocalFrame};
+use crate::costmap::{
+    cache, root_speed, start_states, AgentPose, BuildParams, CostMap, LocalFrame, Start, StartState,
+};
 use crate::motion::{
     GraphError, MotionGraph, MotionLibrary, MotionSource, RootStep, Walker, AUTO_WINDOWS,
 };
 use glam::DVec2;
 use std::path::Path;
 
-/// One behaviour an agent moves with: its motion graph and cost map.
+/// One behaviour an agent moves with: its motion graph and a cost map per start state.
 #[derive(Debug, Clone)]
 pub struct Mover {
     /// The behaviour's name (`dribble`, `run`, `defense`), as frames label a player.
     pub behaviour: &'static str,
     pub graph: MotionGraph,
-    pub map: CostMap,
-    /// Per map cell, the ground its stored path covers: checking a move against the
-    /// court costs a few hull vertices instead of a walk of every frame.
-    footprints: Vec<Footprint>,
+    /// One map per start state ([`start_states`]): standing first, then each moving state.
+    pub states: Vec<StateMap>,
+    /// Which of `states` is the most common running state: the map shown to people.
+    moving: usize,
+    /// Per graph node, the walk to the start state a body playing it reaches soonest.
+    leads: Vec<Lead>,
     /// Per graph edge, how it is played: one root step (with its turn as cos, sin) per
     /// data frame, and how many frames. Worked out once, since paths are walked for
     /// every move an agent considers.
     edge_frames: Vec<(RootStep, DVec2, usize)>,
+}
+
+/// A start state's map, with the ground each cell's stored path covers.
+#[derive(Debug, Clone)]
+pub struct StateMap {
+    pub state: StartState,
+    pub map: CostMap,
+    /// Per map cell: checking a move against the court costs a few hull vertices instead
+    /// of a walk of every frame.
+    footprints: Vec<Footprint>,
+}
+
+/// How a body playing a node gets to a start state: the edges, their frames, and where
+/// the body ends (in the frame it had at the node).
+#[derive(Debug, Clone)]
+struct Lead {
+    state: usize,
+    edges: Vec<u32>,
+    frames: u32,
+    end: Walker,
+}
+
+/// How a body is moving when it plans a move.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Motion {
+    /// Playing this node of the mover's own graph: the move goes on from it.
+    Node(u32),
+    /// Moving at this root speed (m/s) with another behaviour: the move starts from the
+    /// start state nearest that speed.
+    Speed(f64),
+    /// Not yet moving: the move starts standing.
+    Still,
 }
 
 /// One frame of a planned move: where the root is and which way it faces, and the
@@ -35,7 +71,12 @@ pub struct Stride {
 }
 
 impl Mover {
-    pub fn new(behaviour: &'static str, graph: MotionGraph, map: CostMap) -> Mover {
+    pub fn new(
+        behaviour: &'static str,
+        graph: MotionGraph,
+        maps: Vec<(StartState, CostMap)>,
+    ) -> Mover {
+        assert!(!maps.is_empty(), "a mover needs a map");
         let edge_frames = graph
             .edges
             .iter()
@@ -51,78 +92,237 @@ impl Mover {
                 (step, DVec2::from_angle(step.dheading), k as usize)
             })
             .collect();
+        let leads = leads(
+            &graph,
+            &maps.iter().map(|(s, _)| s.node).collect::<Vec<_>>(),
+        );
+        let moving_node = Start::Moving.node(&graph);
+        let moving = maps
+            .iter()
+            .position(|(s, _)| Some(s.node) == moving_node)
+            .unwrap_or(0);
         let mut mover = Mover {
             behaviour,
             graph,
-            map,
-            footprints: Vec::new(),
+            states: Vec::new(),
+            moving,
+            leads,
             edge_frames,
         };
-        let origin = AgentPose {
-            position: DVec2::ZERO,
-            heading: 0.0,
-        };
-        mover.footprints = (0..mover.map.costs.len())
-            .map(|cell| Footprint::of(mover.walk(&origin, cell).map(|s| s.at.position)))
+        let origin = Walker::START;
+        mover.states = maps
+            .into_iter()
+            .map(|(state, map)| {
+                let footprints = (0..map.costs.len())
+                    .map(|cell| {
+                        Footprint::of(mover.path(&map, origin, cell).map(|s| s.at.position))
+                    })
+                    .collect();
+                StateMap {
+                    state,
+                    map,
+                    footprints,
+                }
+            })
             .collect();
         mover
     }
 
-    /// Seconds for an agent whose frame is `frame` ([`AgentPose::frame`], prepared once
-    /// for many look-ups) to reach the world point `world`; `None` beyond the map
-    /// (farther than its horizon or its extent).
-    #[inline]
-    pub fn seconds_in(&self, frame: &LocalFrame, world: DVec2) -> Option<f64> {
-        self.map
-            .cost_in(frame, world)
-            .map(|frames| f64::from(frames) / self.map.fps)
+    /// The map of the most common running state: the one shown to people.
+    pub fn map(&self) -> &CostMap {
+        &self.states[self.moving].map
     }
 
     /// The map's horizon: what "beyond the map" is at least, in seconds.
     pub fn horizon_s(&self) -> f64 {
-        f64::from(self.map.depth) / self.map.fps
+        let map = self.map();
+        f64::from(map.depth) / map.fps
     }
 
-    /// The stored path to map cell `cell` played from `pose`: one stride per data frame,
-    /// starting with the pose itself. Root motion is relative, so the path found from the
-    /// map's start pose holds at any pose (the paper's TEAMBOTS agents did the same).
-    pub fn strides_to(&self, pose: &AgentPose, cell: usize) -> Vec<Stride> {
-        self.walk(pose, cell).collect()
+    /// The behaviour's top speed over the frames its graph kept, m/s.
+    pub fn top_speed_m_s(&self) -> f64 {
+        self.graph.stats.top_speed_m_s
     }
 
-    /// Whether the stored path to `cell`, played by the agent whose frame is `frame`
-    /// ([`AgentPose::frame`]), keeps the body on `court`, or at most `margin_m` beyond its
-    /// lines, at every frame (and between frames, where the body moves in straight lines).
-    pub fn path_on_court(
-        &self,
-        frame: &LocalFrame,
-        cell: usize,
-        court: &Court,
-        margin_m: f64,
-    ) -> bool {
-        self.footprints[cell].within(frame, court, margin_m)
-    }
-
-    /// The strides of the stored path to `cell` from `pose`, without collecting them.
-    fn walk<'a>(&'a self, pose: &AgentPose, cell: usize) -> impl Iterator<Item = Stride> + 'a {
-        let start = Stride {
-            at: Walker {
-                position: pose.position,
-                facing: DVec2::from_angle(pose.heading),
+    /// What an agent at `pose`, moving as `motion`, can reach: the map of the start state
+    /// its walk on the graph gets to soonest, placed where that walk ends.
+    pub fn reach(&self, pose: &AgentPose, motion: Motion) -> Reach<'_> {
+        let (state, lead) = match motion {
+            Motion::Node(n) => match self.leads.get(n as usize) {
+                Some(lead) => (lead.state, Some(lead)),
+                None => (0, None),
             },
-            node: self.map.start_node,
+            Motion::Speed(v) => {
+                let off =
+                    |s: &StateMap| (root_speed(&self.graph.nodes[s.state.node as usize]) - v).abs();
+                let nearest = (0..self.states.len())
+                    .min_by(|&a, &b| off(&self.states[a]).total_cmp(&off(&self.states[b])))
+                    .unwrap_or(0);
+                (nearest, None)
+            }
+            Motion::Still => (0, None),
         };
-        let steps = self.map.paths[cell].iter().flat_map(move |&id| {
+        let start = Walker {
+            position: pose.position,
+            facing: DVec2::from_angle(pose.heading),
+        };
+        let at = match lead {
+            Some(l) => Walker {
+                position: start.position + l.end.position.rotate(start.facing),
+                facing: start.facing.rotate(l.end.facing),
+            },
+            None => start,
+        };
+        let origin = AgentPose {
+            position: at.position,
+            heading: at.heading(),
+        };
+        Reach {
+            mover: self,
+            state,
+            lead,
+            start,
+            node: match motion {
+                Motion::Node(n) => n,
+                _ => self.states[state].state.node,
+            },
+            frame: origin.frame(),
+            origin,
+        }
+    }
+
+    /// The strides of the stored path to `cell` of `map`, played from `at`, without
+    /// collecting them (the first is `at` itself, at the map's start node).
+    fn path<'a>(
+        &'a self,
+        map: &'a CostMap,
+        at: Walker,
+        cell: usize,
+    ) -> impl Iterator<Item = Stride> + 'a {
+        let start = Stride {
+            at,
+            node: map.start_node,
+        };
+        std::iter::once(start).chain(self.play(&map.paths[cell], at))
+    }
+
+    /// The strides of `edges` played from `at` (not including `at`).
+    fn play<'a>(&'a self, edges: &'a [u32], at: Walker) -> impl Iterator<Item = Stride> + 'a {
+        let steps = edges.iter().flat_map(move |&id| {
             let (step, turn, k) = self.edge_frames[id as usize];
             std::iter::repeat_n((step, turn, self.graph.edges[id as usize].to), k)
         });
-        std::iter::once(start).chain(steps.scan(start.at, |at, (step, turn, node)| {
+        steps.scan(at, |at, (step, turn, node)| {
             *at = at.after(&step, turn);
             Some(Stride { at: *at, node })
-        }))
+        })
     }
 
-    /// Of the cells this agent reaches along a path that stays on `court` (within
+    /// The farthest an agent with this behaviour gets from where it stands within
+    /// `seconds`, from any start state, in any direction, m: a danger radius read off the
+    /// maps rather than fixed.
+    pub fn radius_within(&self, seconds: f64) -> f64 {
+        self.states
+            .iter()
+            .flat_map(|s| {
+                let map = &s.map;
+                map.costs
+                    .iter()
+                    .enumerate()
+                    .filter(move |(_, c)| c.is_some_and(|f| f64::from(f) / map.fps <= seconds))
+                    .map(move |(cell, _)| map.grid.centre(cell).length())
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+/// What one agent can reach from where it is and how it is moving: the walk to its start
+/// state (the lead; none when it is not moving on this graph), then that state's map.
+/// Every move it plans is the lead followed by a stored path, one continuous walk on the
+/// graph from the node it is playing.
+pub struct Reach<'a> {
+    mover: &'a Mover,
+    state: usize,
+    lead: Option<&'a Lead>,
+    /// The agent as it is, and the node it plays.
+    start: Walker,
+    node: u32,
+    /// Where the lead leaves it: the map's origin.
+    origin: AgentPose,
+    frame: LocalFrame,
+}
+
+impl Reach<'_> {
+    fn map(&self) -> &CostMap {
+        &self.mover.states[self.state].map
+    }
+
+    fn lead_frames(&self) -> u32 {
+        self.lead.map_or(0, |l| l.frames)
+    }
+
+    /// The name of the start state the map is of.
+    pub fn state(&self) -> &str {
+        &self.mover.states[self.state].state.name
+    }
+
+    /// Where the agent stands now.
+    pub fn position(&self) -> DVec2 {
+        self.start.position
+    }
+
+    /// Seconds to reach the world point `world`: the lead, then the map; `None` beyond
+    /// the map (farther than its horizon or its extent).
+    #[inline]
+    pub fn seconds(&self, world: DVec2) -> Option<f64> {
+        let map = self.map();
+        map.cost_in(&self.frame, world)
+            .map(|frames| f64::from(frames + self.lead_frames()) / map.fps)
+    }
+
+    /// The map's horizon, s: what "beyond the map" is at least.
+    pub fn horizon_s(&self) -> f64 {
+        self.mover.horizon_s()
+    }
+
+    /// The map cell holding `world`, if the map reaches it.
+    pub fn cell(&self, world: DVec2) -> Option<usize> {
+        let map = self.map();
+        let cell = map.grid.cell_of(self.frame.to_local(world))?;
+        map.costs[cell].map(|_| cell)
+    }
+
+    /// The move to map cell `cell`: one stride per data frame, starting with the agent as
+    /// it is, through the lead, then the stored path.
+    pub fn strides(&self, cell: usize) -> Vec<Stride> {
+        let first = Stride {
+            at: self.start,
+            node: self.node,
+        };
+        let lead = self.lead.map_or(&[][..], |l| &l.edges[..]);
+        let at_origin = Walker {
+            position: self.origin.position,
+            facing: DVec2::from_angle(self.origin.heading),
+        };
+        std::iter::once(first)
+            .chain(self.mover.play(lead, self.start))
+            .chain(self.mover.play(&self.map().paths[cell], at_origin))
+            .collect()
+    }
+
+    /// Whether the move to `cell` keeps the body on `court`, or at most `margin_m` beyond
+    /// its lines, at every frame (and between frames, where it moves in straight lines).
+    pub fn on_court(&self, cell: usize, court: &Court, margin_m: f64) -> bool {
+        let lead_ok = self.lead.is_none_or(|l| {
+            self.mover
+                .play(&l.edges, self.start)
+                .all(|s| court.inside_by(s.at.position) + margin_m >= 0.0)
+        });
+        lead_ok
+            && self.mover.states[self.state].footprints[cell].within(&self.frame, court, margin_m)
+    }
+
+    /// Of the cells this agent reaches along a move that stays on `court` (within
     /// `margin_m` of its lines) and ends on it at least a cell nearer `goal`, the one that
     /// gets it there soonest: the frames to the cell plus the rest of the way at the
     /// behaviour's top speed. This is the "cheapest heading" toward a goal the map itself
@@ -132,28 +332,22 @@ impl Mover {
     /// A move must make progress: the rest of the way is counted at top speed, which no
     /// real move beats, so the cell the agent stands in (no frames, the whole way at top
     /// speed) would otherwise always win and the agent would never set off.
-    pub fn cell_toward(
-        &self,
-        pose: &AgentPose,
-        goal: DVec2,
-        court: &Court,
-        margin_m: f64,
-    ) -> Option<usize> {
-        let grid = &self.map.grid;
-        let speed = self.map.top_speed_m_s.max(0.1);
-        let nearer_than = pose.position.distance(goal) - grid.cell_m;
-        let frame = pose.frame();
+    pub fn toward(&self, goal: DVec2, court: &Court, margin_m: f64) -> Option<usize> {
+        let map = self.map();
+        let grid = &map.grid;
+        let speed = self.mover.top_speed_m_s().max(0.1);
+        let nearer_than = self.start.position.distance(goal) - grid.cell_m;
         let mut best: Option<(f64, usize)> = None;
-        for (cell, cost) in self.map.costs.iter().enumerate() {
+        for (cell, cost) in map.costs.iter().enumerate() {
             let Some(frames) = cost else { continue };
-            let world = frame.to_world(grid.centre(cell));
+            let world = self.frame.to_world(grid.centre(cell));
             let remaining = world.distance(goal);
-            let eta = f64::from(*frames) / self.map.fps + remaining / speed;
+            let eta = f64::from(frames + self.lead_frames()) / map.fps + remaining / speed;
             // The path check costs most: only a cell that would win is checked.
             if best.is_some_and(|(b, _)| eta >= b)
                 || remaining > nearer_than
                 || !court.contains(world)
-                || !self.path_on_court(&frame, cell, court, margin_m)
+                || !self.on_court(cell, court, margin_m)
             {
                 continue;
             }
@@ -161,25 +355,62 @@ impl Mover {
         }
         best.map(|(_, cell)| cell)
     }
+}
 
-    /// The farthest an agent with this map gets from where it stands within `seconds`,
-    /// in any direction, m: a danger radius read off the map rather than fixed.
-    pub fn radius_within(&self, seconds: f64) -> f64 {
-        let grid = &self.map.grid;
-        self.map
-            .costs
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| c.is_some_and(|f| f64::from(f) / self.map.fps <= seconds))
-            .map(|(cell, _)| grid.centre(cell).length())
-            .fold(0.0, f64::max)
+/// Per node of `graph`, the walk to the nearest of `starts` (in frames), found by one
+/// search backward from all of them at once. Every node has one: the graph is strongly
+/// connected.
+fn leads(graph: &MotionGraph, starts: &[u32]) -> Vec<Lead> {
+    let n = graph.node_count();
+    let mut into: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for (i, e) in graph.edges.iter().enumerate() {
+        into[e.to as usize].push(i);
     }
-
-    /// The map cell holding the world point `world` for an agent at `pose`, if reachable.
-    pub fn reachable_cell(&self, pose: &AgentPose, world: DVec2) -> Option<usize> {
-        let cell = self.map.grid.cell_of(pose.to_local(world))?;
-        self.map.costs[cell].map(|_| cell)
+    // (frames to a start, the state reached, the first edge of the way)
+    let mut best: Vec<Option<(u32, usize, Option<usize>)>> = vec![None; n];
+    let mut queue = std::collections::BinaryHeap::new();
+    for (state, &s) in starts.iter().enumerate() {
+        if best[s as usize].is_none() {
+            best[s as usize] = Some((0, state, None));
+            queue.push(std::cmp::Reverse((0u32, s)));
+        }
     }
+    while let Some(std::cmp::Reverse((f, node))) = queue.pop() {
+        let Some((known, state, _)) = best[node as usize] else {
+            continue;
+        };
+        if known != f {
+            continue;
+        }
+        for &i in &into[node as usize] {
+            let e = &graph.edges[i];
+            let g = f + e.frames;
+            if best[e.from as usize].is_none_or(|(b, _, _)| g < b) {
+                best[e.from as usize] = Some((g, state, Some(i)));
+                queue.push(std::cmp::Reverse((g, e.from)));
+            }
+        }
+    }
+    (0..n)
+        .map(|node| {
+            let (frames, state, _) = best[node].expect("strongly connected");
+            let mut edges = Vec::new();
+            let mut at = Walker::START;
+            let mut v = node;
+            while let Some((_, _, Some(i))) = best[v] {
+                let e = &graph.edges[i];
+                at = at.step(&e.step);
+                edges.push(i as u32);
+                v = e.to as usize;
+            }
+            Lead {
+                state,
+                edges,
+                frames,
+                end: at,
+            }
+        })
+        .collect()
 }
 
 /// Which behaviour a defender moves with: the paper's defender "can use any form of
@@ -242,11 +473,11 @@ impl std::fmt::Display for Stage {
             }
             Stage::Map { behaviour } => write!(
                 f,
-                "{behaviour}: searching its cost map ({HORIZON_FRAMES} frames ahead; cached for next time)"
+                "{behaviour}: searching its cost maps, one per start state ({HORIZON_FRAMES} frames ahead; cached for next time)"
             ),
             Stage::Ready { behaviour, cached } => write!(
                 f,
-                "{behaviour}: cost map {}",
+                "{behaviour}: cost maps {}",
                 if *cached { "read from the cache" } else { "built" }
             ),
         }
@@ -286,12 +517,15 @@ impl Capabilities {
                 depth: HORIZON_FRAMES,
                 ..BuildParams::default()
             };
+            let states = start_states(&graph);
+            let starts: Vec<u32> = states.iter().map(|s| s.node).collect();
             let mut searching = false;
-            let (map, cached) = cache::build_or_load(
+            let (maps, cached) = cache::build_or_load(
                 cache_dir,
                 library.source.fingerprint(),
                 &graph,
                 &params,
+                &starts,
                 &mut |_| {
                     if !searching {
                         searching = true;
@@ -300,7 +534,11 @@ impl Capabilities {
                 },
             );
             progress(Stage::Ready { behaviour, cached });
-            Ok(Mover::new(behaviour, graph, map))
+            Ok(Mover::new(
+                behaviour,
+                graph,
+                states.into_iter().zip(maps).collect(),
+            ))
         };
         Ok(Capabilities {
             dribble: mover("dribble")?,

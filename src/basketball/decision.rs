@@ -8,10 +8,9 @@
 //! picks the one with the best shot. The maps are precomputed, so a decision is two
 //! table look-ups per square: O(n) in the squares.
 
-use super::capability::Mover;
+use super::capability::Reach;
 use super::court::Court;
 use super::shot::ShotModel;
-use crate::costmap::{AgentPose, LocalFrame};
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
@@ -80,10 +79,10 @@ pub struct Situation<'a> {
     pub court: &'a Court,
     pub shot: &'a ShotModel,
     pub params: &'a DecisionParams,
-    pub shooter: AgentPose,
-    pub dribble: &'a Mover,
-    /// Defender poses, each with the map the shooter models it by.
-    pub defenders: &'a [(AgentPose, &'a Mover)],
+    /// What the shooter reaches dribbling, from where it is and how it moves.
+    pub shooter: Reach<'a>,
+    /// What each defender reaches, by the maps the shooter models it with.
+    pub defenders: &'a [Reach<'a>],
 }
 
 /// Which candidates a decision lists.
@@ -102,16 +101,10 @@ impl Situation<'_> {
     pub fn decide_into(&self, candidates: &mut Vec<Candidate>, keep: Keep) -> Option<Chosen> {
         candidates.clear();
         let court = self.court;
-        let here = court.square_of(self.shooter.position);
+        let here = court.square_of(self.shooter.position());
         let (nx, nz) = court.squares_xz();
         let z0 = -0.5 * nz as f64 * court.square_m;
         let mut best: Option<(usize, bool)> = None;
-        let shooter = self.shooter.frame();
-        let defenders: Vec<(LocalFrame, &Mover, f64)> = self
-            .defenders
-            .iter()
-            .map(|(pose, mover)| (pose.frame(), *mover, mover.horizon_s()))
-            .collect();
         // Row by row, the centres of [`Court::square_centre`] without its per-square
         // division: this loop is the decision's whole cost (measured: 29 µs against 55).
         for i in 0..nz {
@@ -124,18 +117,17 @@ impl Situation<'_> {
                 let c_d = if here == Some(square) {
                     0.0
                 } else {
-                    match self.dribble.seconds_in(&shooter, centre) {
+                    match self.shooter.seconds(centre) {
                         Some(s) => s,
                         None => continue,
                     }
                 };
                 // The map's own start cell costs nothing too: no need to move.
                 let is_here = c_d == 0.0;
-                let c_o = defenders
+                let c_o = self
+                    .defenders
                     .iter()
-                    .map(|(frame, mover, horizon)| {
-                        mover.seconds_in(frame, centre).unwrap_or(*horizon)
-                    })
+                    .map(|d| d.seconds(centre).unwrap_or_else(|| d.horizon_s()))
                     .fold(f64::INFINITY, f64::min);
                 let qualifies = c_o > c_d + self.params.shot_time_s + self.params.epsilon_s;
                 if !qualifies && keep == Keep::Qualifying {

@@ -261,7 +261,7 @@ impl Game {
         let dt = 1.0 / self.params.tick_hz;
         self.tick += 1;
         let now = self.time_s();
-        let data_frames = dt * self.caps.run.map.fps;
+        let data_frames = dt * self.caps.run.map().fps;
         if let Ball::Shot {
             released_s,
             flight_s,

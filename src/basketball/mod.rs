@@ -27,7 +27,7 @@ pub mod shot;
 
 pub use agent::{Action, Agent, Team};
 pub use brain::RUN_OFF_M;
-pub use capability::{Capabilities, DefenderMotion, Mover, Stride};
+pub use capability::{Capabilities, DefenderMotion, Motion, Mover, Reach, StateMap, Stride};
 pub use court::Court;
 pub use decision::{Candidate, Chosen, Decision, DecisionParams, Keep, Situation};
 pub use eval::{compare, evaluate, Comparison, EvalReport};

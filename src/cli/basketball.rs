@@ -10,7 +10,7 @@ use anyhow::Context;
 use clap::Args;
 use fieldhouse::basketball::{
     compare, evaluate, Brain, Capabilities, Court, Decision, DecisionParams, DefenderMotion,
-    GameParams, Mover, ShotModel, Situation,
+    GameParams, Motion, Reach, ShotModel, Situation,
 };
 use fieldhouse::costmap::AgentPose;
 use fieldhouse::words::{figure, plural};
@@ -32,12 +32,25 @@ pub struct CapabilityArgs {
 
 impl CapabilityArgs {
     pub fn load(&self) -> anyhow::Result<Arc<Capabilities>> {
-        let library = self.source.load()?;
+        let library = self.library()?;
+        Ok(Arc::new(self.build(&library)?))
+    }
+
+    /// The motion library these capabilities are built from.
+    pub fn library(&self) -> anyhow::Result<fieldhouse::motion::MotionLibrary> {
+        self.source.load()
+    }
+
+    /// The capabilities of `library`, built or read from the cache, logging each stage.
+    pub fn build(
+        &self,
+        library: &fieldhouse::motion::MotionLibrary,
+    ) -> anyhow::Result<Capabilities> {
         let started = Instant::now();
         let cache = self.cache.dir();
         // A line per stage: on first start the graphs and maps take seconds, and a user
         // (or a container's log) should see what is happening.
-        let caps = Capabilities::build(&library, cache.as_deref(), &mut |stage| {
+        let caps = Capabilities::build(library, cache.as_deref(), &mut |stage| {
             tracing::info!(
                 elapsed_s = %figure(started.elapsed().as_secs_f64(), 2),
                 "{stage}"
@@ -49,7 +62,7 @@ impl CapabilityArgs {
             cache = %cache.map_or_else(|| "none".to_string(), |d| d.display().to_string()),
             "motion graphs and cost maps of run, dribble and defense ready"
         );
-        Ok(Arc::new(caps))
+        Ok(caps)
     }
 }
 
@@ -114,14 +127,18 @@ pub fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<()> {
         epsilon_s: args.epsilon,
     };
     let model = caps.defender(args.defender_model);
-    let defenders: Vec<(AgentPose, &Mover)> = args.defender.iter().map(|&d| (d, model)).collect();
+    // Poses given on the command line stand still: their maps are the standing ones.
+    let defenders: Vec<Reach> = args
+        .defender
+        .iter()
+        .map(|d| model.reach(d, Motion::Still))
+        .collect();
     let shot = ShotModel::default();
     let decision = Situation {
         court: &court,
         shot: &shot,
         params: &params,
-        shooter: args.shooter,
-        dribble: &caps.dribble,
+        shooter: caps.dribble.reach(&args.shooter, Motion::Still),
         defenders: &defenders,
     }
     .decide();

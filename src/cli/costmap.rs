@@ -176,11 +176,12 @@ pub fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
     if let Some(b) = &bar {
         b.set_message(format!("{} cost map", graph.behaviour));
     }
-    let (map, from_cache) = cache::build_or_load(
+    let (mut maps, from_cache) = cache::build_or_load(
         cache_dir.as_deref(),
         library.source.fingerprint(),
         &graph,
         &params,
+        &[start],
         &mut |done| {
             if let Some(b) = &bar {
                 b.set_position(done);
@@ -190,6 +191,7 @@ pub fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
     if let Some(b) = bar {
         b.finish_and_clear();
     }
+    let map = maps.pop().expect("one map per start");
     let elapsed_s = started.elapsed().as_secs_f64();
     tracing::info!(
         from_cache,

@@ -5,6 +5,7 @@ mod args;
 mod basketball;
 mod bot;
 mod canvas;
+mod capability;
 mod catch;
 mod costmap;
 mod heatmap;
@@ -47,8 +48,10 @@ enum Command {
     CatchSweep(sweep::SweepArgs),
     /// Build a behaviour's motion graph from motion capture and print its size.
     MotionGraph(motion::MotionGraphArgs),
-    /// Build a behaviour's cost map: frames to reach each cell from a running start.
+    /// Build a behaviour's cost map: frames to reach each cell from a start state.
     Costmap(costmap::CostmapArgs),
+    /// What the basketball agents can do: frames to reach squares around them, per behaviour and start state.
+    Capability(capability::CapabilityCmdArgs),
     /// Where would a shooter shoot from? Opponent modelling on every square: C_o > C_d + T_s + ε.
     BasketballDecide(basketball::DecideArgs),
     /// The paper's experiment: points per possession of the simple and cost-map offenses.
@@ -83,6 +86,7 @@ pub fn main() -> ExitCode {
         Command::CatchSweep(args) => sweep::run(args, &mut out),
         Command::MotionGraph(args) => motion::run(args, &mut out),
         Command::Costmap(args) => costmap::run(args, &mut out),
+        Command::Capability(args) => capability::run(args, &mut out),
         Command::BasketballDecide(args) => basketball::decide(args, &mut out),
         Command::BasketballEval(args) => basketball::eval(args, &mut out),
         Command::Serve(args) => serve::run(args),

@@ -25,6 +25,7 @@ struct Key<'a> {
     behaviour: &'a str,
     graph: &'a GraphParams,
     build: &'a BuildParams,
+    starts: &'a [u32],
     search: (usize, usize),
 }
 
@@ -35,6 +36,7 @@ pub fn path_for(
     behaviour: &str,
     graph: &GraphParams,
     build: &BuildParams,
+    starts: &[u32],
 ) -> PathBuf {
     let key = Key {
         format: CACHE_FORMAT,
@@ -43,6 +45,7 @@ pub fn path_for(
         behaviour,
         graph,
         build,
+        starts,
         search: (build.search.heading_bins, build.search.sub_cells),
     };
     let digest = Sha256::digest(serde_json::to_vec(&key).expect("keys serialise"));
@@ -62,17 +65,19 @@ pub fn default_dir() -> Option<PathBuf> {
         .map(|d| d.join("fieldhouse"))
 }
 
-/// The map of `graph` with `params`: read from the cache under `dir` if it holds one,
-/// else built (telling `progress` 0 as it starts, then as [`CostMap::build`] does) and
-/// stored there. A cache that cannot be written is logged and otherwise ignored: the map
-/// is still good. Returns the map and whether it came from the cache.
+/// The maps of `graph` with `params` from each of `starts` (nodes): read from the cache
+/// under `dir` if it holds them, else built (telling `progress` 0 as it starts, then as
+/// [`CostMap::build`] does) and stored there. A cache that cannot be written is logged
+/// and otherwise ignored: the maps are still good. Returns the maps and whether they came
+/// from the cache.
 pub fn build_or_load(
     dir: Option<&Path>,
     motion_fingerprint: &str,
     graph: &MotionGraph,
     params: &BuildParams,
+    starts: &[u32],
     progress: &mut dyn FnMut(u64),
-) -> (CostMap, bool) {
+) -> (Vec<CostMap>, bool) {
     let file = dir.map(|d| {
         path_for(
             d,
@@ -80,26 +85,29 @@ pub fn build_or_load(
             &graph.behaviour,
             &graph.params,
             params,
+            starts,
         )
     });
-    if let Some(map) = file.as_deref().and_then(load) {
-        return (map, true);
-    }
-    progress(0);
-    let map = CostMap::build(graph, params, progress);
-    if let Some(file) = &file {
-        if let Err(e) = store(file, &map) {
-            tracing::warn!(file = %file.display(), error = %e, "could not cache the cost map");
+    if let Some(maps) = file.as_deref().and_then(load) {
+        if maps.len() == starts.len() {
+            return (maps, true);
         }
     }
-    (map, false)
+    progress(0);
+    let maps = CostMap::build_from(graph, params, starts, progress);
+    if let Some(file) = &file {
+        if let Err(e) = store(file, &maps) {
+            tracing::warn!(file = %file.display(), error = %e, "could not cache the cost maps");
+        }
+    }
+    (maps, false)
 }
 
-/// The cached map at `path`, if there is a readable one.
-pub fn load(path: &Path) -> Option<CostMap> {
+/// The cached maps at `path`, if there is a readable file of them.
+pub fn load(path: &Path) -> Option<Vec<CostMap>> {
     let bytes = std::fs::read(path).ok()?;
     match serde_json::from_slice(&bytes) {
-        Ok(map) => Some(map),
+        Ok(maps) => Some(maps),
         Err(e) => {
             tracing::warn!(path = %path.display(), error = %e, "ignoring an unreadable cached cost map");
             None
@@ -107,15 +115,15 @@ pub fn load(path: &Path) -> Option<CostMap> {
     }
 }
 
-/// Writes `map` to `path` atomically (temporary file, sync, rename).
-pub fn store(path: &Path, map: &CostMap) -> std::io::Result<()> {
+/// Writes `maps` to `path` atomically (temporary file, sync, rename).
+pub fn store(path: &Path, maps: &[CostMap]) -> std::io::Result<()> {
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir)?;
     }
     let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
     let result = (|| {
         let mut file = std::fs::File::create(&tmp)?;
-        file.write_all(&serde_json::to_vec(map).map_err(std::io::Error::other)?)?;
+        file.write_all(&serde_json::to_vec(maps).map_err(std::io::Error::other)?)?;
         file.sync_all()?;
         std::fs::rename(&tmp, path)
     })();
@@ -142,19 +150,29 @@ mod tests {
             ..BuildParams::default()
         };
         let map = CostMap::build(&graph, &params, &mut |_| {});
-        let path = path_for(&dir, "abc", "run", &graph.params, &params);
+        let path = path_for(&dir, "abc", "run", &graph.params, &params, &[3]);
         assert!(load(&path).is_none());
-        store(&path, &map).unwrap();
-        let back = load(&path).unwrap();
+        store(&path, std::slice::from_ref(&map)).unwrap();
+        let back = load(&path).unwrap().pop().unwrap();
         assert_eq!(back.costs, map.costs);
         assert_eq!(back.paths, map.paths);
+        assert_ne!(
+            path_for(&dir, "abc", "run", &graph.params, &params, &[4]),
+            path
+        );
         // Any change of input gives another file.
         let other = BuildParams {
             depth: 31,
             ..params.clone()
         };
-        assert_ne!(path_for(&dir, "abc", "run", &graph.params, &other), path);
-        assert_ne!(path_for(&dir, "abd", "run", &graph.params, &params), path);
+        assert_ne!(
+            path_for(&dir, "abc", "run", &graph.params, &other, &[3]),
+            path
+        );
+        assert_ne!(
+            path_for(&dir, "abd", "run", &graph.params, &params, &[3]),
+            path
+        );
         // A corrupt file is ignored, not trusted.
         std::fs::write(&path, b"{\"method\": \"mc\", \"costs\": [1, 2").unwrap();
         assert!(load(&path).is_none());

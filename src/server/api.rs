@@ -268,7 +268,7 @@ fn map_json(app: &AppState, behaviour: &str) -> Result<Value, ApiError> {
             ),
         )
     })?;
-    let map = &mover.map;
+    let map = mover.map();
     let seconds: Vec<Vec<Option<f64>>> = map
         .rows()
         .iter()
