@@ -6,7 +6,8 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use fieldhouse::basketball::{
-    Brain, Capabilities, Court, DecisionParams, Game, GameParams, Keep, Mover, ShotModel, Situation,
+    Brain, Capabilities, Court, DecisionParams, Game, GameParams, Keep, Motion, ShotModel,
+    Situation,
 };
 use fieldhouse::costmap::AgentPose;
 use fieldhouse::motion::{MotionLibrary, FPS};
@@ -23,6 +24,18 @@ fn capabilities() -> Arc<Capabilities> {
     )
 }
 
+/// Target: every graph and every map of every behaviour and start state, as a first
+/// start builds them with no cache, in under 10 s.
+fn capabilities_uncached(c: &mut Criterion) {
+    let library = MotionLibrary::embedded(FPS);
+    let mut group = c.benchmark_group("basketball/capabilities");
+    group.sample_size(10);
+    group.bench_function("all_graphs_and_maps_uncached", |b| {
+        b.iter(|| black_box(Capabilities::build(&library, None, &mut |_| {}).unwrap()))
+    });
+    group.finish();
+}
+
 /// Target: a decision over a 20 m × 20 m map of 0.5 m cells in under 50 µs.
 fn decision(c: &mut Criterion) {
     let caps = capabilities();
@@ -33,16 +46,16 @@ fn decision(c: &mut Criterion) {
         position: DVec2::new(4.0, 0.0),
         heading: 0.0,
     };
-    let defenders: [(AgentPose, &Mover); 1] = [(defender, &caps.run)];
+    let defenders = [caps.run.reach(&defender, Motion::Still)];
+    let shooter = AgentPose {
+        position: DVec2::new(9.0, 2.0),
+        heading: std::f64::consts::PI,
+    };
     let situation = Situation {
         court: &court,
         shot: &shot,
         params: &params,
-        shooter: AgentPose {
-            position: DVec2::new(9.0, 2.0),
-            heading: std::f64::consts::PI,
-        },
-        dribble: &caps.dribble,
+        shooter: caps.dribble.reach(&shooter, Motion::Still),
         defenders: &defenders,
     };
     let mut candidates = Vec::new();
@@ -80,5 +93,5 @@ fn match_10_minutes(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, decision, match_10_minutes);
+criterion_group!(benches, capabilities_uncached, decision, match_10_minutes);
 criterion_main!(benches);

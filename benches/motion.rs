@@ -4,7 +4,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use fieldhouse::costmap::{BuildParams, CostMap, Method};
-use fieldhouse::motion::{Clip, GraphParams, MotionGraph, MotionLibrary, FPS};
+use fieldhouse::motion::{Clip, MotionGraph, MotionLibrary, AUTO_WINDOWS, FPS};
 use std::hint::black_box;
 
 fn library() -> MotionLibrary {
@@ -12,8 +12,9 @@ fn library() -> MotionLibrary {
 }
 
 fn graph(library: &MotionLibrary, behaviour: &str) -> MotionGraph {
-    let clips: Vec<&Clip> = library.clips_of(behaviour).collect();
-    MotionGraph::build_auto(behaviour, &clips, GraphParams::default().window).unwrap()
+    let owned = library.ground_clips(behaviour);
+    let clips: Vec<&Clip> = owned.iter().collect();
+    MotionGraph::build_auto(behaviour, &clips, &AUTO_WINDOWS).unwrap()
 }
 
 /// Target: the motion graph over all frames of the motion capture, at 30 fps, in under
