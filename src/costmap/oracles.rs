@@ -265,3 +265,40 @@ fn monte_carlo_records_convergence_and_only_improves() {
         }
     }
 }
+
+/// A longer horizon only adds walks, so no cell may get dearer: on every CMU behaviour,
+/// from standing and from the default start, over a ladder of depths. (Search once
+/// coarsened its local cells with the depth, and some cells rose by a few frames.)
+#[test]
+fn search_never_gets_dearer_with_a_longer_horizon() {
+    for behaviour in ["run", "dribble", "defense"] {
+        let graph = fixtures::cmu_graph(behaviour);
+        for start in [Start::Standing, Start::Default] {
+            let node = start.node(&graph).unwrap();
+            let mut shorter: Option<CostMap> = None;
+            for depth in [30, 60, 120] {
+                let map = build(
+                    &graph,
+                    &BuildParams {
+                        depth,
+                        start_node: Some(node),
+                        grid: Grid::new(10.0, 0.5),
+                        ..params(Method::Search)
+                    },
+                );
+                if let Some(s) = &shorter {
+                    for (c, (a, b)) in s.costs.iter().zip(&map.costs).enumerate() {
+                        if let Some(a) = a {
+                            assert!(
+                                b.is_some_and(|b| b <= *a),
+                                "{behaviour} {start:?}: cell {c} costs {a} at depth {}, {b:?} at {depth}",
+                                s.depth
+                            );
+                        }
+                    }
+                }
+                shorter = Some(map);
+            }
+        }
+    }
+}
