@@ -162,8 +162,8 @@ fn a_first_start_shows_each_stage_and_the_next_start_reads_the_cache() {
     for behaviour in ["run", "dribble", "defense"] {
         for stage in [
             "motion graph of",
-            "searching its cost map",
-            "cost map built",
+            "searching its cost maps",
+            "cost maps built",
         ] {
             assert!(
                 first.contains(&format!("{behaviour}: {stage}")),
@@ -175,7 +175,7 @@ fn a_first_start_shows_each_stage_and_the_next_start_reads_the_cache() {
     assert!(!second.contains("searching"), "{second}");
     for behaviour in ["run", "dribble", "defense"] {
         assert!(
-            second.contains(&format!("{behaviour}: cost map read from the cache")),
+            second.contains(&format!("{behaviour}: cost maps read from the cache")),
             "{second}"
         );
     }

@@ -89,7 +89,7 @@ pub(crate) fn build(
     depth: u32,
     starts: &[u32],
 ) -> Vec<BackwardResult> {
-    let segs = graph.segments(nodes);
+    let segs = graph.segments(nodes, false);
     let segments = walk_segments(graph, &segs, nodes);
     let branch_count = (0..nodes).filter(|&n| segs.branch[n]).count().max(1);
     let local = {
@@ -181,6 +181,7 @@ pub(crate) fn build(
                 at,
                 frames,
                 edges: lead,
+                level: 0,
             };
             chains.extend(
                 chains_from(graph, &segs, &segments, root)
@@ -198,12 +199,27 @@ pub(crate) fn build(
     for at_node in &mut chains_at {
         at_node.sort_by_key(|&i| chains[i as usize].1.frames);
     }
+    let shallow_at: Vec<Vec<u32>> = chains_at
+        .iter()
+        .map(|at_node| {
+            at_node
+                .iter()
+                .copied()
+                .filter(|&i| chains[i as usize].1.level <= FAR_LEVELS)
+                .collect()
+        })
+        .collect();
     let mut placed: Vec<Vec<Option<(u32, u32, Via)>>> =
         vec![vec![None; grid.cells()]; starts.len()];
     // Places an offer through each chain to its node, cheapest chain first, until the
     // horizon.
     let mut place = |node: u32, local_point: DVec2, offered: u32, how: Via| {
-        for &chain in &chains_at[node as usize] {
+        let through = if offered > NEAR_OFFER_FRAMES {
+            &shallow_at[node as usize]
+        } else {
+            &chains_at[node as usize]
+        };
+        for &chain in through {
             let (k, from) = &chains[chain as usize];
             let total = from.frames + offered;
             if total > depth {
@@ -279,15 +295,15 @@ pub(crate) fn build(
 
     let mut results = Vec::with_capacity(starts.len());
     for (k, (mut costs, mut paths)) in costs.into_iter().zip(paths).enumerate() {
-        for (c, entry) in placed[k].iter().enumerate() {
-            let Some((total, chain, how)) = *entry else {
-                continue;
-            };
-            if costs[c].is_some_and(|v| v <= total) {
-                continue;
-            }
-            costs[c] = Some(total);
-            let mut path = chains[chain as usize].1.edges.clone();
+        // Each placed walk is replayed and kept in the cell it really ends in: the point
+        // a state keeps is stored in single precision, and a walk that ends on a cell's
+        // edge (as a straight run along an axis does) may land on the other side of it.
+        let mut found: Vec<(usize, u32, Vec<u32>)> = Vec::new();
+        for entry in placed[k].iter().flatten() {
+            let &(total, chain, how) = entry;
+            let lead = &chains[chain as usize].1;
+            let mut at = lead.at;
+            let mut path = lead.edges.clone();
             let mut v = how;
             loop {
                 let seg = &segments[v.segment as usize];
@@ -296,13 +312,25 @@ pub(crate) fn build(
                 } else {
                     seg.stops.len()
                 };
-                path.extend((0..len).map(|k| graph.edge(segs.step(seg.first_step + k)).id));
+                for step in 0..len {
+                    let e = graph.edge(segs.step(seg.first_step + step));
+                    at = at.after(&e.step, e.turn);
+                    path.push(e.id);
+                }
                 if v.next & BASE != 0 {
                     break;
                 }
                 v = via[v.next as usize];
             }
-            paths[c] = path;
+            if let Some(c) = grid.cell_of(at.position) {
+                found.push((c, total, path));
+            }
+        }
+        for (c, total, path) in found {
+            if costs[c].is_none_or(|v| total < v) {
+                costs[c] = Some(total);
+                paths[c] = path;
+            }
         }
         results.push(BackwardResult { costs, paths });
     }
@@ -318,6 +346,13 @@ pub(crate) fn build(
 /// 74 ms, 8 levels 95.3 % 106 ms, 10 levels 96.3 % 0.20 s, 16 levels 99.0 % 6.7 s.
 const EXACT_LEVELS: usize = 6;
 
+/// An offer of more frames than this is placed only through the exact walks of at most
+/// [`FAR_LEVELS`] choices: the exact walks exist for the cells near the start, where a
+/// grazing walk decides a cell, and placing every long walk through every one of them
+/// was half of search's time.
+const NEAR_OFFER_FRAMES: u32 = 60;
+const FAR_LEVELS: u8 = 2;
+
 /// The most exact walks kept: levels stop before they would pass it. (CMU running has
 /// 107 at six levels; a graph with thousands of branch nodes would have hundreds of
 /// thousands.)
@@ -330,6 +365,8 @@ struct Chain {
     at: Walker,
     frames: u32,
     edges: Vec<u32>,
+    /// Choices made since the lead (0 for the lead itself).
+    level: u8,
 }
 
 /// Every walk from the start through the first [`EXACT_LEVELS`] choices: from `root`
@@ -371,6 +408,7 @@ fn chains_from(graph: &Prepared, segs: &Segments, segments: &[Segment], root: Ch
                     at,
                     frames,
                     edges,
+                    level: from.level + 1,
                 });
             }
         }
@@ -386,7 +424,7 @@ const EXHAUSTIVE_STEPS: f64 = 200_000.0;
 /// fits in [`EXHAUSTIVE_STEPS`] steps, counted without walking them: the number of walks
 /// of each length, by dynamic programming over the nodes. On CMU running that is 28
 /// frames; a densely connected graph gets a shorter one.
-fn exhaustive_horizon(graph: &Prepared, start: u32, nodes: usize, depth: u32) -> u32 {
+pub(crate) fn exhaustive_horizon(graph: &Prepared, start: u32, nodes: usize, depth: u32) -> u32 {
     // Walks ending at frame t, by node, for the frames an edge can still reach: a ring
     // of rows, so a long horizon costs no more memory than a short one.
     let longest = (0..graph.edge_count())

@@ -45,16 +45,17 @@ impl Prepared {
     }
 
     /// The graph compressed to clips between branch points: from every branch node (one
-    /// where a walk has a choice, or where walks meet), each way out followed frame by
-    /// frame to the next branch node. A walk's only decisions are at branch nodes, so a
-    /// search need only tell states apart there.
-    pub fn segments(&self, nodes: usize) -> Segments {
+    /// where a walk has a choice, and, if `at_meetings`, one where walks meet), each way
+    /// out followed frame by frame to the next branch node. A walk's only decisions are
+    /// at choices, so a search need only tell states apart there; a forward search that
+    /// merges walks also wants the meetings, where walks from different places join.
+    pub fn segments(&self, nodes: usize, at_meetings: bool) -> Segments {
         let mut in_degree = vec![0u32; nodes];
         for e in &self.edges {
             in_degree[e.to as usize] += 1;
         }
         let branch: Vec<bool> = (0..nodes as u32)
-            .map(|n| self.out(n).len() != 1 || in_degree[n as usize] != 1)
+            .map(|n| self.out(n).len() != 1 || (at_meetings && in_degree[n as usize] != 1))
             .collect();
         let mut start = vec![0; nodes + 1];
         let mut segments = Vec::new();

@@ -73,7 +73,7 @@ pub(crate) fn build(
 ) -> SearchResult {
     let grid = &input.grid;
     let depth = depth as usize;
-    let segments = graph.segments(nodes);
+    let segments = graph.segments(nodes, true);
     let side = grid.n * params.sub_cells;
     let bins = params.heading_bins;
     let key = |node: u32, at: &Walker| -> Option<usize> {

@@ -72,9 +72,11 @@ const TURNING_RAD_S: f64 = 0.5;
 /// A moving state needs this share of the graph's nodes to get a map of its own.
 const MIN_SHARE: f64 = 0.03;
 
-/// Which kind of moving a node shows: speed class, direction of travel in the body's
-/// frame, and turn.
-fn kind(n: &Node) -> Option<(&'static str, &'static str, &'static str)> {
+/// A kind of moving: speed class, direction of travel in the body's frame, and turn.
+type Kind = (&'static str, &'static str, &'static str);
+
+/// Which kind of moving a node shows.
+fn kind(n: &Node) -> Option<Kind> {
     let speed = root_speed(n);
     if speed < STANDING_M_S {
         return None;
@@ -103,7 +105,7 @@ fn kind(n: &Node) -> Option<(&'static str, &'static str, &'static str)> {
 /// The moving states of `graph` with at least [`MIN_SHARE`] of its nodes, most common
 /// first, each with its node nearest the state's mean speed and turn.
 fn moving_states(graph: &MotionGraph) -> Vec<StartState> {
-    let mut groups: Vec<((&str, &str, &str), Vec<u32>)> = Vec::new();
+    let mut groups: Vec<(Kind, Vec<u32>)> = Vec::new();
     for (i, n) in graph.nodes.iter().enumerate() {
         let Some(k) = kind(n) else { continue };
         match groups.iter_mut().find(|(g, _)| *g == k) {
