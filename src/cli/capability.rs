@@ -75,6 +75,13 @@ fn frames_to(map: &CostMap) -> Map<String, Value> {
         .collect()
 }
 
+/// Cells whose centre is within `radius` m of the agent that the map does not reach.
+fn unreachable_within(map: &CostMap, radius: f64) -> usize {
+    (0..map.costs.len())
+        .filter(|&c| map.grid.centre(c).length() <= radius && map.costs[c].is_none())
+        .count()
+}
+
 fn state_json(mover: &Mover, s: &StateMap, grassfire: &CostMap) -> Value {
     let node = mover.graph.nodes[s.state.node as usize];
     json!({
@@ -86,6 +93,7 @@ fn state_json(mover: &Mover, s: &StateMap, grassfire: &CostMap) -> Value {
         "frames_to": frames_to(&s.map),
         "grassfire": frames_to(grassfire),
         "reachable_cells": s.map.reachable_cells(),
+        "unreachable_within_3m": unreachable_within(&s.map, 3.0),
     })
 }
 
