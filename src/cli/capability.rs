@@ -93,6 +93,7 @@ fn state_json(mover: &Mover, s: &StateMap, grassfire: &CostMap) -> Value {
         "frames_to": frames_to(&s.map),
         "grassfire": frames_to(grassfire),
         "reachable_cells": s.map.reachable_cells(),
+        "memory_bytes": s.map.memory_bytes(),
         "unreachable_within_3m": unreachable_within(&s.map, 3.0),
     })
 }

@@ -14,8 +14,9 @@ use std::path::{Path, PathBuf};
 
 /// Bump when the meaning of a cached map changes without the crate version changing
 /// (3: `search` follows every short walk from the start exactly, so its maps improved;
-/// 4: graphs keep every clip, without the jump shots).
-const CACHE_FORMAT: u32 = 4;
+/// 4: graphs keep every clip, without the jump shots; 5: search splits at choices only
+/// and adds random walks near the start).
+const CACHE_FORMAT: u32 = 5;
 
 #[derive(Serialize)]
 struct Key<'a> {
