@@ -311,3 +311,76 @@ fn an_interrupted_build_leaves_no_cache_file() {
         true
     );
 }
+
+/// `fieldhouse capability --json`, the interface others build on: per behaviour and start
+/// state the frames to the nine squares and grassfire's, per clip the coverage; checked
+/// against what must hold whatever the data (grassfire grows with distance, every clip
+/// keeps half its frames, `standing` is the slowest state) rather than against numbers.
+#[test]
+fn the_capability_report_covers_every_behaviour_state_and_clip() {
+    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("capability-cache");
+    let doc = json(&format!(
+        "capability --json --cache-dir {}",
+        cache.display()
+    ));
+    let keys = [
+        "ahead_1m",
+        "ahead_3m",
+        "ahead_5m",
+        "left_1m",
+        "left_3m",
+        "right_1m",
+        "right_3m",
+        "behind_3m",
+        "behind_5m",
+    ];
+    let behaviours = doc["behaviours"].as_array().unwrap();
+    let names: Vec<&str> = behaviours
+        .iter()
+        .map(|b| b["behaviour"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["dribble", "run", "defense"]);
+    for b in behaviours {
+        for c in b["clips"].as_array().unwrap() {
+            let (frames, kept) = (c["frames"].as_u64().unwrap(), c["kept"].as_u64().unwrap());
+            assert!(2 * kept >= frames, "{c}");
+        }
+        let states = b["states"].as_array().unwrap();
+        assert_eq!(states[0]["name"], "standing");
+        let speed = |s: &Value| s["root_speed_m_s"].as_f64().unwrap();
+        assert!(states.iter().all(|s| speed(&states[0]) <= speed(s)));
+        for s in states {
+            for k in keys {
+                let f = &s["frames_to"][k];
+                assert!(f.is_null() || f.is_u64(), "{k}: {f}");
+                assert!(s["grassfire"][k].is_u64(), "{k}");
+            }
+            let g = |k: &str| s["grassfire"][k].as_u64().unwrap();
+            assert!(g("ahead_1m") < g("ahead_3m") && g("ahead_3m") < g("ahead_5m"));
+            assert!(g("left_1m") < g("left_3m") && g("right_1m") < g("right_3m"));
+            assert!(g("behind_3m") < g("behind_5m"));
+        }
+    }
+    // The two jump shots are cut from the dribbling, with the time a shot takes.
+    let jumps = behaviours[0]["jumps_cut"].as_array().unwrap();
+    assert_eq!(jumps.len(), 2, "{jumps:?}");
+}
+
+#[test]
+fn a_cost_map_starts_from_the_state_asked_for() {
+    let start = |s: &str| {
+        json(&format!(
+            "costmap --behaviour run --depth 30 --size 6 --no-cache --json --start {s}"
+        ))["start"]
+            .clone()
+    };
+    let (standing, moving) = (start("standing"), start("moving"));
+    assert!(standing["root_speed_m_s"].as_f64() < moving["root_speed_m_s"].as_f64());
+    assert_eq!(standing["given"], "standing");
+    let node = moving["node"].as_u64().unwrap();
+    assert_eq!(start(&node.to_string())["node"], node);
+    let clip_frame = format!("{}:{}", moving["clip"].as_str().unwrap(), moving["frame"]);
+    assert_eq!(start(&clip_frame)["node"], node);
+    let err = failure("costmap --behaviour run --start sitting");
+    assert!(err.contains("default, standing, moving"), "{err}");
+}

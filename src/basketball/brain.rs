@@ -161,8 +161,8 @@ impl Game {
     /// preference) that has a way there: plays the map's stored path to the goal's cell if
     /// the map reaches it by a path that stays on the court, else to the cell that is the
     /// cheapest way nearer it on the court. A player without the ball tries the same again
-    /// with the run-off beyond the lines ([`RUN_OFF_M`]); one with the ball never leaves
-    /// the court. It stands if nothing gets it nearer.
+    /// with the run-off beyond the lines ([`RUN_OFF_M`]); one with the ball, or with a
+    /// pass on its way to it, never leaves the court. It stands if nothing gets it nearer.
     ///
     /// Every frame of a move is checked, not only where it ends: the stored paths are
     /// human motion from the map's start pose, and the cheapest way to a square near a
@@ -183,7 +183,7 @@ impl Game {
         }
         let pose = self.agents[k].pose;
         let court = &self.params.court;
-        let margins: &[f64] = if self.holder() == Some(k) {
+        let margins: &[f64] = if self.has_or_awaits_ball(k) {
             &[0.0]
         } else {
             &[0.0, RUN_OFF_M]
@@ -249,8 +249,10 @@ impl Game {
         if now < self.agents[k].not_before_s {
             return None;
         }
+        // Never to a teammate beyond the lines: it would catch the ball out of bounds.
         (0..self.agents.len())
             .filter(|&t| t != k && self.agents[t].team == Team::Offense)
+            .filter(|&t| self.params.court.contains(self.agents[t].pose.position))
             .max_by(|&a, &b| self.openness(a).total_cmp(&self.openness(b)))
     }
 

@@ -252,6 +252,12 @@ impl Game {
     }
 
     /// Defenders' agent indices: agents are offense first, then defense.
+    /// Whether agent `k` has the ball or a pass on its way to it: it must not leave the
+    /// court.
+    pub(super) fn has_or_awaits_ball(&self, k: usize) -> bool {
+        self.holder() == Some(k) || matches!(self.ball, Ball::Pass { to, .. } if to == k)
+    }
+
     pub(super) fn defenders(&self) -> std::ops::Range<usize> {
         self.params.offense_players..self.agents.len()
     }
@@ -432,6 +438,12 @@ impl Game {
     }
 
     pub(super) fn start_pass(&mut self, from: usize, to: usize) {
+        // The receiver re-plans at once, as one about to have the ball: its move may not
+        // take it beyond the lines (a catch out of bounds would put the ball handler
+        // off the court). The new move goes on from where its body is.
+        let receiver = &mut self.agents[to];
+        receiver.stop();
+        receiver.next_plan_s = 0.0;
         self.ball = Ball::Pass {
             from,
             to,
