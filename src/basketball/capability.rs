@@ -313,13 +313,21 @@ impl Reach<'_> {
     /// Whether the move to `cell` keeps the body on `court`, or at most `margin_m` beyond
     /// its lines, at every frame (and between frames, where it moves in straight lines).
     pub fn on_court(&self, cell: usize, court: &Court, margin_m: f64) -> bool {
-        let lead_ok = self.lead.is_none_or(|l| {
+        self.lead_on_court(court, margin_m) && self.path_on_court(cell, court, margin_m)
+    }
+
+    /// Whether the lead keeps the body on `court` (within `margin_m` of its lines).
+    fn lead_on_court(&self, court: &Court, margin_m: f64) -> bool {
+        self.lead.is_none_or(|l| {
             self.mover
                 .play(&l.edges, self.start)
                 .all(|s| court.inside_by(s.at.position) + margin_m >= 0.0)
-        });
-        lead_ok
-            && self.mover.states[self.state].footprints[cell].within(&self.frame, court, margin_m)
+        })
+    }
+
+    /// Whether the stored path to `cell`, after the lead, keeps the body on `court`.
+    fn path_on_court(&self, cell: usize, court: &Court, margin_m: f64) -> bool {
+        self.mover.states[self.state].footprints[cell].within(&self.frame, court, margin_m)
     }
 
     /// Of the cells this agent reaches along a move that stays on `court` (within
@@ -337,6 +345,10 @@ impl Reach<'_> {
         let grid = &map.grid;
         let speed = self.mover.top_speed_m_s().max(0.1);
         let nearer_than = self.start.position.distance(goal) - grid.cell_m;
+        // Every move starts with the lead: checked once, not once per cell.
+        if !self.lead_on_court(court, margin_m) {
+            return None;
+        }
         let mut best: Option<(f64, usize)> = None;
         for (cell, cost) in map.costs.iter().enumerate() {
             let Some(frames) = cost else { continue };
@@ -347,7 +359,7 @@ impl Reach<'_> {
             if best.is_some_and(|(b, _)| eta >= b)
                 || remaining > nearer_than
                 || !court.contains(world)
-                || !self.on_court(cell, court, margin_m)
+                || !self.path_on_court(cell, court, margin_m)
             {
                 continue;
             }
