@@ -20,7 +20,7 @@ const ABOVE_UPRIGHT_M: f64 = 0.05;
 pub struct Jump {
     /// The lowest root before take-off: where the jump (the shot) begins.
     pub crouch: usize,
-    /// Where the root first rises at [`TAKE_OFF_M_S`].
+    /// Where the root first rises at take-off speed (0.8 m/s over 0.1 s).
     pub take_off: usize,
     /// The highest root after take-off: a jump shot releases the ball about here.
     pub apex: usize,
