@@ -21,9 +21,11 @@
 //!   (Kovar et al. 2002): transitions between similar frames, pruned to the largest
 //!   strongly connected component.
 //! * [`costmap`]: Sukthankar et al.'s physical capability model: the frames a human needs
-//!   to reach each square around it, by Monte Carlo walks, search, or grassfire.
+//!   to reach each square around it from a start state (standing, or a way of moving),
+//!   by Monte Carlo walks, search, or grassfire.
 //! * [`basketball`]: the paper's basketball domain: a half court, agents that move with
-//!   motion capture along cost-map paths, opponent modelling (`C_o > C_d + T_s + ε`),
+//!   motion capture along cost-map paths that go on from the node each body is playing
+//!   (one continuous walk on the graph), opponent modelling (`C_o > C_d + T_s + ε`),
 //!   the `simple` and `costmap` offenses, and the possession experiment.
 //! * [`sim`]: a whole match of any sport as one deterministic [`sim::World`]: scenarios
 //!   checked field by field, fly balls with fielders, basketball, bots' commands.

@@ -1,8 +1,10 @@
 //! Cost maps (Sukthankar, Mandel & Sycara 2008): for each square around an agent, how many
-//! frames a real human needs to get there with a behaviour, from a given pose. Three
+//! frames a real human needs to get there with a behaviour, from a start state (`start`:
+//! a node of the motion graph; standing, or one of the ways the data moves). Three
 //! builders behind one interface: the paper's Monte Carlo (`mc`), a systematic search
-//! (`search`: backward over per-node cost-to-go maps, or forward where obstacles break
-//! the pose invariance) and the grassfire distance baseline (`grassfire`).
+//! (`search`: backward over per-node cost-to-go maps, one pass for any number of starts,
+//! or forward where obstacles break the pose invariance) and the grassfire distance
+//! baseline (`grassfire`).
 
 mod backward;
 pub mod cache;

@@ -3,7 +3,8 @@
 //! BVH files go through `bvh` (parse), `skeleton` (forward kinematics to metres),
 //! `resample` (to [`FPS`]) and `loader` (behaviour folders of files) into a
 //! [`MotionLibrary`] of [`Clip`]s; `embedded` holds the CMU capture compiled into the
-//! binary, the default everywhere.
+//! binary, the default everywhere. `jump` finds where a clip leaves the ground (the jump
+//! shots), which ends the part of a clip the ground-locomotion graphs use.
 //! `transitions` finds where clips can cut into each other (`alignment` is the ground
 //! alignment it uses), `graph` turns clips and transitions into a [`MotionGraph`], and
 //! `playback` plays a walk on it as a body, blending across transitions.
