@@ -118,8 +118,15 @@ mod tests {
     }
 
     #[test]
-    fn blending_softens_the_roughest_cut_of_real_running() {
-        let g = fixtures::cmu_graph("run");
+    fn blending_softens_the_roughest_cut_of_every_behaviour() {
+        for behaviour in ["run", "dribble", "defense"] {
+            roughest_cut_is_softened(&fixtures::cmu_graph(behaviour));
+        }
+    }
+
+    /// The roughest cut of `g` that a clip then plays on from for a whole blend, played
+    /// with and without blending.
+    fn roughest_cut_is_softened(g: &MotionGraph) {
         // The natural run of `len` edges from `node`, if its clip goes on that long.
         let run_from = |mut node: u32, len: usize| -> Option<Vec<u32>> {
             let mut edges = Vec::with_capacity(len);
@@ -177,7 +184,8 @@ mod tests {
         let (smooth, popped) = (largest_jump(&blended[..2]), largest_jump(&cut[..2]));
         assert!(
             smooth < 0.7 * popped,
-            "blended {smooth} m vs cut {popped} m"
+            "{}: blended {smooth} m vs cut {popped} m",
+            g.behaviour
         );
         // After the window the body is wholly in the target clip.
         let last = blended.last().unwrap();
