@@ -173,10 +173,11 @@ impl Mover {
             },
             None => start,
         };
-        let origin = AgentPose {
+        let frame = AgentPose {
             position: at.position,
             heading: at.heading(),
-        };
+        }
+        .frame();
         Reach {
             mover: self,
             state,
@@ -186,8 +187,8 @@ impl Mover {
                 Motion::Node(n) => n,
                 _ => self.states[state].state.node,
             },
-            frame: origin.frame(),
-            origin,
+            frame,
+            origin: at,
         }
     }
 
@@ -247,8 +248,8 @@ pub struct Reach<'a> {
     /// The agent as it is, and the node it plays.
     start: Walker,
     node: u32,
-    /// Where the lead leaves it: the map's origin.
-    origin: AgentPose,
+    /// Where the lead leaves it: the map's origin, and the frame of it look-ups use.
+    origin: Walker,
     frame: LocalFrame,
 }
 
@@ -300,13 +301,9 @@ impl Reach<'_> {
             node: self.node,
         };
         let lead = self.lead.map_or(&[][..], |l| &l.edges[..]);
-        let at_origin = Walker {
-            position: self.origin.position,
-            facing: DVec2::from_angle(self.origin.heading),
-        };
         std::iter::once(first)
             .chain(self.mover.play(lead, self.start))
-            .chain(self.mover.play(&self.map().paths[cell], at_origin))
+            .chain(self.mover.play(&self.map().paths[cell], self.origin))
             .collect()
     }
 
