@@ -1,5 +1,5 @@
-//! Who may open a WebSocket, decided before the upgrade: the origin policy, and a cap
-//! on each address's open connections.
+//! Who may open a WebSocket, decided before the upgrade: the origin policy, and room
+//! for spectators.
 //!
 //! Browsers let any page open a WebSocket to any server, sending the page's `Origin`;
 //! unlike `fetch`, no CORS check stops it. So the server checks the origin itself: a
@@ -7,46 +7,31 @@
 //! and tools send no `Origin` and are not browsers, so the check does not concern them;
 //! their tokens do.
 //!
-//! One address may hold at most `max_connections_per_ip` sockets (spectators, bots and
-//! replay viewers together), so one client cannot take every file descriptor.
+//! "Same origin" means the `Origin` names the `Host` the request was sent to *and* that
+//! host is one of the server's own: a loopback name, the address it listens on, or one
+//! in `allowed_hosts`. Without the second half a DNS-rebinding page (its name pointed at
+//! 127.0.0.1 after it loaded) would pass, since its `Origin` and `Host` agree.
+//!
+//! Connections are counted and capped where they are accepted (see `listener`);
+//! here spectators and replay viewers are refused while the server is near its cap, so
+//! the last places go to requests, admins and bots.
 
 use super::api::ApiError;
 use super::state::AppState;
-use axum::extract::{ConnectInfo, FromRequestParts};
+use axum::extract::FromRequestParts;
 use axum::http::request::Parts;
 use axum::http::{HeaderMap, StatusCode};
-use std::collections::HashMap;
 use std::net::{IpAddr, SocketAddr};
 use std::sync::atomic::Ordering::Relaxed;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
-/// Open WebSocket connections per client address.
-#[derive(Default)]
-pub struct Connections {
-    open: Mutex<HashMap<IpAddr, usize>>,
-}
+/// A WebSocket request whose origin may connect (bots).
+pub struct Admitted;
 
-/// A connection's place in [`Connections`], given back when it is dropped: when its
-/// socket closes, or when the upgrade never completes.
-pub struct Admitted {
-    app: Arc<AppState>,
-    ip: IpAddr,
-}
+/// A spectator's or replay viewer's WebSocket request: its origin may connect and the
+/// server has room for it.
+pub struct AdmittedSpectator;
 
-impl Drop for Admitted {
-    fn drop(&mut self) {
-        let mut open = self.app.connections.open.lock().expect("not poisoned");
-        if let Some(n) = open.get_mut(&self.ip) {
-            *n -= 1;
-            if *n == 0 {
-                open.remove(&self.ip);
-            }
-        }
-    }
-}
-
-/// Every socket route takes an `Admitted` among its arguments, so the checks run before
-/// the handler and its upgrade; the handler keeps it for the socket's life.
 impl FromRequestParts<Arc<AppState>> for Admitted {
     type Rejection = ApiError;
 
@@ -54,58 +39,54 @@ impl FromRequestParts<Arc<AppState>> for Admitted {
         parts: &mut Parts,
         app: &Arc<AppState>,
     ) -> Result<Admitted, ApiError> {
-        let peer = parts
-            .extensions
-            .get::<ConnectInfo<SocketAddr>>()
-            .map(|ConnectInfo(peer)| peer.ip())
-            .ok_or_else(|| {
-                ApiError::new(
-                    StatusCode::INTERNAL_SERVER_ERROR,
-                    "internal",
-                    "the server was started without peer addresses",
-                )
-            })?;
-        admit(app, peer, &parts.headers)
+        let config = &app.config;
+        let ours = |host: &str| host_is_ours(host, config.addr, &config.allowed_hosts);
+        if let Err(origin) = check_origin(&config.allowed_origins, ours, &parts.headers) {
+            app.metrics.refused_origin.fetch_add(1, Relaxed);
+            return Err(ApiError::forbidden(&format!(
+                "origin {origin} may not open sockets here (allowed_origins, allowed_hosts)"
+            )));
+        }
+        Ok(Admitted)
     }
 }
 
-/// Lets a WebSocket request in, or says why not: 403 for an origin the policy does
-/// not allow, 429 for an address at its connection cap.
-fn admit(app: &Arc<AppState>, ip: IpAddr, headers: &HeaderMap) -> Result<Admitted, ApiError> {
-    if let Err(origin) = check_origin(&app.config.allowed_origins, headers) {
-        app.metrics.refused_origin.fetch_add(1, Relaxed);
-        return Err(ApiError::forbidden(&format!(
-            "origin {origin} may not open sockets here (allowed_origins)"
-        )));
+impl FromRequestParts<Arc<AppState>> for AdmittedSpectator {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(
+        parts: &mut Parts,
+        app: &Arc<AppState>,
+    ) -> Result<AdmittedSpectator, ApiError> {
+        Admitted::from_request_parts(parts, app).await?;
+        if !app.connections.spectators_welcome() {
+            app.metrics.refused_busy.fetch_add(1, Relaxed);
+            return Err(ApiError::new(
+                StatusCode::SERVICE_UNAVAILABLE,
+                "server_busy",
+                "the server is near its connection limit and takes no more spectators now; try again later",
+            ));
+        }
+        Ok(AdmittedSpectator)
     }
-    let mut open = app.connections.open.lock().expect("not poisoned");
-    let n = open.entry(ip).or_default();
-    if *n >= app.config.max_connections_per_ip {
-        app.metrics.refused_per_ip.fetch_add(1, Relaxed);
-        return Err(ApiError::new(
-            StatusCode::TOO_MANY_REQUESTS,
-            "too_many_connections",
-            format!(
-                "this address already has {n} open sockets (max_connections_per_ip)",
-                n = *n
-            ),
-        ));
-    }
-    *n += 1;
-    Ok(Admitted {
-        app: app.clone(),
-        ip,
-    })
 }
 
 /// No `Origin` (not a browser), the server's own origin, or one of `allowed` (`*`
-/// allows every origin). Else the refused origin, for the error.
-fn check_origin(allowed: &[String], headers: &HeaderMap) -> Result<(), String> {
+/// allows every origin). Else the refused origin, for the error. `ours` says whether a
+/// `Host` is one of the server's own.
+fn check_origin(
+    allowed: &[String],
+    ours: impl Fn(&str) -> bool,
+    headers: &HeaderMap,
+) -> Result<(), String> {
     let Some(origin) = headers.get("origin") else {
         return Ok(());
     };
     let origin = origin.to_str().unwrap_or("(not text)");
-    let host = headers.get("host").and_then(|h| h.to_str().ok());
+    let host = headers
+        .get("host")
+        .and_then(|h| h.to_str().ok())
+        .filter(|h| ours(h));
     let authority = origin
         .strip_prefix("http://")
         .or_else(|| origin.strip_prefix("https://"));
@@ -119,6 +100,53 @@ fn check_origin(allowed: &[String], headers: &HeaderMap) -> Result<(), String> {
     } else {
         Err(origin.to_string())
     }
+}
+
+/// Whether a `Host` header names this server: a loopback name or address (any port:
+/// no one else's page can be served from them), the address it listens on, or an entry
+/// of `allowed_hosts` (`name` for any port, `name:port` for one).
+fn host_is_ours(host: &str, listening: SocketAddr, allowed_hosts: &[String]) -> bool {
+    let (name, port) = split_host(host);
+    let loopback = name.eq_ignore_ascii_case("localhost")
+        || name.parse::<IpAddr>().is_ok_and(|ip| ip.is_loopback());
+    let listen_address = !listening.ip().is_unspecified()
+        && name.parse::<IpAddr>().ok() == Some(listening.ip())
+        && port == Some(listening.port());
+    loopback
+        || listen_address
+        || allowed_hosts.iter().any(|entry| {
+            let (entry_name, entry_port) = split_host(entry);
+            entry_name.eq_ignore_ascii_case(name) && (entry_port.is_none() || entry_port == port)
+        })
+}
+
+/// `name[:port]`, with IPv6 addresses in brackets (`[::1]:7878`); the brackets are
+/// dropped from the name.
+fn split_host(host: &str) -> (&str, Option<u16>) {
+    if let Some(rest) = host.strip_prefix('[') {
+        let (name, after) = rest.split_once(']').unwrap_or((rest, ""));
+        return (name, after.strip_prefix(':').and_then(|p| p.parse().ok()));
+    }
+    match host.rsplit_once(':') {
+        Some((name, port)) => (name, port.parse().ok()),
+        None => (host, None),
+    }
+}
+
+/// Checks an `allowed_hosts` entry: a host name or IP address (IPv6 in brackets), with
+/// an optional port.
+pub fn valid_host(entry: &str) -> bool {
+    let (name, port) = split_host(entry);
+    let port_written = match entry.strip_prefix('[') {
+        Some(rest) => rest.contains("]:"),
+        None => entry.contains(':'),
+    };
+    let name_ok = name.parse::<IpAddr>().is_ok()
+        || (!name.is_empty()
+            && name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '.'));
+    name_ok && (!port_written || port.is_some())
 }
 
 /// Checks an `allowed_origins` entry: `*`, or a scheme and host with an optional
@@ -138,8 +166,9 @@ pub fn valid_origin(entry: &str) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::{check_origin, valid_origin};
+    use super::{check_origin, host_is_ours, valid_host, valid_origin};
     use axum::http::HeaderMap;
+    use std::net::SocketAddr;
 
     fn headers(origin: Option<&str>, host: &str) -> HeaderMap {
         let mut h = HeaderMap::new();
@@ -153,6 +182,8 @@ mod tests {
     #[test]
     fn same_origin_and_no_origin_pass_and_others_need_allowing() {
         let none: Vec<String> = Vec::new();
+        let check_origin =
+            |allowed: &[String], headers: &HeaderMap| check_origin(allowed, |_| true, headers);
         assert!(check_origin(&none, &headers(None, "127.0.0.1:7878")).is_ok());
         assert!(check_origin(
             &none,
@@ -199,6 +230,64 @@ mod tests {
             "http://a?x",
         ] {
             assert!(!valid_origin(bad), "{bad}");
+        }
+    }
+
+    #[test]
+    fn a_forged_host_is_not_the_servers_own() {
+        let listening: SocketAddr = "0.0.0.0:7878".parse().unwrap();
+        let none: Vec<String> = Vec::new();
+        let ours = |h: &str| host_is_ours(h, listening, &none);
+        // The DNS-rebinding shape: the page's origin and the Host agree, but the name
+        // is the attacker's.
+        let rebound = headers(Some("http://evil.example:7878"), "evil.example:7878");
+        assert_eq!(
+            check_origin(&none, ours, &rebound),
+            Err("http://evil.example:7878".into())
+        );
+        for own in [
+            "localhost:7878",
+            "127.0.0.1:8080",
+            "[::1]:7878",
+            "LOCALHOST:1",
+        ] {
+            let page = headers(Some(&format!("http://{own}")), own);
+            assert!(check_origin(&none, ours, &page).is_ok(), "{own}");
+        }
+        let named = vec!["play.example".to_string(), "tv.example:8443".to_string()];
+        let ours = |h: &str| host_is_ours(h, listening, &named);
+        let page = headers(Some("https://play.example:9000"), "play.example:9000");
+        assert!(check_origin(&none, ours, &page).is_ok());
+        let page = headers(Some("https://tv.example:8443"), "tv.example:8443");
+        assert!(check_origin(&none, ours, &page).is_ok());
+        let page = headers(Some("https://tv.example:9"), "tv.example:9");
+        assert!(check_origin(&none, ours, &page).is_err(), "another port");
+        // A specific listen address is the server's own, at its port.
+        let at: SocketAddr = "10.0.0.5:7878".parse().unwrap();
+        assert!(host_is_ours("10.0.0.5:7878", at, &none));
+        assert!(!host_is_ours("10.0.0.5:80", at, &none));
+    }
+
+    #[test]
+    fn allowed_hosts_are_names_or_addresses_with_an_optional_port() {
+        for ok in [
+            "play.example",
+            "play.example:8443",
+            "10.0.0.5",
+            "[::1]:7878",
+            "[::1]",
+        ] {
+            assert!(valid_host(ok), "{ok}");
+        }
+        for bad in [
+            "",
+            "http://play.example",
+            "play.example/",
+            "a b",
+            "play.example:port",
+            ":80",
+        ] {
+            assert!(!valid_host(bad), "{bad}");
         }
     }
 }

@@ -1,7 +1,7 @@
 //! The server's settings: defaults that suit a laptop, overridable by a TOML file
 //! (`serve --config FILE`) and by flags.
 
-use super::admission::valid_origin;
+use super::admission::{valid_host, valid_origin};
 use serde::{Deserialize, Deserializer};
 use std::net::{IpAddr, SocketAddr, ToSocketAddrs};
 use std::path::Path;
@@ -47,8 +47,20 @@ pub struct ServerConfig {
     /// here besides the server's own. Clients that send no `Origin` (bots, tools) are
     /// not browsers and are let in; their tokens guard what matters.
     pub allowed_origins: Vec<String>,
-    /// Most WebSockets one client address may hold open at once.
+    /// Host names (or addresses) this server is reached by besides loopback and its
+    /// listen address, `name` or `name:port`: a page served under one of them may open
+    /// WebSockets as the server's own. Anything else claiming to be the server's own
+    /// origin is a DNS-rebinding page.
+    pub allowed_hosts: Vec<String>,
+    /// Most connections (HTTP and WebSocket) one client address may hold open at once.
     pub max_connections_per_ip: usize,
+    /// Most connections in all; none: what the descriptor limit allows, less a reserve.
+    pub max_connections: Option<usize>,
+    /// A request's headers must arrive within this of the connection opening (or of
+    /// the previous response on a kept-alive connection), ms; else it is closed.
+    pub header_timeout_ms: u64,
+    /// Most REST requests in flight at once; more are answered 503 at once.
+    pub max_concurrent_requests: usize,
     /// Run as an Agones game server, talking to the SDK sidecar on this port (`serve
     /// --agones`; not a file setting: it is where the process runs, not how).
     #[serde(skip)]
@@ -70,7 +82,11 @@ impl Default for ServerConfig {
             replay_dir: None,
             stamp_frames: false,
             allowed_origins: Vec::new(),
+            allowed_hosts: Vec::new(),
             max_connections_per_ip: 256,
+            max_connections: None,
+            header_timeout_ms: 10_000,
+            max_concurrent_requests: 256,
             agones_sdk_port: None,
         }
     }
@@ -173,6 +189,20 @@ impl ServerConfig {
             self.max_connections_per_ip as u64,
             1,
         )?;
+        at_least("header_timeout_ms", self.header_timeout_ms, 100)?;
+        at_least(
+            "max_concurrent_requests",
+            self.max_concurrent_requests as u64,
+            1,
+        )?;
+        if let Some(n) = self.max_connections {
+            at_least("max_connections", n as u64, 32)?;
+        }
+        if let Some(bad) = self.allowed_hosts.iter().find(|h| !valid_host(h)) {
+            return Err(format!(
+                "allowed_hosts: \"{bad}\" is not a host; write a name or address with an optional port (play.example, play.example:8443, [::1]:7878)"
+            ));
+        }
         if let Some(bad) = self.allowed_origins.iter().find(|o| !valid_origin(o)) {
             return Err(format!(
                 "allowed_origins: \"{bad}\" is not an origin; write scheme://host[:port] (https://example.com) or *"

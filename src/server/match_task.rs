@@ -10,12 +10,12 @@ use crate::protocol::{encode, End, ErrorMessage, MatchInfo, Perception};
 use crate::replay::Recorder;
 use crate::session::Session;
 use crate::sim::{Mode, Scenario, ScenarioError, World};
-use axum::extract::ws::Utf8Bytes;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::sync::{mpsc, watch};
 use tokio::time::Instant;
+use tokio_tungstenite::tungstenite::Utf8Bytes;
 
 /// A bot connected to an agent.
 struct Bot {

@@ -30,9 +30,21 @@ pub struct Metrics {
     pub replay_errors: AtomicU64,
     pub refused_origin: AtomicU64,
     pub refused_per_ip: AtomicU64,
+    pub refused_full: AtomicU64,
+    pub refused_busy: AtomicU64,
+    pub accept_errors: AtomicU64,
+    pub overloaded: AtomicU64,
 }
 
 impl Metrics {
+    pub fn refuse_connection(&self, refused: super::listener::Refused) {
+        let counter = match refused {
+            super::listener::Refused::PerIp => &self.refused_per_ip,
+            super::listener::Refused::Full => &self.refused_full,
+        };
+        counter.fetch_add(1, Relaxed);
+    }
+
     pub fn observe_tick(&self, seconds: f64) {
         self.ticks.fetch_add(1, Relaxed);
         self.tick_count.fetch_add(1, Relaxed);
@@ -118,9 +130,21 @@ impl Metrics {
         );
         counter(
             "fieldhouse_slow_clients_dropped_total",
-            "Spectators dropped for lagging too long.",
+            "Clients (spectators, bots, replay viewers) dropped for not reading within the send timeout.",
             "counter",
             self.slow_clients_dropped.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_accept_errors_total",
+            "Failures to accept a connection (descriptors or memory ran out).",
+            "counter",
+            self.accept_errors.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_requests_shed_total",
+            "REST requests answered 503 because too many were in flight.",
+            "counter",
+            self.overloaded.load(Relaxed),
         );
         let _ = writeln!(
             out,
@@ -130,10 +154,20 @@ impl Metrics {
         );
         let _ = writeln!(
             out,
-            "# HELP fieldhouse_sockets_refused_total WebSocket requests refused before the upgrade, by reason.\n# TYPE fieldhouse_sockets_refused_total counter\nfieldhouse_sockets_refused_total{{reason=\"origin\"}} {}\nfieldhouse_sockets_refused_total{{reason=\"per_ip\"}} {}",
-            self.refused_origin.load(Relaxed),
-            self.refused_per_ip.load(Relaxed)
+            "# HELP fieldhouse_sockets_refused_total Connections refused at accept (per_ip, full) and WebSocket requests refused before the upgrade (origin, busy), by reason.\n# TYPE fieldhouse_sockets_refused_total counter"
         );
+        for (reason, counter) in [
+            ("origin", &self.refused_origin),
+            ("per_ip", &self.refused_per_ip),
+            ("full", &self.refused_full),
+            ("busy", &self.refused_busy),
+        ] {
+            let _ = writeln!(
+                out,
+                "fieldhouse_sockets_refused_total{{reason=\"{reason}\"}} {}",
+                counter.load(Relaxed)
+            );
+        }
         let _ = writeln!(out, "# HELP fieldhouse_tick_duration_seconds Time to simulate one tick.\n# TYPE fieldhouse_tick_duration_seconds histogram");
         let mut cumulative = 0;
         for (bound, bucket) in TICK_BUCKETS_S.iter().zip(&self.tick_buckets) {

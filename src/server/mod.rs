@@ -10,7 +10,12 @@
 //! * [`replays`]: recorded matches: listed, downloaded, played with controls.
 //! * [`api`]: the REST API, health, readiness and metrics.
 //! * [`auth`]: tokens, compared in constant time.
-//! * [`admission`]: who may open a WebSocket: origin policy, connections per address.
+//! * [`listener`]: the accept loop: every connection counted and capped (per address
+//!   and in all), header and idle timeouts, descriptors kept for health checks.
+//! * [`upgrade`]: the WebSocket handshake and the frame meter under every socket.
+//! * [`budget`]: what a client may send a second, on every socket kind.
+//! * [`admission`]: who may open a WebSocket: origin and host policy, room for
+//!   spectators.
 //! * [`metrics`]: Prometheus counters.
 //! * [`demo`]: the built-in demo matches.
 //! * [`agones`]: running as an Agones game server (Ready, Health, Shutdown).
@@ -20,34 +25,41 @@ pub mod admission;
 pub mod agones;
 pub mod api;
 pub mod auth;
+pub mod budget;
 pub mod config;
 pub mod demo;
+pub mod listener;
 pub mod match_task;
 pub mod metrics;
 pub mod replays;
 pub mod state;
+pub mod upgrade;
 pub mod web;
 pub mod ws;
 
 pub use config::ServerConfig;
 
 use crate::basketball::Capabilities;
+use axum::error_handling::HandleErrorLayer;
+use axum::http::StatusCode;
 use axum::routing::get;
 use axum::Router;
 use state::AppState;
 use std::collections::BTreeMap;
 use std::future::Future;
-use std::sync::atomic::AtomicU64;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, RwLock};
 use std::time::Duration;
 use tokio::net::TcpListener;
 use tokio::sync::watch;
+use tower::ServiceBuilder;
 use tower_http::limit::RequestBodyLimitLayer;
 use tower_http::timeout::TimeoutLayer;
 use tower_http::trace::TraceLayer;
 
 /// Runs the server on `listener` until `shutdown` completes; then every match ends,
-/// every socket is closed with 1001, and it returns.
+/// every socket is closed with 1001, and it returns. Raises the process's descriptor
+/// limit to its hard limit (see [`listener::connection_budget`]).
 pub async fn serve(
     listener: TcpListener,
     config: ServerConfig,
@@ -55,6 +67,24 @@ pub async fn serve(
     caps: Arc<Capabilities>,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
+    let budget = listener::connection_budget();
+    let max_connections = match config.max_connections {
+        Some(n) if n > budget => {
+            tracing::warn!(
+                max_connections = n,
+                budget,
+                "max_connections is more than the descriptor limit allows; using {budget} (raise it with ulimit -n)"
+            );
+            budget
+        }
+        Some(n) => n,
+        None => budget,
+    };
+    let connections = Arc::new(listener::Connections::new(
+        config.max_connections_per_ip,
+        max_connections,
+    ));
+    tracing::info!(max_connections, "connection limit");
     let (stop_tx, stop_rx) = watch::channel(false);
     // Matches tick on a runtime of their own, apart from the one serving sockets: there
     // a tick waited in the same queue as the fan-out of the previous frame to every
@@ -74,7 +104,7 @@ pub async fn serve(
         shutdown: stop_rx,
         next_conn: AtomicU64::new(0),
         replay_dir: config.replay_dir.clone(),
-        connections: admission::Connections::default(),
+        connections: connections.clone(),
     });
     if config.demo {
         demo::start_all(&app);
@@ -100,22 +130,37 @@ pub async fn serve(
         // Give sockets a moment to send their close frames.
         tokio::time::sleep(Duration::from_millis(200)).await;
     };
-    // Sockets are counted per client address, so handlers need the peer's.
-    let service = router.into_make_service_with_connect_info::<std::net::SocketAddr>();
-    let served = axum::serve(listener, service)
-        .with_graceful_shutdown(graceful)
-        .await;
+    let settings = listener::Listening {
+        connections,
+        header_timeout: Duration::from_millis(config.header_timeout_ms),
+        metrics: app.metrics.clone(),
+    };
+    listener::serve(listener, router, settings, graceful).await;
     // The matches have ended by now: the graceful shutdown gave them 200 ms after the
     // stop, and a match ends at the next tick.
     ticking.shutdown_background();
     if let Some(sdk) = &agones {
         sdk.shutdown().await;
     }
-    served
+    Ok(())
 }
 
 pub fn router(app: Arc<AppState>) -> Router {
     let config = &app.config;
+    let metrics = app.metrics.clone();
+    // More requests in flight than the limit are answered 503 at once rather than
+    // queued: a queue would hold their connections and memory while they wait.
+    let shed = ServiceBuilder::new()
+        .layer(HandleErrorLayer::new(move |_: tower::BoxError| {
+            metrics.overloaded.fetch_add(1, Relaxed);
+            std::future::ready(api::ApiError::new(
+                StatusCode::SERVICE_UNAVAILABLE,
+                "overloaded",
+                "too many requests in flight (max_concurrent_requests); try again",
+            ))
+        }))
+        .load_shed()
+        .concurrency_limit(config.max_concurrent_requests);
     let api = Router::new()
         .route("/api/matches", get(api::list).post(api::create))
         .route("/api/matches/{id}", get(api::show).delete(api::delete))
@@ -123,16 +168,21 @@ pub fn router(app: Arc<AppState>) -> Router {
         .route("/api/costmaps/{behaviour}", get(api::behaviour_costmap))
         .route("/api/replays", get(replays::list))
         .route("/api/replays/{id}", get(replays::download))
-        .route("/healthz", get(api::healthz))
-        .route("/readyz", get(api::readyz))
-        .route("/metrics", get(api::metrics))
         .layer(TimeoutLayer::with_status_code(
-            axum::http::StatusCode::REQUEST_TIMEOUT,
+            StatusCode::REQUEST_TIMEOUT,
             Duration::from_millis(config.request_timeout_ms),
         ))
-        .layer(RequestBodyLimitLayer::new(config.max_body_bytes));
+        .layer(RequestBodyLimitLayer::new(config.max_body_bytes))
+        .layer(shed);
+    // Health, readiness and metrics stay outside the limit: an orchestrator must be able
+    // to ask while the API is saturated.
+    let probes = Router::new()
+        .route("/healthz", get(api::healthz))
+        .route("/readyz", get(api::readyz))
+        .route("/metrics", get(api::metrics));
     Router::new()
         .merge(api)
+        .merge(probes)
         .route("/ws/matches/{id}", get(ws::spectate))
         .route("/ws/matches/{id}/play", get(ws::play))
         .route("/ws/replays/{id}", get(replays::watch))

@@ -2,13 +2,14 @@
 //! WebSocket with the live protocol (`hello`, `frame`s, `end`) plus the client's
 //! `control` messages: play, pause, speed (0.25× to 8×), seek to a tick.
 
-use super::admission::Admitted;
+use super::admission::AdmittedSpectator;
 use super::api::ApiError;
+use super::budget::Verdict;
 use super::state::AppState;
-use super::ws::{classify, shut, upgrade, Read, GOING_AWAY, TOO_BIG};
+use super::upgrade::{Socket, Upgrade};
+use super::ws::{budget, classify, refusal, shut, Read, GOING_AWAY, POLICY};
 use crate::protocol::{encode, End, ErrorMessage};
 use crate::replay::{self, Replay};
-use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::extract::{Path, State};
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
@@ -20,6 +21,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 use tokio::time::Instant;
+use tokio_tungstenite::tungstenite::{Message, Utf8Bytes};
 
 /// The file of replay `id`, if the id is one: letters, digits, `-` and `_` only, so no
 /// id reaches outside the replay directory.
@@ -117,9 +119,9 @@ pub async fn download(
 }
 
 pub async fn watch(
-    ws: WebSocketUpgrade,
+    ws: Upgrade,
     Path(id): Path<String>,
-    admitted: Admitted,
+    _: AdmittedSpectator,
     State(app): State<Arc<AppState>>,
 ) -> Response {
     let path = match file_of(&app, &id) {
@@ -144,10 +146,8 @@ pub async fn watch(
                 .into_response()
         }
     };
-    upgrade(ws, &app).on_upgrade(move |socket| async move {
-        play(socket, replay, id, app).await;
-        drop(admitted);
-    })
+    let config = app.config.clone();
+    ws.on_upgrade(&config, move |socket| play(socket, replay, id, app))
 }
 
 /// What a replay viewer may ask.
@@ -179,7 +179,7 @@ fn control(text: &str) -> Result<Incoming, String> {
 const MIN_SPEED: f64 = 0.25;
 const MAX_SPEED: f64 = 8.0;
 
-async fn play(socket: WebSocket, replay: Replay, id: String, app: Arc<AppState>) {
+async fn play(socket: Socket, replay: Replay, id: String, app: Arc<AppState>) {
     let (mut sink, mut stream) = socket.split();
     let tick_hz = replay.scenario.tick_hz;
     let hello = json!({
@@ -217,6 +217,7 @@ async fn play(socket: WebSocket, replay: Replay, id: String, app: Arc<AppState>)
         return;
     }
     let mut stopping = app.shutdown.clone();
+    let mut budget = budget(&app);
     let (mut next, mut playing, mut speed) = (0usize, true, 1.0f64);
     let mut due = Instant::now();
     loop {
@@ -248,15 +249,31 @@ async fn play(socket: WebSocket, replay: Replay, id: String, app: Arc<AppState>)
                 break;
             }
             incoming = stream.next() => {
-                let text = match classify(incoming) {
+                let read = classify(incoming);
+                if let Some((code, reason)) = refusal(&read, &app.metrics) {
+                    shut(&mut sink, &mut stream, code, reason).await;
+                    break;
+                }
+                let text = match read {
                     Read::Text(t) => t,
                     Read::Closed => break,
-                    Read::TooBig => {
-                        shut(&mut sink, &mut stream, TOO_BIG, "message too big").await;
+                    _ => continue,
+                };
+                match budget.charge() {
+                    Verdict::Take => {}
+                    Verdict::Refuse { warn } => {
+                        let error = encode(&ErrorMessage::new("rate_limited", "too many messages; slow down or be disconnected"));
+                        if warn && sink.send(Message::Text(error.into())).await.is_err() {
+                            break;
+                        }
+                        continue;
+                    }
+                    Verdict::Flooding => {
+                        app.metrics.closed_for_rate.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        shut(&mut sink, &mut stream, POLICY, "too many messages").await;
                         break;
                     }
-                    Read::Binary | Read::Ignore => continue,
-                };
+                }
                 let reply = match control(&text) {
                     Ok(Incoming::Control(Control::Play {})) => {
                         playing = true;

@@ -6,11 +6,11 @@ use super::metrics::Metrics;
 use crate::basketball::Capabilities;
 use crate::protocol::MatchInfo;
 use crate::sim::{Action, Mode, Scenario};
-use axum::extract::ws::Utf8Bytes;
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicU64};
 use std::sync::{Arc, Mutex, RwLock};
 use tokio::sync::{mpsc, watch};
+use tokio_tungstenite::tungstenite::Utf8Bytes;
 
 /// The newest frame of a match (encoded once; every spectator gets the same bytes), and
 /// its `end` once it has ended.
@@ -73,8 +73,8 @@ pub struct AppState {
     pub next_conn: AtomicU64,
     /// Where matches are recorded, if anywhere.
     pub replay_dir: Option<std::path::PathBuf>,
-    /// Open WebSockets per client address.
-    pub connections: super::admission::Connections,
+    /// Open connections, per client address and in all.
+    pub connections: Arc<super::listener::Connections>,
 }
 
 impl AppState {

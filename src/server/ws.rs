@@ -8,12 +8,13 @@
 //! oversized message closes it with 1009, flooding with 1008. On shutdown every match
 //! ends: its sockets get `end` and close with 1001.
 
-use super::admission::Admitted;
+use super::admission::{Admitted, AdmittedSpectator};
 use super::api::ApiError;
 use super::auth;
+use super::budget::{MessageBudget, Verdict};
 use super::state::{AppState, Control, MatchEntry};
+use super::upgrade::{FrameFlood, Socket, Upgrade};
 use crate::protocol::{decode, encode, ClientMessage, ErrorMessage, Hello, Limits};
-use axum::extract::ws::{CloseFrame, Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::extract::{Path, Query, State};
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
@@ -22,17 +23,16 @@ use futures_util::{SinkExt, StreamExt};
 use std::collections::HashMap;
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 use tokio::sync::mpsc;
+use tokio_tungstenite::tungstenite::protocol::CloseFrame;
+use tokio_tungstenite::tungstenite::{self, Message, Utf8Bytes};
 
 /// Close codes (RFC 6455).
 pub(super) const GOING_AWAY: u16 = 1001;
-const POLICY: u16 = 1008;
+pub(super) const POLICY: u16 = 1008;
 pub(super) const TOO_BIG: u16 = 1009;
 const NORMAL: u16 = 1000;
-
-/// Sockets buffer little: frames are small and a slow reader should skip, not queue.
-const SOCKET_BUFFER_BYTES: usize = 8 * 1024;
 
 fn limits(app: &AppState) -> Limits {
     Limits {
@@ -41,11 +41,9 @@ fn limits(app: &AppState) -> Limits {
     }
 }
 
-pub(super) fn upgrade(ws: WebSocketUpgrade, app: &AppState) -> WebSocketUpgrade {
-    ws.max_message_size(app.config.max_message_bytes)
-        .max_frame_size(app.config.max_message_bytes)
-        .read_buffer_size(SOCKET_BUFFER_BYTES)
-        .write_buffer_size(SOCKET_BUFFER_BYTES)
+/// The message budget every socket starts with.
+pub(super) fn budget(app: &AppState) -> MessageBudget {
+    MessageBudget::new(app.config.bot_messages_per_second, app.config.bot_burst)
 }
 
 /// How a socket closes after its match's `end`: 1001 when the server is shutting down
@@ -60,62 +58,85 @@ fn ending(shutdown: &tokio::sync::watch::Receiver<bool>) -> (u16, &'static str) 
 
 fn close(code: u16, reason: &str) -> Message {
     Message::Close(Some(CloseFrame {
-        code,
+        code: code.into(),
         reason: Utf8Bytes::from(reason.to_string()),
     }))
 }
 
-/// Why reading a socket stopped, if it did.
+/// What reading a socket gave, or why it stopped.
 pub(super) enum Read {
     Text(Utf8Bytes),
     Binary,
+    /// Pings and pongs: the library answers pings, and the frame meter counts both.
     Ignore,
     Closed,
     TooBig,
+    /// More control or fragment frames than the frame meter allows.
+    Flood,
 }
 
-pub(super) fn classify(incoming: Option<Result<Message, axum::Error>>) -> Read {
+pub(super) fn classify(incoming: Option<Result<Message, tungstenite::Error>>) -> Read {
     match incoming {
         None | Some(Ok(Message::Close(_))) => Read::Closed,
         Some(Ok(Message::Text(t))) => Read::Text(t),
         Some(Ok(Message::Binary(_))) => Read::Binary,
-        Some(Ok(_)) => Read::Ignore, // ping and pong are answered by the library
-        Some(Err(e)) => {
-            let too_big = e
-                .into_inner()
-                .downcast_ref::<tokio_tungstenite::tungstenite::Error>()
-                .is_some_and(|e| matches!(e, tokio_tungstenite::tungstenite::Error::Capacity(_)));
-            if too_big {
-                Read::TooBig
-            } else {
-                Read::Closed
-            }
+        Some(Ok(_)) => Read::Ignore,
+        Some(Err(tungstenite::Error::Capacity(_))) => Read::TooBig,
+        Some(Err(tungstenite::Error::Io(e)))
+            if e.get_ref().is_some_and(|inner| inner.is::<FrameFlood>()) =>
+        {
+            Read::Flood
         }
+        Some(Err(_)) => Read::Closed,
+    }
+}
+
+/// How a socket closes because of what its client sent, if it does: 1009 for a message
+/// over the size limit, 1008 for flooding. Counted in the metrics.
+pub(super) fn refusal(
+    read: &Read,
+    metrics: &super::metrics::Metrics,
+) -> Option<(u16, &'static str)> {
+    match read {
+        Read::TooBig => {
+            metrics.closed_for_size.fetch_add(1, Relaxed);
+            Some((TOO_BIG, "message too big"))
+        }
+        Read::Flood => {
+            metrics.closed_for_rate.fetch_add(1, Relaxed);
+            Some((POLICY, "too many frames"))
+        }
+        _ => None,
     }
 }
 
 #[derive(Debug, PartialEq, Eq)]
-enum Sent {
+pub(super) enum Sent {
     Ok,
     Failed,
     /// The socket did not take the message in time: the client stopped reading.
     TimedOut,
 }
 
-/// Writes to a spectator's socket, counting bytes, giving up after `timeout`.
-struct Sender<'a> {
-    sink: &'a mut SplitSink<WebSocket, Message>,
-    timeout: Duration,
-    metrics: &'a super::metrics::Metrics,
+/// Writes to a client's socket, counting bytes, giving up after `timeout`
+/// (`send_timeout_ms`): a client that stops reading never holds a task, a slot or a
+/// descriptor for longer than that.
+pub(super) struct Sender<'a> {
+    pub sink: &'a mut SplitSink<Socket, Message>,
+    pub timeout: Duration,
+    pub metrics: &'a super::metrics::Metrics,
 }
 
 impl Sender<'_> {
-    async fn text(&mut self, text: Utf8Bytes) -> Sent {
+    pub async fn text(&mut self, text: Utf8Bytes) -> Sent {
         self.metrics.bytes_out.fetch_add(text.len() as u64, Relaxed);
         match tokio::time::timeout(self.timeout, self.sink.send(Message::Text(text))).await {
             Ok(Ok(())) => Sent::Ok,
             Ok(Err(_)) => Sent::Failed,
-            Err(_) => Sent::TimedOut,
+            Err(_) => {
+                self.metrics.slow_clients_dropped.fetch_add(1, Relaxed);
+                Sent::TimedOut
+            }
         }
     }
 }
@@ -123,8 +144,8 @@ impl Sender<'_> {
 /// Sends a close frame, then reads on until the client answers it (or a second passes),
 /// so the client gets the close code rather than a connection reset.
 pub(super) async fn shut(
-    sink: &mut SplitSink<WebSocket, Message>,
-    stream: &mut SplitStream<WebSocket>,
+    sink: &mut SplitSink<Socket, Message>,
+    stream: &mut SplitStream<Socket>,
     code: u16,
     reason: &str,
 ) {
@@ -140,21 +161,19 @@ pub(super) async fn shut(
 }
 
 pub async fn spectate(
-    ws: WebSocketUpgrade,
+    ws: Upgrade,
     Path(id): Path<String>,
-    admitted: Admitted,
+    _: AdmittedSpectator,
     State(app): State<Arc<AppState>>,
 ) -> Response {
     let Some(entry) = app.get(&id) else {
         return ApiError::not_found(&id).into_response();
     };
-    upgrade(ws, &app).on_upgrade(move |socket| async move {
-        spectator(socket, entry, app).await;
-        drop(admitted);
-    })
+    let config = app.config.clone();
+    ws.on_upgrade(&config, move |socket| spectator(socket, entry, app))
 }
 
-async fn spectator(socket: WebSocket, entry: Arc<MatchEntry>, app: Arc<AppState>) {
+async fn spectator(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>) {
     let metrics = app.metrics.clone();
     metrics.spectators.fetch_add(1, Relaxed);
     entry.spectators.fetch_add(1, Relaxed);
@@ -164,7 +183,7 @@ async fn spectator(socket: WebSocket, entry: Arc<MatchEntry>, app: Arc<AppState>
     // each poll cleared a read buffer: a profile at 1,000 spectators showed 12 % of the
     // server's CPU in memset.
     let (said_tx, mut said) = tokio::sync::oneshot::channel();
-    let mut listener = tokio::spawn(listen(stream, said_tx));
+    let mut listener = tokio::spawn(listen(stream, budget(&app), metrics.clone(), said_tx));
     let timeout = Duration::from_millis(app.config.send_timeout_ms);
     let shutdown = app.shutdown.clone();
     let mut published = entry.published.clone();
@@ -202,7 +221,6 @@ async fn spectator(socket: WebSocket, entry: Arc<MatchEntry>, app: Arc<AppState>
                             Sent::Ok => { metrics.frames_sent.fetch_add(1, Relaxed); }
                             Sent::Failed => break,
                             Sent::TimedOut => {
-                                metrics.slow_clients_dropped.fetch_add(1, Relaxed);
                                 tracing::info!(id = %entry.info.id, "dropping a spectator that stopped reading");
                                 break;
                             }
@@ -215,10 +233,7 @@ async fn spectator(socket: WebSocket, entry: Arc<MatchEntry>, app: Arc<AppState>
                     }
                 }
                 read = &mut said => {
-                    if let Ok(Read::TooBig) = read {
-                        metrics.closed_for_size.fetch_add(1, Relaxed);
-                        closing = Some((TOO_BIG, "message too big"));
-                    }
+                    closing = read.ok().flatten();
                     break;
                 }
             }
@@ -234,20 +249,42 @@ async fn spectator(socket: WebSocket, entry: Arc<MatchEntry>, app: Arc<AppState>
 }
 
 /// Reads a spectator's socket until it closes. Spectators only listen, so what they say
-/// is not read; the first thing that ends the conversation (a close, or a message over
-/// the size limit) is told through `said`, and reading goes on until the close, so the
-/// client's answer to the server's close frame is taken.
-async fn listen(mut stream: SplitStream<WebSocket>, said: tokio::sync::oneshot::Sender<Read>) {
+/// is not handled, only charged to their budget; the first thing that ends the
+/// conversation (a close, a message over the size limit, flooding) is told through
+/// `said` (with the close to send, if the server closes), and reading goes on until
+/// the close, so the client's answer to the server's close frame is taken.
+async fn listen(
+    mut stream: SplitStream<Socket>,
+    mut budget: MessageBudget,
+    metrics: Arc<super::metrics::Metrics>,
+    said: tokio::sync::oneshot::Sender<Option<(u16, &'static str)>>,
+) {
     let mut said = Some(said);
     loop {
         let read = classify(stream.next().await);
-        let closed = matches!(read, Read::Closed);
-        if matches!(read, Read::Closed | Read::TooBig) {
-            if let Some(said) = said.take() {
-                let _ = said.send(read);
+        let verdict = match &read {
+            Read::Text(_) | Read::Binary => budget.charge(),
+            _ => Verdict::Take,
+        };
+        let ends = match (&read, verdict) {
+            (Read::Closed, _) => Some(None),
+            (_, Verdict::Flooding) => {
+                metrics.closed_for_rate.fetch_add(1, Relaxed);
+                Some(Some((POLICY, "too many messages")))
+            }
+            _ => refusal(&read, &metrics).map(Some),
+        };
+        if let Some(close) = ends {
+            // A second reason to stop after the first: the client goes on misbehaving
+            // after being told, and is read no more.
+            match said.take() {
+                Some(said) => {
+                    let _ = said.send(close);
+                }
+                None => return,
             }
         }
-        if closed {
+        if matches!(read, Read::Closed) {
             return;
         }
     }
@@ -270,10 +307,10 @@ fn token_of<'a>(query: &'a HashMap<String, String>, headers: &'a HeaderMap) -> O
 }
 
 pub async fn play(
-    ws: WebSocketUpgrade,
+    ws: Upgrade,
     Path(id): Path<String>,
     Query(query): Query<HashMap<String, String>>,
-    admitted: Admitted,
+    _: Admitted,
     headers: HeaderMap,
     State(app): State<Arc<AppState>>,
 ) -> Response {
@@ -300,57 +337,24 @@ pub async fn play(
     if entry.ended.load(Relaxed) {
         return ApiError::gone(&id).into_response();
     }
-    upgrade(ws, &app).on_upgrade(move |socket| async move {
-        bot(socket, entry, app, k, agent).await;
-        drop(admitted);
-    })
+    let config = app.config.clone();
+    ws.on_upgrade(&config, move |socket| bot(socket, entry, app, k, agent))
 }
 
-/// A token bucket: `rate` messages a second, `burst` at once.
-struct Bucket {
-    tokens: f64,
-    rate: f64,
-    burst: f64,
-    last: Instant,
-    /// Messages refused with no quiet second between them: flooding, once there are
-    /// more than a burst of them.
-    strikes: u32,
-    last_refused: Instant,
-}
-
-impl Bucket {
-    fn take(&mut self) -> bool {
-        let now = Instant::now();
-        self.tokens = (self.tokens + (now - self.last).as_secs_f64() * self.rate).min(self.burst);
-        self.last = now;
-        if self.tokens >= 1.0 {
-            self.tokens -= 1.0;
-            return true;
-        }
-        if now - self.last_refused > Duration::from_secs(1) {
-            self.strikes = 0;
-        }
-        self.strikes += 1;
-        self.last_refused = now;
-        false
-    }
-}
-
-async fn bot(
-    socket: WebSocket,
-    entry: Arc<MatchEntry>,
-    app: Arc<AppState>,
-    k: usize,
-    agent: String,
-) {
+async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usize, agent: String) {
     let metrics = app.metrics.clone();
     metrics.bots.fetch_add(1, Relaxed);
     let conn = app.next_conn.fetch_add(1, Relaxed);
     let (out_tx, mut out_rx) = mpsc::channel::<Utf8Bytes>(16);
     let (mut sink, mut stream) = socket.split();
     let shutdown = app.shutdown.clone();
+    let mut send = Sender {
+        sink: &mut sink,
+        timeout: Duration::from_millis(app.config.send_timeout_ms),
+        metrics: &metrics,
+    };
     let hello = encode(&Hello::new("bot", &entry.info, Some(&agent), limits(&app)));
-    let joined = sink.send(Message::Text(hello.into())).await.is_ok()
+    let joined = send.text(hello.into()).await == Sent::Ok
         && entry
             .control
             .send(Control::BotJoin {
@@ -360,14 +364,7 @@ async fn bot(
             })
             .await
             .is_ok();
-    let mut bucket = Bucket {
-        tokens: f64::from(app.config.bot_burst),
-        rate: f64::from(app.config.bot_messages_per_second),
-        burst: f64::from(app.config.bot_burst),
-        last: Instant::now(),
-        strikes: 0,
-        last_refused: Instant::now(),
-    };
+    let mut budget = budget(&app);
     let error = |code: &str, message: &str| {
         metrics.client_errors.fetch_add(1, Relaxed);
         let _ = out_tx.try_send(Utf8Bytes::from(encode(&ErrorMessage::new(code, message))));
@@ -375,6 +372,8 @@ async fn bot(
     // The match's end comes through what it publishes, so a bot whose queue is full
     // still gets it.
     let mut published = entry.published.clone();
+    // Every write is bounded by the send timeout: a bot that stops reading is closed
+    // rather than kept (with its slot) after its match ended or its token reconnected.
     let closing: Option<(u16, &str)> = if !joined {
         None
     } else {
@@ -383,8 +382,7 @@ async fn bot(
                 outgoing = out_rx.recv() => {
                     let Some(text) = outgoing else { break None };
                     let replaced = text.as_str().contains("\"code\":\"replaced\"");
-                    metrics.bytes_out.fetch_add(text.len() as u64, Relaxed);
-                    if sink.send(Message::Text(text)).await.is_err() {
+                    if send.text(text).await != Sent::Ok {
                         break None;
                     }
                     if replaced {
@@ -395,41 +393,53 @@ async fn bot(
                     let end = published.borrow_and_update().end.clone();
                     match (changed, end) {
                         (_, Some(end)) => {
-                            metrics.bytes_out.fetch_add(end.len() as u64, Relaxed);
-                            let _ = sink.send(Message::Text(end)).await;
+                            if send.text(end).await != Sent::Ok {
+                                break None;
+                            }
                             break Some(ending(&shutdown));
                         }
                         (Err(_), None) => break None,
                         (Ok(()), None) => {}
                     }
                 }
-                incoming = stream.next() => match classify(incoming) {
-                    Read::Closed => break None,
-                    Read::TooBig => {
-                        metrics.closed_for_size.fetch_add(1, Relaxed);
-                        break Some((TOO_BIG, "message too big"));
+                incoming = stream.next() => {
+                    let read = classify(incoming);
+                    if let Some(close) = refusal(&read, &metrics) {
+                        break Some(close);
                     }
-                    Read::Ignore => {}
-                    _ if !bucket.take() => {
-                        if bucket.strikes > app.config.bot_burst {
+                    if matches!(read, Read::Closed) {
+                        break None;
+                    }
+                    if matches!(read, Read::Ignore) {
+                        continue;
+                    }
+                    match budget.charge() {
+                        Verdict::Take => {}
+                        Verdict::Refuse { warn } => {
+                            if warn {
+                                error("rate_limited", "too many messages; slow down or be disconnected");
+                            }
+                            continue;
+                        }
+                        Verdict::Flooding => {
                             metrics.closed_for_rate.fetch_add(1, Relaxed);
                             break Some((POLICY, "too many messages"));
                         }
-                        if bucket.strikes == 1 {
-                            error("rate_limited", "too many messages; slow down or be disconnected");
-                        }
                     }
-                    Read::Binary => error("binary", "binary frames are not part of the protocol; send JSON text"),
-                    Read::Text(text) => match decode(&text) {
-                        Ok(ClientMessage::Command { tick, action }) => {
-                            let command = Control::Command { agent: k, conn, tick, action };
-                            if entry.control.send(command).await.is_err() {
-                                break None;
+                    match read {
+                        Read::Binary => error("binary", "binary frames are not part of the protocol; send JSON text"),
+                        Read::Text(text) => match decode(&text) {
+                            Ok(ClientMessage::Command { tick, action }) => {
+                                let command = Control::Command { agent: k, conn, tick, action };
+                                if entry.control.send(command).await.is_err() {
+                                    break None;
+                                }
                             }
-                        }
-                        Err((code, message)) => error(code, &message),
-                    },
-                },
+                            Err((code, message)) => error(code, &message),
+                        },
+                        _ => {}
+                    }
+                }
             }
         }
     };
