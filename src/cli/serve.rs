@@ -37,9 +37,21 @@ pub struct ServeArgs {
     /// like bots, are not browsers and are not checked.
     #[arg(long = "allow-origin", value_name = "ORIGIN")]
     allow_origins: Vec<String>,
-    /// Most WebSockets one client address may hold open at once (default 256).
+    /// A host name (or address) this server is reached by, NAME or NAME:PORT
+    /// (repeatable): pages served under it may open WebSockets as the server's own.
+    /// Loopback names and the listen address always may; any other Host claiming to be
+    /// the page's origin is refused (the shape of DNS rebinding).
+    #[arg(long = "allow-host", value_name = "HOST")]
+    allow_hosts: Vec<String>,
+    /// Most connections (HTTP and WebSocket alike) one client address may hold open at
+    /// once (default 256). At the cap its longest-idle HTTP connection is closed to make
+    /// room, else the new one is answered 429.
     #[arg(long, value_name = "N")]
     max_connections_per_ip: Option<usize>,
+    /// Most connections in all (default: what the descriptor limit allows, less 64).
+    /// Near it new spectators are refused (503) so requests and admins still get in.
+    #[arg(long, value_name = "N")]
+    max_connections: Option<usize>,
     /// Run as an Agones game server: say Ready to the SDK sidecar once listening, ping
     /// Health every 2 s, and ask for Shutdown (then exit) once every match has ended
     /// or on SIGTERM. Usually with --no-demo, the matches created by an allocator.
@@ -54,7 +66,8 @@ pub struct ServeArgs {
     )]
     agones_sdk_port: u16,
     /// A TOML file of server settings (addr, max_matches, max_message_bytes,
-    /// bot_messages_per_second, bot_burst, send_timeout_ms, ...); flags override it.
+    /// bot_messages_per_second, bot_burst, send_timeout_ms, header_timeout_ms,
+    /// max_concurrent_requests, ...; every setting is in the README); flags override it.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     #[command(flatten)]
@@ -116,8 +129,12 @@ fn settings(args: &ServeArgs) -> anyhow::Result<ServerConfig> {
         .allowed_origins
         .extend(args.allow_origins.iter().cloned());
     config.agones_sdk_port = args.agones.then_some(args.agones_sdk_port);
+    config.allowed_hosts.extend(args.allow_hosts.iter().cloned());
     if let Some(n) = args.max_connections_per_ip {
         config.max_connections_per_ip = n;
+    }
+    if let Some(n) = args.max_connections {
+        config.max_connections = Some(n);
     }
     config.check().map_err(anyhow::Error::msg)?;
     Ok(config)

@@ -351,7 +351,14 @@ fn accept(
         let place = place.clone();
         async move {
             let response = served.await;
-            place.idle();
+            // An upgraded connection is a WebSocket now: never idle, never closed to
+            // make room (its owner closes it).
+            let upgraded = response
+                .as_ref()
+                .is_ok_and(|r| r.status() == StatusCode::SWITCHING_PROTOCOLS);
+            if !upgraded {
+                place.idle();
+            }
             response
         }
     });

@@ -1,0 +1,421 @@
+//! Connections from clients that do not play by the rules: headers trickled, sockets
+//! opened and left idle, descriptors run short, control frames by the thousand, text
+//! from clients that should only listen, bots that stop reading, forged Host headers,
+//! more requests than the server should run at once. Real binary, loopback only; each
+//! test is bounded in time and count.
+
+mod common;
+
+use common::server::{connect, next_of, Server, ADMIN};
+use futures_util::{SinkExt, StreamExt};
+use std::io::{ErrorKind, Read, Write};
+use std::net::TcpStream;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio_tungstenite::tungstenite::client::IntoClientRequest;
+use tokio_tungstenite::tungstenite::Message;
+
+/// A settings file with `toml` in it.
+fn settings(name: &str, toml: &str) -> PathBuf {
+    let dir = common::server::empty_dir(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("server.toml");
+    std::fs::write(&path, toml).unwrap();
+    path
+}
+
+fn metric(server: &Server, name: &str) -> f64 {
+    let text = ureq::get(&server.http("/metrics"))
+        .call()
+        .unwrap()
+        .into_string()
+        .unwrap();
+    text.lines()
+        .find_map(|l| l.strip_prefix(name)?.trim().parse().ok())
+        .unwrap_or_else(|| panic!("{name} in /metrics:\n{text}"))
+}
+
+/// Whether the server has closed `stream` (reads end), without waiting.
+fn closed_by_server(stream: &mut TcpStream) -> bool {
+    stream.set_nonblocking(true).unwrap();
+    let mut byte = [0u8; 64];
+    let closed = loop {
+        match stream.read(&mut byte) {
+            Ok(0) => break true,
+            Ok(_) => continue, // a refusal's response, then the close
+            Err(e) if e.kind() == ErrorKind::WouldBlock => break false,
+            Err(_) => break true,
+        }
+    };
+    stream.set_nonblocking(false).unwrap();
+    closed
+}
+
+#[test]
+fn trickled_headers_and_silent_connections_are_closed_at_the_header_timeout() {
+    let file = settings("header-timeout", "header_timeout_ms = 1000\n");
+    let server = Server::start(&["--no-demo", "--config", file.to_str().unwrap()]);
+    // A request whose header lines come one every 300 ms: never complete in time.
+    let mut trickle = TcpStream::connect(&server.addr).unwrap();
+    let opened = Instant::now();
+    trickle.write_all(b"GET /healthz HTTP/1.1\r\n").unwrap();
+    let mut writer = trickle.try_clone().unwrap();
+    let dripping = std::thread::spawn(move || {
+        for k in 0..20 {
+            std::thread::sleep(Duration::from_millis(300));
+            if writer.write_all(format!("X-Drip-{k}: 1\r\n").as_bytes()).is_err() {
+                return;
+            }
+        }
+        let _ = writer.write_all(b"Host: x\r\n\r\n");
+    });
+    // Connections that say nothing at all.
+    let mut silent: Vec<TcpStream> = (0..20)
+        .map(|_| TcpStream::connect(&server.addr).unwrap())
+        .collect();
+    trickle
+        .set_read_timeout(Some(Duration::from_secs(8)))
+        .unwrap();
+    let mut answer = Vec::new();
+    let _ = trickle.read_to_end(&mut answer);
+    let after = opened.elapsed();
+    let answer = String::from_utf8_lossy(&answer);
+    assert!(
+        !answer.contains("200 OK"),
+        "a trickled request was served: {answer}"
+    );
+    assert!(
+        after < Duration::from_secs(3),
+        "closed after {after:?}, not at the 1 s header timeout"
+    );
+    dripping.join().unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let open = silent
+        .iter_mut()
+        .filter(|s| !closed_by_server(s))
+        .count();
+    assert_eq!(open, 0, "silent connections outlive the header timeout");
+    // A prompt client is unaffected.
+    assert_eq!(server.get("/readyz")["ready"], true);
+}
+
+#[test]
+fn every_connection_counts_against_its_address_not_only_websockets() {
+    let server = Server::start(&["--no-demo", "--max-connections-per-ip", "10"]);
+    // Thirty idle connections from one address: it never holds more than ten, because
+    // at its cap its longest-idle one is closed for the next.
+    let mut idle: Vec<TcpStream> = (0..30)
+        .map(|_| TcpStream::connect(&server.addr).unwrap())
+        .collect();
+    std::thread::sleep(Duration::from_millis(300));
+    let open = idle.iter_mut().filter(|s| !closed_by_server(s)).count();
+    assert!(open <= 10, "{open} idle connections held by one address");
+    // Requests still get in (an idle connection makes room).
+    assert_eq!(server.get("/readyz")["ready"], true);
+    drop(idle);
+    // Ten busy connections (WebSockets) fill the cap: the next connection is refused
+    // with 429, whatever it asks for.
+    let runtime = tokio::runtime::Runtime::new().unwrap();
+    runtime.block_on(async {
+        let (id, _) = server.create(serde_json::json!({"sport": "cricket"}));
+        let url = server.ws(&format!("/ws/matches/{id}"));
+        let deadline = Instant::now() + Duration::from_secs(5);
+        let mut held = Vec::new();
+        while held.len() < 10 {
+            match tokio_tungstenite::connect_async(&url).await {
+                Ok((socket, _)) => held.push(socket),
+                // The idle connections above may not all be gone yet.
+                Err(_) if Instant::now() < deadline => {
+                    tokio::time::sleep(Duration::from_millis(50)).await
+                }
+                Err(e) => panic!("the cap is 10, {} open: {e}", held.len()),
+            }
+        }
+        match ureq::get(&server.http("/healthz")).call() {
+            Err(ureq::Error::Status(429, response)) => {
+                let body: serde_json::Value = response.into_json().unwrap();
+                assert_eq!(body["error"]["code"], "too_many_connections");
+            }
+            other => panic!("an 11th connection: {other:?}"),
+        }
+    });
+}
+
+/// Connects from `source` (any 127.0.0.0/8 address is this machine).
+async fn connect_from(source: [u8; 4], addr: &str) -> std::io::Result<tokio::net::TcpStream> {
+    let socket = tokio::net::TcpSocket::new_v4()?;
+    socket.bind((std::net::Ipv4Addr::from(source), 0).into())?;
+    socket.connect(addr.parse().unwrap()).await
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn with_descriptors_short_health_checks_and_admins_still_get_in() {
+    // 160 descriptors: room for 96 connections. Many addresses, so the per-address cap
+    // (256) is not what stops them.
+    let server = Server::launch(
+        &["sh", "-c", "ulimit -n 160 && exec \"$0\" \"$@\""],
+        "info",
+        &["--no-demo"],
+    );
+    let (id, tokens) = server.create(common::server::fielder_with_bot("realtime", 1000));
+    let mut idle = Vec::new();
+    for k in 0..400 {
+        let source = [127, 0, 0, 2 + (k % 8) as u8];
+        if let Ok(stream) = connect_from(source, &server.addr).await {
+            idle.push(stream);
+        }
+    }
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    let started = Instant::now();
+    assert_eq!(
+        tokio::task::spawn_blocking({
+            let url = server.http("/healthz");
+            move || ureq::get(&url).call().unwrap().into_string().unwrap()
+        })
+        .await
+        .unwrap(),
+        "ok"
+    );
+    assert!(started.elapsed() < Duration::from_secs(2));
+    // An admin can still create and delete matches.
+    let (second, _) = tokio::task::spawn_blocking({
+        let url = server.http("/api/matches");
+        move || {
+            let doc: serde_json::Value = ureq::post(&url)
+                .set("Authorization", &format!("Bearer {ADMIN}"))
+                .send_json(serde_json::json!({"sport": "cricket"}))
+                .unwrap()
+                .into_json()
+                .unwrap();
+            (doc["id"].as_str().unwrap().to_string(), ())
+        }
+    })
+    .await
+    .unwrap();
+    // Spectators are shed first; a bot still gets its agent.
+    let spectator = tokio_tungstenite::connect_async(server.ws(&format!("/ws/matches/{id}"))).await;
+    match spectator {
+        Err(tokio_tungstenite::tungstenite::Error::Http(r)) => assert_eq!(r.status(), 503),
+        other => panic!("a spectator near the limit: {:?}", other.map(|_| ())),
+    }
+    let token = tokens["cf"].as_str().unwrap();
+    let mut bot = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    assert_eq!(next_of(&mut bot, "hello").await["role"], "bot");
+    assert!(!second.is_empty());
+    drop(idle);
+    let log = server.log.lock().unwrap().join("\n");
+    let complaints = log.matches("cannot accept").count();
+    assert!(
+        complaints <= 3,
+        "{complaints} accept-error lines: the log is flooded\n{log}"
+    );
+}
+
+/// A WebSocket opened by hand, so the test can write any frame it likes.
+async fn raw_socket(server: &Server, path: &str) -> tokio::net::TcpStream {
+    let mut stream = tokio::net::TcpStream::connect(&server.addr).await.unwrap();
+    let request = format!(
+        "GET {path} HTTP/1.1\r\nHost: {}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
+         Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n",
+        server.addr
+    );
+    stream.write_all(request.as_bytes()).await.unwrap();
+    let mut head = Vec::new();
+    while !head.ends_with(b"\r\n\r\n") {
+        let mut byte = [0u8];
+        stream.read_exact(&mut byte).await.unwrap();
+        head.push(byte[0]);
+    }
+    assert!(head.starts_with(b"HTTP/1.1 101"), "{}", String::from_utf8_lossy(&head));
+    stream
+}
+
+/// A masked client frame.
+fn frame(fin: bool, opcode: u8, payload: &[u8]) -> Vec<u8> {
+    assert!(payload.len() < 126);
+    let mut out = vec![(u8::from(fin) << 7) | opcode, 0x80 | payload.len() as u8];
+    out.extend([7, 7, 7, 7]);
+    out.extend(payload.iter().map(|b| b ^ 7));
+    out
+}
+
+/// Reads server frames until a close; its code (None: the connection ended without one).
+async fn close_code(stream: &mut tokio::net::TcpStream) -> Option<u16> {
+    let reading = async {
+        loop {
+            let mut head = [0u8; 2];
+            stream.read_exact(&mut head).await.ok()?;
+            let length = match head[1] & 0x7f {
+                126 => u64::from(stream.read_u16().await.ok()?),
+                127 => stream.read_u64().await.ok()?,
+                n => u64::from(n),
+            };
+            let mut payload = vec![0u8; length as usize];
+            stream.read_exact(&mut payload).await.ok()?;
+            if head[0] & 0x0f == 0x8 {
+                return payload.get(..2).map(|c| u16::from_be_bytes([c[0], c[1]]));
+            }
+        }
+    };
+    tokio::time::timeout(Duration::from_secs(10), reading)
+        .await
+        .expect("the server answers within 10 s")
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn control_and_fragment_frame_floods_are_closed_with_1008() {
+    let server = Server::start(&[]);
+    let floods: [(&str, Vec<u8>); 3] = [
+        ("pings", frame(true, 0x9, b"hi").repeat(5000)),
+        ("pongs", frame(true, 0xa, b"").repeat(5000)),
+        ("an endless message of empty continuation frames", {
+            let mut bytes = frame(false, 0x1, b"{");
+            bytes.extend(frame(false, 0x0, b"").repeat(5000));
+            bytes
+        }),
+    ];
+    for (what, bytes) in floods {
+        let mut socket = raw_socket(&server, "/ws/matches/demo-baseball").await;
+        // The server may close before it has read them all.
+        let _ = socket.write_all(&bytes).await;
+        assert_eq!(close_code(&mut socket).await, Some(1008), "{what}");
+    }
+    // A ping now and then is answered, and the socket stays open.
+    let mut polite = connect(&server.ws("/ws/matches/demo-baseball")).await;
+    for _ in 0..5 {
+        polite.send(Message::Ping(b"still there?".to_vec().into())).await.unwrap();
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    let mut pongs = 0;
+    while pongs < 5 {
+        match tokio::time::timeout(Duration::from_secs(5), polite.next()).await {
+            Ok(Some(Ok(Message::Pong(_)))) => pongs += 1,
+            Ok(Some(Ok(Message::Close(c)))) => panic!("a polite client was closed: {c:?}"),
+            Ok(Some(Ok(_))) => {}
+            other => panic!("{other:?}"),
+        }
+    }
+    assert!(metric(&server, "fieldhouse_closed_flooding_total") >= 3.0);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn spectators_and_replay_viewers_that_flood_text_are_closed_with_1008() {
+    let dir = common::server::empty_dir("flooding-viewers");
+    let server = Server::start(&["--replay-dir", dir.to_str().unwrap()]);
+    let replays = server.get("/api/replays");
+    let replay = replays["replays"][0]["id"].as_str().expect("a demo is recorded");
+    for path in [
+        "/ws/matches/demo-cricket".to_string(),
+        format!("/ws/replays/{replay}"),
+    ] {
+        let mut socket = connect(&server.ws(&path)).await;
+        let chatter = r#"{"type":"control","action":"pause"}"#;
+        let mut sent = 0;
+        let closed = loop {
+            if sent < 5000 && socket.send(Message::Text(chatter.into())).await.is_ok() {
+                sent += 1;
+                continue;
+            }
+            match tokio::time::timeout(Duration::from_secs(10), socket.next()).await {
+                Ok(Some(Ok(Message::Close(Some(frame))))) => break u16::from(frame.code),
+                Ok(Some(Ok(_))) => {}
+                other => panic!("{path}: {other:?}"),
+            }
+        };
+        assert_eq!(closed, 1008, "{path}");
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_bot_that_stops_reading_is_closed_within_the_send_timeout() {
+    let file = settings("bot-write-timeout", "send_timeout_ms = 1000\n");
+    let server = Server::start(&["--no-demo", "--config", file.to_str().unwrap()]);
+    let (id, tokens) = server.create(common::server::fielder_with_bot("realtime", 1000));
+    let token = tokens["cf"].as_str().unwrap();
+    // A small receive window, so the server's writes back up soon.
+    let socket = tokio::net::TcpSocket::new_v4().unwrap();
+    socket.set_recv_buffer_size(2048).unwrap();
+    let stream = socket.connect(server.addr.parse().unwrap()).await.unwrap();
+    let request = server
+        .ws(&format!("/ws/matches/{id}/play?token={token}"))
+        .into_client_request()
+        .unwrap();
+    let (bot, _) = tokio_tungstenite::client_async(request, stream).await.unwrap();
+    // The bot never reads again. Its perceptions fill the socket; then its match goes.
+    tokio::time::sleep(Duration::from_secs(4)).await;
+    assert_eq!(metric(&server, "fieldhouse_connections{role=\"bot\"}"), 1.0);
+    let deleted = ureq::delete(&server.http(&format!("/api/matches/{id}")))
+        .set("Authorization", &format!("Bearer {ADMIN}"))
+        .call();
+    assert!(deleted.is_ok());
+    let deadline = Instant::now() + Duration::from_secs(4);
+    while metric(&server, "fieldhouse_connections{role=\"bot\"}") > 0.0 {
+        assert!(
+            Instant::now() < deadline,
+            "a bot that stopped reading is still connected after its match was deleted"
+        );
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    drop(bot);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_forged_host_cannot_pass_for_the_servers_own_origin() {
+    let server = Server::start(&["--allow-host", "play.example"]);
+    let port = server.addr.rsplit(':').next().unwrap().to_string();
+    let open = |host: String| {
+        let url = server.ws("/ws/matches/demo-baseball");
+        async move {
+            let mut request = url.into_client_request().unwrap();
+            let headers = request.headers_mut();
+            headers.insert("host", host.parse().unwrap());
+            headers.insert("origin", format!("http://{host}").parse().unwrap());
+            match tokio_tungstenite::connect_async(request).await {
+                Ok(_) => 101,
+                Err(tokio_tungstenite::tungstenite::Error::Http(r)) => r.status().as_u16(),
+                Err(e) => panic!("{e}"),
+            }
+        }
+    };
+    // A page whose name the attacker pointed at this machine: Origin and Host agree.
+    assert_eq!(open(format!("evil.example:{port}")).await, 403);
+    assert_eq!(open(format!("localhost:{port}")).await, 101);
+    assert_eq!(open(format!("play.example:{port}")).await, 101);
+    assert!(metric(&server, "fieldhouse_sockets_refused_total{reason=\"origin\"}") >= 1.0);
+}
+
+#[test]
+fn requests_beyond_the_concurrency_limit_are_shed_not_queued() {
+    let file = settings("shedding", "max_concurrent_requests = 1\n");
+    let server = Server::start(&["--no-demo", "--config", file.to_str().unwrap()]);
+    let url = server.http("/api/costmaps/dribble");
+    let statuses: Vec<u16> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..12)
+            .map(|_| {
+                scope.spawn(|| {
+                    (0..15)
+                        .map(|_| match ureq::get(&url).call() {
+                            Ok(r) => r.status(),
+                            Err(ureq::Error::Status(code, r)) => {
+                                let body: serde_json::Value = r.into_json().unwrap();
+                                assert_eq!(body["error"]["code"], "overloaded");
+                                code
+                            }
+                            Err(e) => panic!("{e}"),
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        // Health checks are not part of the limit.
+        for _ in 0..20 {
+            assert_eq!(server.get("/readyz")["ready"], true);
+        }
+        workers.into_iter().flat_map(|w| w.join().unwrap()).collect()
+    });
+    let shed = statuses.iter().filter(|&&s| s == 503).count();
+    assert!(shed > 0, "no request was shed at a limit of 1");
+    assert!(statuses.iter().all(|&s| s == 200 || s == 503), "{statuses:?}");
+    assert!(metric(&server, "fieldhouse_requests_shed_total") >= shed as f64);
+}
