@@ -37,11 +37,11 @@ fn metric(server: &Server, name: &str) -> f64 {
 }
 
 /// Whether the server has closed `stream` (reads end), without waiting.
-fn closed_by_server(stream: &mut TcpStream) -> bool {
+fn closed_by_server(stream: &TcpStream) -> bool {
     stream.set_nonblocking(true).unwrap();
     let mut byte = [0u8; 64];
     let closed = loop {
-        match stream.read(&mut byte) {
+        match (&mut &*stream).read(&mut byte) {
             Ok(0) => break true,
             Ok(_) => continue, // a refusal's response, then the close
             Err(e) if e.kind() == ErrorKind::WouldBlock => break false,
@@ -64,14 +64,17 @@ fn trickled_headers_and_silent_connections_are_closed_at_the_header_timeout() {
     let dripping = std::thread::spawn(move || {
         for k in 0..20 {
             std::thread::sleep(Duration::from_millis(300));
-            if writer.write_all(format!("X-Drip-{k}: 1\r\n").as_bytes()).is_err() {
+            if writer
+                .write_all(format!("X-Drip-{k}: 1\r\n").as_bytes())
+                .is_err()
+            {
                 return;
             }
         }
         let _ = writer.write_all(b"Host: x\r\n\r\n");
     });
     // Connections that say nothing at all.
-    let mut silent: Vec<TcpStream> = (0..20)
+    let silent: Vec<TcpStream> = (0..20)
         .map(|_| TcpStream::connect(&server.addr).unwrap())
         .collect();
     trickle
@@ -91,10 +94,7 @@ fn trickled_headers_and_silent_connections_are_closed_at_the_header_timeout() {
     );
     dripping.join().unwrap();
     std::thread::sleep(Duration::from_millis(1500));
-    let open = silent
-        .iter_mut()
-        .filter(|s| !closed_by_server(s))
-        .count();
+    let open = silent.iter().filter(|s| !closed_by_server(s)).count();
     assert_eq!(open, 0, "silent connections outlive the header timeout");
     // A prompt client is unaffected.
     assert_eq!(server.get("/readyz")["ready"], true);
@@ -105,11 +105,11 @@ fn every_connection_counts_against_its_address_not_only_websockets() {
     let server = Server::start(&["--no-demo", "--max-connections-per-ip", "10"]);
     // Thirty idle connections from one address: it never holds more than ten, because
     // at its cap its longest-idle one is closed for the next.
-    let mut idle: Vec<TcpStream> = (0..30)
+    let idle: Vec<TcpStream> = (0..30)
         .map(|_| TcpStream::connect(&server.addr).unwrap())
         .collect();
     std::thread::sleep(Duration::from_millis(300));
-    let open = idle.iter_mut().filter(|s| !closed_by_server(s)).count();
+    let open = idle.iter().filter(|s| !closed_by_server(s)).count();
     assert!(open <= 10, "{open} idle connections held by one address");
     // Requests still get in (an idle connection makes room).
     assert_eq!(server.get("/readyz")["ready"], true);
@@ -227,7 +227,11 @@ async fn raw_socket(server: &Server, path: &str) -> tokio::net::TcpStream {
         stream.read_exact(&mut byte).await.unwrap();
         head.push(byte[0]);
     }
-    assert!(head.starts_with(b"HTTP/1.1 101"), "{}", String::from_utf8_lossy(&head));
+    assert!(
+        head.starts_with(b"HTTP/1.1 101"),
+        "{}",
+        String::from_utf8_lossy(&head)
+    );
     stream
 }
 
@@ -284,7 +288,10 @@ async fn control_and_fragment_frame_floods_are_closed_with_1008() {
     // A ping now and then is answered, and the socket stays open.
     let mut polite = connect(&server.ws("/ws/matches/demo-baseball")).await;
     for _ in 0..5 {
-        polite.send(Message::Ping(b"still there?".to_vec().into())).await.unwrap();
+        polite
+            .send(Message::Ping(b"still there?".to_vec().into()))
+            .await
+            .unwrap();
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
     let mut pongs = 0;
@@ -304,7 +311,9 @@ async fn spectators_and_replay_viewers_that_flood_text_are_closed_with_1008() {
     let dir = common::server::empty_dir("flooding-viewers");
     let server = Server::start(&["--replay-dir", dir.to_str().unwrap()]);
     let replays = server.get("/api/replays");
-    let replay = replays["replays"][0]["id"].as_str().expect("a demo is recorded");
+    let replay = replays["replays"][0]["id"]
+        .as_str()
+        .expect("a demo is recorded");
     for path in [
         "/ws/matches/demo-cricket".to_string(),
         format!("/ws/replays/{replay}"),
@@ -341,7 +350,9 @@ async fn a_bot_that_stops_reading_is_closed_within_the_send_timeout() {
         .ws(&format!("/ws/matches/{id}/play?token={token}"))
         .into_client_request()
         .unwrap();
-    let (bot, _) = tokio_tungstenite::client_async(request, stream).await.unwrap();
+    let (bot, _) = tokio_tungstenite::client_async(request, stream)
+        .await
+        .unwrap();
     // The bot never reads again. Its perceptions fill the socket; then its match goes.
     tokio::time::sleep(Duration::from_secs(4)).await;
     assert_eq!(metric(&server, "fieldhouse_connections{role=\"bot\"}"), 1.0);
@@ -382,7 +393,12 @@ async fn a_forged_host_cannot_pass_for_the_servers_own_origin() {
     assert_eq!(open(format!("evil.example:{port}")).await, 403);
     assert_eq!(open(format!("localhost:{port}")).await, 101);
     assert_eq!(open(format!("play.example:{port}")).await, 101);
-    assert!(metric(&server, "fieldhouse_sockets_refused_total{reason=\"origin\"}") >= 1.0);
+    assert!(
+        metric(
+            &server,
+            "fieldhouse_sockets_refused_total{reason=\"origin\"}"
+        ) >= 1.0
+    );
 }
 
 #[test]
@@ -412,10 +428,16 @@ fn requests_beyond_the_concurrency_limit_are_shed_not_queued() {
         for _ in 0..20 {
             assert_eq!(server.get("/readyz")["ready"], true);
         }
-        workers.into_iter().flat_map(|w| w.join().unwrap()).collect()
+        workers
+            .into_iter()
+            .flat_map(|w| w.join().unwrap())
+            .collect()
     });
     let shed = statuses.iter().filter(|&&s| s == 503).count();
     assert!(shed > 0, "no request was shed at a limit of 1");
-    assert!(statuses.iter().all(|&s| s == 200 || s == 503), "{statuses:?}");
+    assert!(
+        statuses.iter().all(|&s| s == 200 || s == 503),
+        "{statuses:?}"
+    );
     assert!(metric(&server, "fieldhouse_requests_shed_total") >= shed as f64);
 }

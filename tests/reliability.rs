@@ -117,7 +117,10 @@ async fn one_address_holds_at_most_its_share_of_sockets() {
     drop((held, again));
     let deadline = Instant::now() + Duration::from_secs(5);
     while ureq::get(&server.http("/healthz")).call().is_err() {
-        assert!(Instant::now() < deadline, "closed sockets free their places");
+        assert!(
+            Instant::now() < deadline,
+            "closed sockets free their places"
+        );
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
     assert!(

@@ -129,7 +129,9 @@ fn settings(args: &ServeArgs) -> anyhow::Result<ServerConfig> {
         .allowed_origins
         .extend(args.allow_origins.iter().cloned());
     config.agones_sdk_port = args.agones.then_some(args.agones_sdk_port);
-    config.allowed_hosts.extend(args.allow_hosts.iter().cloned());
+    config
+        .allowed_hosts
+        .extend(args.allow_hosts.iter().cloned());
     if let Some(n) = args.max_connections_per_ip {
         config.max_connections_per_ip = n;
     }
