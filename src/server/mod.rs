@@ -6,6 +6,7 @@
 //! * [`config`]: settings, defaults and the TOML file.
 //! * [`state`]: the shared table of matches and what a match publishes.
 //! * [`match_task`]: the tick loop of one match (realtime, fast, lockstep).
+//! * [`slot`]: a match's place among the `max_matches`, taken atomically.
 //! * [`ws`]: spectator and bot WebSockets.
 //! * [`replays`]: recorded matches: listed, downloaded, played with controls.
 //! * [`api`]: the REST API, health, readiness and metrics.
@@ -25,6 +26,7 @@ pub mod demo;
 pub mod match_task;
 pub mod metrics;
 pub mod replays;
+pub mod slot;
 pub mod state;
 pub mod web;
 pub mod ws;

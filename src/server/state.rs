@@ -9,7 +9,8 @@ use crate::sim::{Action, Mode, Scenario};
 use axum::extract::ws::Utf8Bytes;
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicU64};
-use std::sync::{Arc, Mutex, RwLock};
+use std::sync::{Arc, Mutex, OnceLock, RwLock};
+use std::time::Instant;
 use tokio::sync::{mpsc, watch};
 
 /// The newest frame of a match (encoded once; every spectator gets the same bytes), and
@@ -40,6 +41,10 @@ pub enum Control {
         action: Action,
     },
     Stop,
+    /// Makes the match task panic, standing for a bug, to test that a panic ends the
+    /// match cleanly.
+    #[cfg(test)]
+    Panic,
 }
 
 pub struct MatchEntry {
@@ -53,6 +58,9 @@ pub struct MatchEntry {
     pub spectators: AtomicU64,
     pub tick: AtomicU64,
     pub ended: AtomicBool,
+    /// When it ended: an ended match is listed for `ended_match_ttl_s` after this,
+    /// then swept from the table.
+    pub ended_at: OnceLock<Instant>,
     /// Who controls each agent now (`true`: a bot).
     pub controlled: Mutex<Vec<bool>>,
     /// The id of its replay, if the server records matches.
