@@ -40,6 +40,10 @@ pub struct ServeArgs {
     /// Most WebSockets one client address may hold open at once (default 256).
     #[arg(long, value_name = "N")]
     max_connections_per_ip: Option<usize>,
+    /// How long an ended match stays in the match list, seconds (default 600); at most
+    /// max_matches ended matches are kept, the most recently ended.
+    #[arg(long, value_name = "SECONDS")]
+    ended_match_ttl_s: Option<u64>,
     /// Run as an Agones game server: say Ready to the SDK sidecar once listening, ping
     /// Health every 2 s, and ask for Shutdown (then exit) once every match has ended
     /// or on SIGTERM. Usually with --no-demo, the matches created by an allocator.
@@ -118,6 +122,9 @@ fn settings(args: &ServeArgs) -> anyhow::Result<ServerConfig> {
     config.agones_sdk_port = args.agones.then_some(args.agones_sdk_port);
     if let Some(n) = args.max_connections_per_ip {
         config.max_connections_per_ip = n;
+    }
+    if let Some(s) = args.ended_match_ttl_s {
+        config.ended_match_ttl_s = s;
     }
     config.check().map_err(anyhow::Error::msg)?;
     Ok(config)

@@ -4,6 +4,7 @@
 use super::auth;
 use super::match_task;
 use super::slot::Slot;
+use super::sweep;
 use super::state::{AppState, Control, MatchEntry};
 use crate::sim::Scenario;
 use axum::body::Bytes;
@@ -182,6 +183,8 @@ pub fn start(
         .write()
         .expect("not poisoned")
         .insert(id.clone(), entry.clone());
+    // Matches that end fast could otherwise pile up between sweeps.
+    sweep::sweep(app, std::time::Instant::now());
     Ok((id, entry))
 }
 

@@ -49,6 +49,9 @@ pub struct ServerConfig {
     pub allowed_origins: Vec<String>,
     /// Most WebSockets one client address may hold open at once.
     pub max_connections_per_ip: usize,
+    /// How long an ended match stays listed, s (at most `max_matches` ended matches
+    /// are kept, the most recently ended).
+    pub ended_match_ttl_s: u64,
     /// Run as an Agones game server, talking to the SDK sidecar on this port (`serve
     /// --agones`; not a file setting: it is where the process runs, not how).
     #[serde(skip)]
@@ -71,6 +74,7 @@ impl Default for ServerConfig {
             stamp_frames: false,
             allowed_origins: Vec::new(),
             max_connections_per_ip: 256,
+            ended_match_ttl_s: 600,
             agones_sdk_port: None,
         }
     }

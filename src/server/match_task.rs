@@ -6,7 +6,7 @@
 use super::auth::new_token;
 use super::metrics::Metrics;
 use super::slot::Slot;
-use super::state::{AppState, Control, MatchEntry, Published};
+use super::state::{AppState, Control, MatchEntry, Published, ToBot};
 use crate::protocol::{encode, End, ErrorMessage, MatchInfo, Perception};
 use crate::replay::Recorder;
 use crate::session::Session;
@@ -24,7 +24,7 @@ use tokio::time::Instant;
 /// A bot connected to an agent.
 struct Bot {
     conn: u64,
-    out: mpsc::Sender<Utf8Bytes>,
+    out: mpsc::Sender<ToBot>,
     /// The latest tick it has answered.
     answered: Option<u64>,
 }
@@ -309,7 +309,7 @@ impl Ticker {
                 perception: &perception,
             });
             // A bot that is not reading misses perceptions rather than holding a tick.
-            let _ = bot.out.try_send(Utf8Bytes::from(message));
+            let _ = bot.out.try_send(ToBot::perception(tick, message));
         }
     }
 
@@ -318,7 +318,7 @@ impl Ticker {
             self.metrics.client_errors.fetch_add(1, Relaxed);
             let _ = bot
                 .out
-                .try_send(Utf8Bytes::from(encode(&ErrorMessage::new(code, message))));
+                .try_send(ToBot::message(encode(&ErrorMessage::new(code, message))));
         }
     }
 

@@ -23,12 +23,35 @@ pub struct Published {
     pub end: Option<Utf8Bytes>,
 }
 
+/// What a match task sends a bot's socket. A perception carries its tick: the bot owes
+/// one answer to it, and that answer is never charged to its rate limit.
+#[derive(Debug)]
+pub struct ToBot {
+    pub text: Utf8Bytes,
+    pub perception: Option<u64>,
+}
+
+impl ToBot {
+    pub fn message(text: String) -> ToBot {
+        ToBot {
+            text: Utf8Bytes::from(text),
+            perception: None,
+        }
+    }
+    pub fn perception(tick: u64, text: String) -> ToBot {
+        ToBot {
+            text: Utf8Bytes::from(text),
+            perception: Some(tick),
+        }
+    }
+}
+
 /// What sockets and the API tell a match task.
 pub enum Control {
     BotJoin {
         agent: usize,
         conn: u64,
-        out: mpsc::Sender<Utf8Bytes>,
+        out: mpsc::Sender<ToBot>,
     },
     BotLeave {
         agent: usize,

@@ -11,7 +11,7 @@
 use super::admission::Admitted;
 use super::api::ApiError;
 use super::auth;
-use super::state::{AppState, Control, MatchEntry};
+use super::state::{AppState, Control, MatchEntry, ToBot};
 use crate::protocol::{decode, encode, ClientMessage, ErrorMessage, Hello, Limits};
 use axum::extract::ws::{CloseFrame, Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::extract::{Path, Query, State};
@@ -19,7 +19,7 @@ use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 use futures_util::stream::{SplitSink, SplitStream};
 use futures_util::{SinkExt, StreamExt};
-use std::collections::HashMap;
+use std::collections::{HashMap, VecDeque};
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -336,6 +336,32 @@ impl Bucket {
     }
 }
 
+/// The perceptions a bot has been sent and not yet answered, by tick: its answer to
+/// each is owed, so it passes free of the rate limit, once. A lock-step bot answers
+/// every perception at once, and a match may send them faster than any fixed rate;
+/// charging those answers disconnected bots that did exactly what the protocol asks.
+/// Only the newest [`Owed::MAX`] are remembered: an answer to an older one is charged.
+#[derive(Default)]
+struct Owed(VecDeque<u64>);
+
+impl Owed {
+    const MAX: usize = 64;
+
+    fn owe(&mut self, tick: u64) {
+        if self.0.len() == Self::MAX {
+            self.0.pop_front();
+        }
+        self.0.push_back(tick);
+    }
+
+    /// Whether a command for `tick` answers an unanswered perception; it is answered
+    /// from now on.
+    fn settle(&mut self, tick: u64) -> bool {
+        let found = self.0.iter().position(|&t| t == tick);
+        found.map(|k| self.0.remove(k)).is_some()
+    }
+}
+
 async fn bot(
     socket: WebSocket,
     entry: Arc<MatchEntry>,
@@ -346,7 +372,7 @@ async fn bot(
     let metrics = app.metrics.clone();
     metrics.bots.fetch_add(1, Relaxed);
     let conn = app.next_conn.fetch_add(1, Relaxed);
-    let (out_tx, mut out_rx) = mpsc::channel::<Utf8Bytes>(16);
+    let (out_tx, mut out_rx) = mpsc::channel::<ToBot>(16);
     let (mut sink, mut stream) = socket.split();
     let shutdown = app.shutdown.clone();
     let hello = encode(&Hello::new("bot", &entry.info, Some(&agent), limits(&app)));
@@ -370,18 +396,22 @@ async fn bot(
     };
     let error = |code: &str, message: &str| {
         metrics.client_errors.fetch_add(1, Relaxed);
-        let _ = out_tx.try_send(Utf8Bytes::from(encode(&ErrorMessage::new(code, message))));
+        let _ = out_tx.try_send(ToBot::message(encode(&ErrorMessage::new(code, message))));
     };
     // The match's end comes through what it publishes, so a bot whose queue is full
     // still gets it.
     let mut published = entry.published.clone();
+    let mut owed = Owed::default();
     let closing: Option<(u16, &str)> = if !joined {
         None
     } else {
         loop {
             tokio::select! {
                 outgoing = out_rx.recv() => {
-                    let Some(text) = outgoing else { break None };
+                    let Some(ToBot { text, perception }) = outgoing else { break None };
+                    if let Some(tick) = perception {
+                        owed.owe(tick);
+                    }
                     let replaced = text.as_str().contains("\"code\":\"replaced\"");
                     metrics.bytes_out.fetch_add(text.len() as u64, Relaxed);
                     if sink.send(Message::Text(text)).await.is_err() {
@@ -410,25 +440,39 @@ async fn bot(
                         break Some((TOO_BIG, "message too big"));
                     }
                     Read::Ignore => {}
-                    _ if !bucket.take() => {
-                        if bucket.strikes > app.config.bot_burst {
-                            metrics.closed_for_rate.fetch_add(1, Relaxed);
-                            break Some((POLICY, "too many messages"));
+                    read => {
+                        // Read first, to see whether it answers a perception: only what
+                        // is not owed pays the rate limit. (Messages are at most
+                        // max_message_bytes, so reading a flood costs little.)
+                        let message = match &read {
+                            Read::Text(text) => Some(decode(text)),
+                            _ => None,
+                        };
+                        let answers = matches!(
+                            &message,
+                            Some(Ok(ClientMessage::Command { tick, .. })) if owed.settle(*tick)
+                        );
+                        if !answers && !bucket.take() {
+                            if bucket.strikes > app.config.bot_burst {
+                                metrics.closed_for_rate.fetch_add(1, Relaxed);
+                                break Some((POLICY, "too many messages"));
+                            }
+                            if bucket.strikes == 1 {
+                                error("rate_limited", "too many messages; slow down or be disconnected");
+                            }
+                            continue;
                         }
-                        if bucket.strikes == 1 {
-                            error("rate_limited", "too many messages; slow down or be disconnected");
+                        match message {
+                            None => error("binary", "binary frames are not part of the protocol; send JSON text"),
+                            Some(Ok(ClientMessage::Command { tick, action })) => {
+                                let command = Control::Command { agent: k, conn, tick, action };
+                                if entry.control.send(command).await.is_err() {
+                                    break None;
+                                }
+                            }
+                            Some(Err((code, message))) => error(code, &message),
                         }
                     }
-                    Read::Binary => error("binary", "binary frames are not part of the protocol; send JSON text"),
-                    Read::Text(text) => match decode(&text) {
-                        Ok(ClientMessage::Command { tick, action }) => {
-                            let command = Control::Command { agent: k, conn, tick, action };
-                            if entry.control.send(command).await.is_err() {
-                                break None;
-                            }
-                        }
-                        Err((code, message)) => error(code, &message),
-                    },
                 },
             }
         }
@@ -441,4 +485,26 @@ async fn bot(
         .send(Control::BotLeave { agent: k, conn })
         .await;
     metrics.bots.fetch_sub(1, Relaxed);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Owed;
+
+    #[test]
+    fn each_perception_is_owed_one_answer_and_only_the_newest_are_remembered() {
+        let mut owed = Owed::default();
+        owed.owe(6);
+        owed.owe(12);
+        assert!(owed.settle(12));
+        assert!(!owed.settle(12), "a second answer to the same perception pays");
+        assert!(!owed.settle(18), "nor does an answer to a perception never sent");
+        assert!(owed.settle(6), "answers may come out of order");
+        for tick in 0..(Owed::MAX as u64 + 10) {
+            owed.owe(tick);
+        }
+        assert!(!owed.settle(9), "forgotten: older than the newest {}", Owed::MAX);
+        assert!(owed.settle(10));
+        assert_eq!(owed.0.len(), Owed::MAX - 1);
+    }
 }
