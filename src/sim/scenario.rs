@@ -220,8 +220,17 @@ fn within(path: &str, x: f64, lo: f64, hi: f64) -> Result<(), ScenarioError> {
     } else {
         Err(ScenarioError::at(
             path,
-            format!("must be from {lo} to {hi}, not {x}"),
+            format!("must be from {lo} to {hi}, not {}", readable(x)),
         ))
+    }
+}
+
+/// A number as people write it: `1e-300` rather than 300 zeros.
+fn readable(x: f64) -> String {
+    if x != 0.0 && !(1e-4..1e16).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        x.to_string()
     }
 }
 
@@ -281,7 +290,10 @@ impl Scenario {
             if !(d.is_finite() && d > 0.0 && d <= MAX_DURATION_S) {
                 return Err(ScenarioError::at(
                     "duration_s",
-                    format!("must be more than 0 and at most {MAX_DURATION_S} (7 days), not {d}"),
+                    format!(
+                        "must be more than 0 and at most {MAX_DURATION_S} (7 days), not {}",
+                        readable(d)
+                    ),
                 ));
             }
         }

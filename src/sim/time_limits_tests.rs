@@ -75,7 +75,11 @@ proptest! {
 
 #[test]
 fn a_tick_rate_the_timer_cannot_sleep_is_refused_with_its_field() {
-    for (field, value) in [("tick_hz", 1e-300), ("tick_hz", 0.5), ("frame_hz", 0.01)] {
+    for (field, value, shown) in [
+        ("tick_hz", 1e-300, "1e-300"),
+        ("tick_hz", 0.5, "0.5"),
+        ("frame_hz", 0.01, "0.01"),
+    ] {
         let mut s = json!({"sport": "baseball", "tick_hz": 60.0, "frame_hz": 30.0});
         s[field] = json!(value);
         if field == "tick_hz" {
@@ -84,7 +88,7 @@ fn a_tick_rate_the_timer_cannot_sleep_is_refused_with_its_field() {
         let e = Scenario::from_value(s).unwrap_err();
         assert_eq!(e.path, field);
         assert!(e.to_string().starts_with(&format!("{field}: must be from ")), "{e}");
-        assert!(e.to_string().ends_with(&format!("not {value}")), "{e}");
+        assert!(e.to_string().ends_with(&format!("not {shown}")), "{e}");
     }
     let e = Scenario::from_value(json!({"sport": "cricket", "duration_s": 1e300})).unwrap_err();
     assert_eq!(e.path, "duration_s");
