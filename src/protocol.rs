@@ -37,7 +37,8 @@ pub struct MatchInfo {
 pub struct Limits {
     /// Largest message the server reads; a larger one closes the socket with 1009.
     pub max_message_bytes: usize,
-    /// Sustained messages per second a bot may send; flooding closes with 1008.
+    /// Sustained messages per second a bot may send beyond one answer per perception
+    /// (those are never counted); flooding closes with 1008.
     pub messages_per_second: u32,
 }
 
