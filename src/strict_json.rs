@@ -130,15 +130,24 @@ mod tests {
         let top = refused(r#"{"tick": 1, "tick": 2}"#);
         assert!(top.starts_with("duplicate key \"tick\" at line 1"), "{top}");
         let deep = refused(r#"{"agents": [{"id": "a"}, {"id": "b", "id": "c"}]}"#);
-        assert!(deep.starts_with("agents[1]: duplicate key \"id\""), "{deep}");
+        assert!(
+            deep.starts_with("agents[1]: duplicate key \"id\""),
+            "{deep}"
+        );
         let escaped = refused(r#"{"a": {"t\u0069ck": 1, "tick": 2}}"#);
-        assert!(escaped.starts_with("a: duplicate key \"tick\""), "{escaped}");
+        assert!(
+            escaped.starts_with("a: duplicate key \"tick\""),
+            "{escaped}"
+        );
     }
 
     #[test]
     fn trailing_text_and_broken_json_are_refused() {
         for text in ["{} {}", "{\"a\": ", "", "[1,]"] {
-            assert!(matches!(parse(text.as_bytes()), Err(Refused::Malformed(_))), "{text}");
+            assert!(
+                matches!(parse(text.as_bytes()), Err(Refused::Malformed(_))),
+                "{text}"
+            );
         }
     }
 }

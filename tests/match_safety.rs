@@ -95,19 +95,37 @@ async fn time_like_numbers_the_code_cannot_represent_are_refused_with_their_fiel
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn every_response_carries_the_security_headers() {
     let server = Server::start(&["--no-demo"]);
-    for path in ["/", "/web/app.js", "/web/lobby.js", "/api/matches", "/no/such/route"] {
+    for path in [
+        "/",
+        "/web/app.js",
+        "/web/lobby.js",
+        "/api/matches",
+        "/no/such/route",
+    ] {
         let response = match ureq::get(&server.http(path)).call() {
             Ok(r) => r,
             Err(ureq::Error::Status(_, r)) => r,
             Err(e) => panic!("{path}: {e}"),
         };
         let csp = response.header("content-security-policy").unwrap_or("");
-        for directive in ["script-src 'self'", "object-src 'none'", "frame-ancestors 'none'"] {
+        for directive in [
+            "script-src 'self'",
+            "object-src 'none'",
+            "frame-ancestors 'none'",
+        ] {
             assert!(csp.contains(directive), "{path}: {csp:?}");
         }
         assert!(!csp.contains("unsafe-inline"), "{path}: {csp:?}");
-        assert_eq!(response.header("x-content-type-options"), Some("nosniff"), "{path}");
-        assert_eq!(response.header("referrer-policy"), Some("no-referrer"), "{path}");
+        assert_eq!(
+            response.header("x-content-type-options"),
+            Some("nosniff"),
+            "{path}"
+        );
+        assert_eq!(
+            response.header("referrer-policy"),
+            Some("no-referrer"),
+            "{path}"
+        );
     }
 }
 
@@ -122,15 +140,21 @@ async fn the_bearer_scheme_is_read_in_any_case() {
     let (status, _) = post(&server, &format!("Basic {ADMIN}"), &body);
     assert_eq!(status, 401);
     // Bot tokens are read the same way.
-    let (id, token) = (doc["id"].as_str().unwrap(), doc["bot_tokens"]["cf"].as_str().unwrap());
-    let mut request = tokio_tungstenite::tungstenite::client::IntoClientRequest::into_client_request(
-        server.ws(&format!("/ws/matches/{id}/play")),
-    )
-    .unwrap();
+    let (id, token) = (
+        doc["id"].as_str().unwrap(),
+        doc["bot_tokens"]["cf"].as_str().unwrap(),
+    );
+    let mut request =
+        tokio_tungstenite::tungstenite::client::IntoClientRequest::into_client_request(
+            server.ws(&format!("/ws/matches/{id}/play")),
+        )
+        .unwrap();
     request
         .headers_mut()
         .insert("authorization", format!("bEaReR {token}").parse().unwrap());
-    let (mut bot, _) = tokio_tungstenite::connect_async(request).await.expect("the bot is let in");
+    let (mut bot, _) = tokio_tungstenite::connect_async(request)
+        .await
+        .expect("the bot is let in");
     assert_eq!(next(&mut bot).await["type"], "hello");
 }
 
@@ -138,7 +162,11 @@ async fn the_bearer_scheme_is_read_in_any_case() {
 async fn a_key_given_twice_is_refused_in_scenarios_and_bot_messages() {
     let server = Server::start(&["--no-demo"]);
     let bearer = format!("Bearer {ADMIN}");
-    let (status, doc) = post(&server, &bearer, r#"{"sport":"basketball","sport":"baseball"}"#);
+    let (status, doc) = post(
+        &server,
+        &bearer,
+        r#"{"sport":"basketball","sport":"baseball"}"#,
+    );
     assert_eq!(status, 422, "{doc}");
     let message = doc["error"]["message"].as_str().unwrap();
     assert!(message.starts_with("duplicate key \"sport\""), "{message}");
@@ -146,18 +174,25 @@ async fn a_key_given_twice_is_refused_in_scenarios_and_bot_messages() {
     let (status, doc) = post(&server, &bearer, nested);
     assert_eq!(status, 422, "{doc}");
     let message = doc["error"]["message"].as_str().unwrap();
-    assert!(message.starts_with("agents[0]: duplicate key \"bot\""), "{message}");
+    assert!(
+        message.starts_with("agents[0]: duplicate key \"bot\""),
+        "{message}"
+    );
 
     let (_, _, mut bot) = server.play_cf("realtime", 1000).await;
     next(&mut bot).await;
-    let tick = next_of(&mut bot, "perception").await["tick"].as_u64().unwrap();
-    let twice = format!(
-        r#"{{"type":"command","tick":{tick},"tick":{tick},"action":{{"kind":"stand"}}}}"#
-    );
+    let tick = next_of(&mut bot, "perception").await["tick"]
+        .as_u64()
+        .unwrap();
+    let twice =
+        format!(r#"{{"type":"command","tick":{tick},"tick":{tick},"action":{{"kind":"stand"}}}}"#);
     bot.send(Message::Text(twice.into())).await.unwrap();
     let error = next_of(&mut bot, "error").await;
     assert_eq!(error["code"], "bad_message", "{error}");
-    assert!(error["message"].as_str().unwrap().contains("duplicate key \"tick\""));
+    assert!(error["message"]
+        .as_str()
+        .unwrap()
+        .contains("duplicate key \"tick\""));
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -194,9 +229,23 @@ async fn racing_creations_start_exactly_max_matches() {
             .collect();
         racers.into_iter().map(|r| r.join().unwrap()).collect()
     });
-    assert_eq!(statuses.iter().filter(|&&s| s == 201).count(), max, "{statuses:?}");
-    assert_eq!(statuses.iter().filter(|&&s| s == 503).count(), 16 - max, "{statuses:?}");
-    assert_eq!(server.get("/api/matches")["matches"].as_array().unwrap().len(), max);
+    assert_eq!(
+        statuses.iter().filter(|&&s| s == 201).count(),
+        max,
+        "{statuses:?}"
+    );
+    assert_eq!(
+        statuses.iter().filter(|&&s| s == 503).count(),
+        16 - max,
+        "{statuses:?}"
+    );
+    assert_eq!(
+        server.get("/api/matches")["matches"]
+            .as_array()
+            .unwrap()
+            .len(),
+        max
+    );
     assert_eq!(metric(&server, "fieldhouse_matches"), max as f64);
 }
 
@@ -207,18 +256,28 @@ async fn ended_matches_leave_the_list_after_their_time_to_live() {
     let started = Instant::now();
     let mut seen_ended = false;
     loop {
-        let listed = server.get("/api/matches")["matches"].as_array().unwrap().clone();
+        let listed = server.get("/api/matches")["matches"]
+            .as_array()
+            .unwrap()
+            .clone();
         match listed.iter().find(|m| m["id"] == id.as_str()) {
             Some(m) => seen_ended |= m["status"] == "ended",
             None => break,
         }
-        assert!(started.elapsed() < Duration::from_secs(10), "still listed: {listed:?}");
+        assert!(
+            started.elapsed() < Duration::from_secs(10),
+            "still listed: {listed:?}"
+        );
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
     assert!(seen_ended, "listed as ended for a while before it left");
     // ttl (1 s) + the sweep period (1 s) + the match's own run, with slack for a busy
     // machine.
-    assert!(started.elapsed() < Duration::from_secs(5), "{:?}", started.elapsed());
+    assert!(
+        started.elapsed() < Duration::from_secs(5),
+        "{:?}",
+        started.elapsed()
+    );
     assert_eq!(metric(&server, "fieldhouse_matches"), 0.0);
 }
 
@@ -277,7 +336,10 @@ async fn a_lockstep_bot_answering_each_perception_once_is_never_rate_limited() {
     let before = server.tick(&id);
     let (answers, errors, closed) = answer_every_perception(&mut bot, 0, 3).await;
     let ticks = server.tick(&id) - before;
-    assert_eq!(closed, None, "closed after {answers} answers, errors {errors:?}");
+    assert_eq!(
+        closed, None,
+        "closed after {answers} answers, errors {errors:?}"
+    );
     assert!(!errors.contains(&"rate_limited".to_string()), "{errors:?}");
     // Far over the 20 a second the bucket allows: the answers are free.
     assert!(answers > 300, "only {answers} answers in 3 s");

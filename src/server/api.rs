@@ -4,8 +4,8 @@
 use super::auth;
 use super::match_task;
 use super::slot::Slot;
-use super::sweep;
 use super::state::{AppState, Control, MatchEntry};
+use super::sweep;
 use crate::sim::Scenario;
 use axum::body::Bytes;
 use axum::extract::{Path, State};

@@ -60,7 +60,14 @@ mod tests {
         ] {
             assert_eq!(bearer(header), Some("abc"), "{header:?}");
         }
-        for header in ["Bearer", "Bearer ", "Bearerabc", "Basic abc", "Bearers abc", ""] {
+        for header in [
+            "Bearer",
+            "Bearer ",
+            "Bearerabc",
+            "Basic abc",
+            "Bearers abc",
+            "",
+        ] {
             assert_eq!(bearer(header), None, "{header:?}");
         }
     }

@@ -474,14 +474,24 @@ mod tests {
     fn ticks_near_the_end_of_u64_are_in_the_future_not_wrapped_into_the_past() {
         let every = 6;
         for tick in [u64::MAX, u64::MAX - 1, u64::MAX - 4 * every, u64::MAX / 2] {
-            assert_eq!(in_window(tick, 100, every).unwrap_err().0, "future_tick", "{tick}");
+            assert_eq!(
+                in_window(tick, 100, every).unwrap_err().0,
+                "future_tick",
+                "{tick}"
+            );
         }
         assert_eq!(in_window(0, 1_000, every).unwrap_err().0, "stale_tick");
         assert!(in_window(u64::MAX, u64::MAX, every).is_ok());
         assert!(in_window(100 - 4 * every, 100, every).is_ok());
         assert!(in_window(100 + every, 100, every).is_ok());
-        assert_eq!(in_window(101 + every, 100, every).unwrap_err().0, "future_tick");
-        assert_eq!(in_window(99 - 4 * every, 100, every).unwrap_err().0, "stale_tick");
+        assert_eq!(
+            in_window(101 + every, 100, every).unwrap_err().0,
+            "future_tick"
+        );
+        assert_eq!(
+            in_window(99 - 4 * every, 100, every).unwrap_err().0,
+            "stale_tick"
+        );
     }
 
     /// A server's shared state with no sockets, whose matches tick on this test's
@@ -509,7 +519,10 @@ mod tests {
         let scenario = Scenario::from_value(serde_json::json!({"sport": "baseball"})).unwrap();
         let slot = Slot::reserve(&app.metrics, 1).unwrap();
         let entry = spawn(&app, "m".into(), scenario, slot).unwrap();
-        assert!(Slot::reserve(&app.metrics, 1).is_none(), "the match holds the place");
+        assert!(
+            Slot::reserve(&app.metrics, 1).is_none(),
+            "the match holds the place"
+        );
         let mut published = entry.published.clone();
         entry.control.send(Control::Panic).await.unwrap();
         let ended = tokio::time::timeout(

@@ -54,7 +54,11 @@ mod tests {
         assert_eq!(taken.iter().flatten().count(), max);
         assert_eq!(metrics.matches_running.load(Relaxed), max as u64);
         drop(taken);
-        assert_eq!(metrics.matches_running.load(Relaxed), 0, "every place given back");
+        assert_eq!(
+            metrics.matches_running.load(Relaxed),
+            0,
+            "every place given back"
+        );
         assert!(Slot::reserve(&metrics, max).is_some());
     }
 }

@@ -21,7 +21,10 @@ pub fn sweep(app: &AppState, now: Instant) -> usize {
     let mut matches = app.matches.write().expect("not poisoned");
     let before = matches.len();
     matches.retain(|_, m| {
-        !m.ended.load(Relaxed) || m.ended_at.get().is_none_or(|&at| now.duration_since(at) < ttl)
+        !m.ended.load(Relaxed)
+            || m.ended_at
+                .get()
+                .is_none_or(|&at| now.duration_since(at) < ttl)
     });
     let mut ended: Vec<(Instant, String)> = matches
         .iter()

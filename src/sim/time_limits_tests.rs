@@ -23,7 +23,7 @@ fn number() -> impl Strategy<Value = f64> {
         Just(1.0),
         Just(0.999_999),
         Just(1000.0),
-        Just(1000.000_1),
+        Just(1_000.000_1),
         Just(604_800.0),
         Just(604_800.1),
         Just(1e6),
@@ -38,21 +38,29 @@ fn scenario() -> impl Strategy<Value = Value> {
         prop_oneof![Just("baseball"), Just("cricket"), Just("basketball")],
         prop_oneof![Just("realtime"), Just("lockstep"), Just("fast")],
         [number(), number(), number(), number(), number()],
-        prop_oneof![Just(0u64), Just(1), Just(60_000), Just(60_001), Just(u64::MAX)],
+        prop_oneof![
+            Just(0u64),
+            Just(1),
+            Just(60_000),
+            Just(60_001),
+            Just(u64::MAX)
+        ],
     )
-        .prop_map(|(sport, mode, [tick_hz, frame_hz, duration_s, pause_s, clock], deadline)| {
-            let mut s = json!({
-                "sport": sport, "mode": mode, "tick_hz": tick_hz, "frame_hz": frame_hz,
-                "duration_s": duration_s, "lockstep_deadline_ms": deadline,
-            });
-            s["options"] = if sport == "basketball" {
-                json!({"shot_clock_s": clock, "possessions": 1})
-            } else {
-                json!({"pause_s": pause_s, "launches": [{"time_s": clock, "speed_m_s": 30.0,
+        .prop_map(
+            |(sport, mode, [tick_hz, frame_hz, duration_s, pause_s, clock], deadline)| {
+                let mut s = json!({
+                    "sport": sport, "mode": mode, "tick_hz": tick_hz, "frame_hz": frame_hz,
+                    "duration_s": duration_s, "lockstep_deadline_ms": deadline,
+                });
+                s["options"] = if sport == "basketball" {
+                    json!({"shot_clock_s": clock, "possessions": 1})
+                } else {
+                    json!({"pause_s": pause_s, "launches": [{"time_s": clock, "speed_m_s": 30.0,
                     "elevation_deg": 40.0, "azimuth_deg": 45.0}]})
-            };
-            s
-        })
+                };
+                s
+            },
+        )
 }
 
 proptest! {
@@ -87,7 +95,11 @@ fn a_tick_rate_the_timer_cannot_sleep_is_refused_with_its_field() {
         }
         let e = Scenario::from_value(s).unwrap_err();
         assert_eq!(e.path, field);
-        assert!(e.to_string().starts_with(&format!("{field}: must be from ")), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with(&format!("{field}: must be from ")),
+            "{e}"
+        );
         assert!(e.to_string().ends_with(&format!("not {shown}")), "{e}");
     }
     let e = Scenario::from_value(json!({"sport": "cricket", "duration_s": 1e300})).unwrap_err();
