@@ -40,6 +40,8 @@
 //!   module that reads a clock or opens a socket.
 //! * [`loadgen`]: a load generator for the server (and a peer, Colyseus) on loopback:
 //!   a client of the protocol, not part of the core.
+//! * [`strict_json`]: JSON as read from clients, refusing an object that names a key
+//!   twice.
 //! * [`names`]: the names users type for presets, and the error a wrong one gets.
 //! * [`words`]: how counts and figures read in text for people (`1 possession`, `2.82`).
 //!
@@ -59,4 +61,5 @@ pub mod replay;
 pub mod server;
 pub mod session;
 pub mod sim;
+pub mod strict_json;
 pub mod words;

@@ -6,6 +6,7 @@
 //! (bots), `end`, `error`. Client to server: `command` (bots).
 
 use crate::sim::Action;
+use crate::strict_json::{self, Refused};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -36,7 +37,8 @@ pub struct MatchInfo {
 pub struct Limits {
     /// Largest message the server reads; a larger one closes the socket with 1009.
     pub max_message_bytes: usize,
-    /// Sustained messages per second a bot may send; flooding closes with 1008.
+    /// Sustained messages per second a bot may send beyond one answer per perception
+    /// (those are never counted); flooding closes with 1008.
     pub messages_per_second: u32,
 }
 
@@ -97,7 +99,7 @@ pub struct End<'a> {
     #[serde(rename = "match")]
     pub match_id: &'a str,
     pub tick: u64,
-    /// `finished`, `deleted` or `shutdown`.
+    /// `finished`, `deleted`, `shutdown` or `error` (the server failed running it).
     pub reason: &'a str,
     pub result: &'a Value,
 }
@@ -141,10 +143,14 @@ pub enum ClientMessage {
 }
 
 /// Reads a client's message, or says what is wrong with it: `(code, message)` with code
-/// `malformed_json` (not JSON at all) or `bad_message` (JSON, but not a message we know).
-/// Only objects are messages: serde would otherwise also read a struct from an array.
+/// `malformed_json` (not JSON at all) or `bad_message` (JSON, but not a message we know,
+/// including one that names a key twice). Only objects are messages: serde would
+/// otherwise also read a struct from an array.
 pub fn decode(text: &str) -> Result<ClientMessage, (&'static str, String)> {
-    let value: Value = serde_json::from_str(text).map_err(|e| ("malformed_json", e.to_string()))?;
+    let value = strict_json::parse(text.as_bytes()).map_err(|e| match e {
+        Refused::Malformed(m) => ("malformed_json", m),
+        duplicate @ Refused::DuplicateKey { .. } => ("bad_message", duplicate.to_string()),
+    })?;
     let is_object = |v: &Value| v.is_object();
     if !is_object(&value) || value.get("action").is_some_and(|a| !is_object(a)) {
         return Err((
@@ -158,4 +164,23 @@ pub fn decode(text: &str) -> Result<ClientMessage, (&'static str, String)> {
 /// Serialises a message (they always serialise: their fields are plain data).
 pub fn encode(message: &impl Serialize) -> String {
     serde_json::to_string(message).expect("protocol messages serialise")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::decode;
+
+    #[test]
+    fn a_message_naming_a_key_twice_is_refused_at_any_depth() {
+        assert!(decode(r#"{"type":"command","tick":3,"action":{"kind":"stand"}}"#).is_ok());
+        for twice in [
+            r#"{"type":"command","tick":3,"tick":99,"action":{"kind":"stand"}}"#,
+            r#"{"type":"command","tick":3,"action":{"kind":"stand","kind":"shoot"}}"#,
+        ] {
+            let (code, message) = decode(twice).unwrap_err();
+            assert_eq!(code, "bad_message", "{twice}");
+            assert!(message.contains("duplicate key"), "{message}");
+        }
+        assert_eq!(decode(r#"{"type":"#).unwrap_err().0, "malformed_json");
+    }
 }

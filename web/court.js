@@ -255,11 +255,13 @@ function explain(d, rule, now) {
   let text = `<b>${escapeHtml(d.agent)}</b> ${escapeHtml(d.reason)}`;
   const c = d.chosen;
   if (c) {
-    const margin = c.c_o - (c.c_d + rule.shot_time_s + rule.epsilon_s);
-    text += `<br>C<sub>o</sub> ${c.c_o.toFixed(1)} s ${margin > 0 ? "&gt;" : "≤"} C<sub>d</sub> ${c.c_d.toFixed(1)} s + ` +
-      `T<sub>s</sub> ${rule.shot_time_s.toFixed(1)} s + ε ${rule.epsilon_s.toFixed(1)} s; shot success ${(100 * c.success).toFixed(0)} %`;
+    // Numbers are coerced: a replay's frames are whatever its file holds.
+    const [co, cd, ts, eps] = [c.c_o, c.c_d, rule.shot_time_s, rule.epsilon_s].map(Number);
+    const margin = co - (cd + ts + eps);
+    text += `<br>C<sub>o</sub> ${co.toFixed(1)} s ${margin > 0 ? "&gt;" : "≤"} C<sub>d</sub> ${cd.toFixed(1)} s + ` +
+      `T<sub>s</sub> ${ts.toFixed(1)} s + ε ${eps.toFixed(1)} s; shot success ${(100 * Number(c.success)).toFixed(0)} %`;
   }
-  const n = d.safe.length;
+  const n = Number(d.safe.length);
   text += `<br><span class="muted">${n} safe square${n === 1 ? "" : "s"} outlined; decided ${age.toFixed(1)} s ago.</span>`;
   return text;
 }

@@ -38,21 +38,26 @@ async function getJson(path) {
   return response.json();
 }
 
+// Every string from the server is escaped and every number coerced before it goes
+// into the page: a replay file's header is whatever was written to the disk, and a
+// `sport` holding HTML once ran script here.
 function matchRow(m) {
   const name = escapeHtml(m.name || m.id);
   return `<tr><td><a href="#/matches/${encodeURIComponent(m.id)}">${name}</a></td>` +
-    `<td>${m.sport}</td><td>${m.status}, tick ${m.tick}</td>` +
-    `<td>${escapeHtml(formatScore(m.sport, m.score))}</td><td>${m.spectators}</td></tr>`;
+    `<td>${escapeHtml(m.sport)}</td><td>${escapeHtml(m.status)}, tick ${Number(m.tick)}</td>` +
+    `<td>${escapeHtml(formatScore(m.sport, m.score))}</td><td>${Number(m.spectators)}</td></tr>`;
 }
 
 /** A replay; `recording`: its match is still running and writing it. */
 function replayRow(r, recording) {
-  const file = `<a href="/api/replays/${encodeURIComponent(r.id)}" download>${size(r.bytes)}</a>`;
+  const file = `<a href="/api/replays/${encodeURIComponent(r.id)}" download>${size(Number(r.bytes))}</a>`;
   if (r.error) return `<tr><td>${escapeHtml(r.id)}</td><td></td><td>unreadable: ${escapeHtml(r.error)}</td><td></td><td>${file}</td></tr>`;
   const name = escapeHtml(r.name || r.match || r.id);
-  const started = r.started_unix_ms ? ` <span class="muted">${new Date(r.started_unix_ms).toLocaleString()}</span>` : "";
+  const started = r.started_unix_ms
+    ? ` <span class="muted">${escapeHtml(new Date(Number(r.started_unix_ms)).toLocaleString())}</span>`
+    : "";
   return `<tr><td><a href="#/replays/${encodeURIComponent(r.id)}">${name}</a>${started}</td>` +
-    `<td>${r.sport}</td><td>${r.complete ? "complete" : recording ? "recording (match live)" : "cut short"}</td>` +
+    `<td>${escapeHtml(r.sport)}</td><td>${r.complete ? "complete" : recording ? "recording (match live)" : "cut short"}</td>` +
     `<td>${escapeHtml(formatScore(r.sport, r.result))}</td><td>${file}</td></tr>`;
 }
 

@@ -136,9 +136,10 @@ export function showView(kind, id) {
     const parts = [`<span class="state ${state[0]}" data-state="${connection.state}">${state[1]}</span>`];
     if (connection.detail) parts.push(`<span>${escapeHtml(connection.detail)}</span>`);
     if (sample) {
-      parts.push(`<span>tick <b id="hud-tick">${sample.tick}</b></span>`, `<span>${clock(sample.time_s)}</span>`);
+      // Numbers are coerced: a replay's frames are whatever its file holds.
+      parts.push(`<span>tick <b id="hud-tick">${Number(sample.tick)}</b></span>`, `<span>${clock(Number(sample.time_s))}</span>`);
       parts.push(`<span>${escapeHtml(formatScore(hello.match.sport, sample.score))}</span>`);
-      if (sample.score.shot_clock_s !== undefined) parts.push(`<span>shot clock ${sample.score.shot_clock_s.toFixed(1)}</span>`);
+      if (sample.score.shot_clock_s !== undefined) parts.push(`<span>shot clock ${Number(sample.score.shot_clock_s).toFixed(1)}</span>`);
     }
     if (player) parts.push(`<span id="hud-playback">${player.status()}</span>`);
     if (ended) parts.push(`<span>${escapeHtml(ended.reason)}</span>`);

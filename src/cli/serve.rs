@@ -52,6 +52,10 @@ pub struct ServeArgs {
     /// Near it new spectators are refused (503) so requests and admins still get in.
     #[arg(long, value_name = "N")]
     max_connections: Option<usize>,
+    /// How long an ended match stays in the match list, seconds (default 600); at most
+    /// max_matches ended matches are kept, the most recently ended.
+    #[arg(long, value_name = "SECONDS")]
+    ended_match_ttl_s: Option<u64>,
     /// Run as an Agones game server: say Ready to the SDK sidecar once listening, ping
     /// Health every 2 s, and ask for Shutdown (then exit) once every match has ended
     /// or on SIGTERM. Usually with --no-demo, the matches created by an allocator.
@@ -137,6 +141,9 @@ fn settings(args: &ServeArgs) -> anyhow::Result<ServerConfig> {
     }
     if let Some(n) = args.max_connections {
         config.max_connections = Some(n);
+    }
+    if let Some(s) = args.ended_match_ttl_s {
+        config.ended_match_ttl_s = s;
     }
     config.check().map_err(anyhow::Error::msg)?;
     Ok(config)

@@ -3,7 +3,9 @@
 
 use super::auth;
 use super::match_task;
+use super::slot::Slot;
 use super::state::{AppState, Control, MatchEntry};
+use super::sweep;
 use crate::sim::Scenario;
 use axum::body::Bytes;
 use axum::extract::{Path, State};
@@ -162,22 +164,15 @@ pub fn start(
     scenario: Scenario,
     id: Option<String>,
 ) -> Result<(String, Arc<MatchEntry>), ApiError> {
-    let running = app
-        .matches
-        .read()
-        .expect("not poisoned")
-        .values()
-        .filter(|m| !m.ended.load(Relaxed))
-        .count();
-    if running >= app.config.max_matches {
-        return Err(ApiError::new(
+    let slot = Slot::reserve(&app.metrics, app.config.max_matches).ok_or_else(|| {
+        ApiError::new(
             StatusCode::SERVICE_UNAVAILABLE,
             "too_many_matches",
             format!("the server runs at most {} matches", app.config.max_matches),
-        ));
-    }
+        )
+    })?;
     let id = id.unwrap_or_else(|| auth::new_token()[..12].to_string());
-    let entry = match_task::spawn(app, id.clone(), scenario).map_err(|e| {
+    let entry = match_task::spawn(app, id.clone(), scenario, slot).map_err(|e| {
         ApiError::new(
             StatusCode::UNPROCESSABLE_ENTITY,
             "bad_scenario",
@@ -188,6 +183,8 @@ pub fn start(
         .write()
         .expect("not poisoned")
         .insert(id.clone(), entry.clone());
+    // Matches that end fast could otherwise pile up between sweeps.
+    sweep::sweep(app, std::time::Instant::now());
     Ok((id, entry))
 }
 

@@ -20,12 +20,13 @@ pub fn same(given: &str, expected: &str) -> bool {
     diff == 0
 }
 
-/// The bearer token of an `Authorization` header value, if it is one.
+/// The bearer token of an `Authorization` header value, if it is one. The scheme is
+/// matched without regard to case (RFC 7235: `BEARER t` is `Bearer t`), and any run of
+/// spaces or tabs may separate it from the token.
 pub fn bearer(header: &str) -> Option<&str> {
-    header
-        .strip_prefix("Bearer ")
-        .or_else(|| header.strip_prefix("bearer "))
-        .map(str::trim)
+    let (scheme, token) = header.trim().split_once([' ', '\t'])?;
+    let token = token.trim();
+    (scheme.eq_ignore_ascii_case("bearer") && !token.is_empty()).then_some(token)
 }
 
 #[cfg(test)]
@@ -44,5 +45,30 @@ mod tests {
         assert!(!same("", &a));
         assert_eq!(bearer("Bearer abc"), Some("abc"));
         assert_eq!(bearer("Basic abc"), None);
+    }
+
+    #[test]
+    fn the_bearer_scheme_is_read_in_any_case_with_any_spacing() {
+        for header in [
+            "Bearer abc",
+            "bearer abc",
+            "BEARER abc",
+            "bEaReR abc",
+            "Bearer    abc",
+            "Bearer\tabc ",
+            " Bearer abc",
+        ] {
+            assert_eq!(bearer(header), Some("abc"), "{header:?}");
+        }
+        for header in [
+            "Bearer",
+            "Bearer ",
+            "Bearerabc",
+            "Basic abc",
+            "Bearers abc",
+            "",
+        ] {
+            assert_eq!(bearer(header), None, "{header:?}");
+        }
     }
 }

@@ -61,6 +61,9 @@ pub struct ServerConfig {
     pub header_timeout_ms: u64,
     /// Most REST requests in flight at once; more are answered 503 at once.
     pub max_concurrent_requests: usize,
+    /// How long an ended match stays listed, s (at most `max_matches` ended matches
+    /// are kept, the most recently ended).
+    pub ended_match_ttl_s: u64,
     /// Run as an Agones game server, talking to the SDK sidecar on this port (`serve
     /// --agones`; not a file setting: it is where the process runs, not how).
     #[serde(skip)]
@@ -87,6 +90,7 @@ impl Default for ServerConfig {
             max_connections: None,
             header_timeout_ms: 10_000,
             max_concurrent_requests: 256,
+            ended_match_ttl_s: 600,
             agones_sdk_port: None,
         }
     }

@@ -5,11 +5,15 @@
 
 use super::auth::new_token;
 use super::metrics::Metrics;
-use super::state::{AppState, Control, MatchEntry, Published};
+use super::slot::Slot;
+use super::state::{AppState, Control, MatchEntry, Published, ToBot};
 use crate::protocol::{encode, End, ErrorMessage, MatchInfo, Perception};
 use crate::replay::Recorder;
 use crate::session::Session;
 use crate::sim::{Mode, Scenario, ScenarioError, World};
+use futures_util::FutureExt;
+use serde_json::Value;
+use std::panic::AssertUnwindSafe;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -20,17 +24,18 @@ use tokio_tungstenite::tungstenite::Utf8Bytes;
 /// A bot connected to an agent.
 struct Bot {
     conn: u64,
-    out: mpsc::Sender<Utf8Bytes>,
+    out: mpsc::Sender<ToBot>,
     /// The latest tick it has answered.
     answered: Option<u64>,
 }
 
-/// Builds the world a scenario describes and starts its task. Returns the match and the
-/// bot tokens of its bot-controlled agents.
+/// Builds the world a scenario describes and starts its task, which holds `slot` until
+/// it ends. Returns the match and the bot tokens of its bot-controlled agents.
 pub fn spawn(
     app: &Arc<AppState>,
     id: String,
     scenario: Scenario,
+    slot: Slot,
 ) -> Result<Arc<MatchEntry>, ScenarioError> {
     let world = World::new(&scenario, Some(app.caps.clone()))?;
     let agent_ids = world.agent_ids();
@@ -99,13 +104,14 @@ pub fn spawn(
         spectators: AtomicU64::new(0),
         tick: AtomicU64::new(0),
         ended: AtomicBool::new(false),
+        ended_at: std::sync::OnceLock::new(),
         controlled: Mutex::new(controlled),
         replay,
         replay_error: creation_error,
     });
     app.metrics.matches_created.fetch_add(1, Relaxed);
-    app.metrics.matches_running.fetch_add(1, Relaxed);
     let task = Ticker {
+        _slot: slot,
         session,
         recorder,
         entry: entry.clone(),
@@ -123,6 +129,8 @@ pub fn spawn(
 }
 
 struct Ticker {
+    /// The match's place among `max_matches`, given back when the task is dropped.
+    _slot: Slot,
     session: Session,
     recorder: Option<Recorder>,
     entry: Arc<MatchEntry>,
@@ -137,27 +145,46 @@ struct Ticker {
 }
 
 impl Ticker {
+    /// Plays the match, then ends it. A panic while playing (a bug) ends this match
+    /// with reason `error`, told to its spectators and bots and logged, instead of
+    /// leaving it listed as running for ever with its place taken.
     async fn run(mut self) {
+        let played = AssertUnwindSafe(self.play()).catch_unwind().await;
+        let reason = played.unwrap_or_else(|panic| {
+            self.metrics.match_panics.fetch_add(1, Relaxed);
+            tracing::error!(
+                id = %self.entry.info.id,
+                tick = self.entry.tick.load(Relaxed),
+                panic = panic_message(panic.as_ref()),
+                "the match task panicked; ending the match"
+            );
+            "error"
+        });
+        self.end(reason);
+    }
+
+    /// Ticks until the match ends; returns why it ended.
+    async fn play(&mut self) -> &'static str {
         let info = &self.entry.info;
-        let period = Duration::from_secs_f64(1.0 / info.tick_hz);
+        let period = self.entry.scenario.tick_period();
         let perceive_every = info.perception_every_ticks;
-        let deadline = Duration::from_millis(self.entry.scenario.lockstep_deadline_ms);
+        let deadline = self.entry.scenario.lockstep_deadline();
         let mode = self.entry.mode;
         let mut next_tick = Instant::now() + period;
         // Lockstep: when the tick waiting for bots must go anyway.
         let mut waiting_until: Option<Instant> = None;
-        let reason = loop {
+        loop {
             if self.session.world.finished() {
-                break "finished";
+                return "finished";
             }
             if mode == Mode::Fast {
                 // No timer at all (even a zero sleep costs a timer tick): take whatever
                 // the sockets and the API said, then tick.
                 if *self.shutdown.borrow() {
-                    break "shutdown";
+                    return "shutdown";
                 }
                 if let Some(reason) = self.drain_controls() {
-                    break reason;
+                    return reason;
                 }
                 self.tick();
                 if self.session.world.tick().is_multiple_of(256) {
@@ -171,10 +198,10 @@ impl Ticker {
             };
             tokio::select! {
                 biased;
-                _ = self.shutdown.changed() => break "shutdown",
+                _ = self.shutdown.changed() => return "shutdown",
                 message = self.control.recv() => {
                     match message {
-                        None | Some(Control::Stop) => break "deleted",
+                        None | Some(Control::Stop) => return "deleted",
                         Some(m) => self.handle(m),
                     }
                     let all_answered = waiting_until.is_some() && self.all_answered();
@@ -207,8 +234,7 @@ impl Ticker {
                     waiting_until = Some(Instant::now() + deadline);
                 }
             }
-        };
-        self.end(reason);
+        }
     }
 
     /// Handles every control message waiting; the reason to stop, if one says so.
@@ -283,7 +309,7 @@ impl Ticker {
                 perception: &perception,
             });
             // A bot that is not reading misses perceptions rather than holding a tick.
-            let _ = bot.out.try_send(Utf8Bytes::from(message));
+            let _ = bot.out.try_send(ToBot::perception(tick, message));
         }
     }
 
@@ -292,7 +318,7 @@ impl Ticker {
             self.metrics.client_errors.fetch_add(1, Relaxed);
             let _ = bot
                 .out
-                .try_send(Utf8Bytes::from(encode(&ErrorMessage::new(code, message))));
+                .try_send(ToBot::message(encode(&ErrorMessage::new(code, message))));
         }
     }
 
@@ -336,13 +362,8 @@ impl Ticker {
                 }
                 let now = self.session.world.tick();
                 let every = self.entry.info.perception_every_ticks;
-                if tick + 4 * every < now {
-                    let text = format!("command for tick {tick} arrived at tick {now}");
-                    return self.tell(agent, "stale_tick", &text);
-                }
-                if tick > now + every {
-                    let text = format!("command for tick {tick}, but the match is at tick {now}");
-                    return self.tell(agent, "future_tick", &text);
+                if let Err((code, text)) = in_window(tick, now, every) {
+                    return self.tell(agent, code, &text);
                 }
                 // Any command answers its tick, even one the world rejects: lockstep
                 // waits for bots to speak, not to be right.
@@ -358,15 +379,23 @@ impl Ticker {
                 }
             }
             Control::Stop => unreachable!("the tick loop stops on Stop"),
+            #[cfg(test)]
+            Control::Panic => panic!("a test asked this match task to panic"),
         }
     }
 
     fn end(mut self, reason: &str) {
-        if let Some(frame) = self.session.last_frame() {
+        // After a panic the world may be half-stepped: reading it may panic again, so
+        // the last frame and the result are read under a guard, and left out if so.
+        let last = std::panic::catch_unwind(AssertUnwindSafe(|| {
+            let world = &self.session.world;
+            (world.tick(), world.result())
+        }));
+        let (tick, result) = last.unwrap_or_else(|_| (self.entry.tick.load(Relaxed), Value::Null));
+        let frame = std::panic::catch_unwind(AssertUnwindSafe(|| self.session.last_frame()));
+        if let Ok(Some(frame)) = frame {
             self.publish_frame(frame);
         }
-        let world = &self.session.world;
-        let (tick, result) = (world.tick(), world.result());
         let end = Utf8Bytes::from(encode(&End {
             kind: "end",
             match_id: &self.entry.info.id,
@@ -383,10 +412,39 @@ impl Ticker {
             }
         }
         self.entry.ended.store(true, Relaxed);
+        self.entry.ended_at.get_or_init(std::time::Instant::now);
         self.publish.send_modify(|p| p.end = Some(end));
-        self.metrics.matches_running.fetch_sub(1, Relaxed);
         tracing::info!(id = %self.entry.info.id, reason, tick, "match ended");
     }
+}
+
+/// Whether a command for `tick` may act at tick `now` (perceptions every `every`
+/// ticks): not more than four perceptions late, nor for a tick after the next
+/// perception's. The sums saturate: a tick near `u64::MAX` is in the future, never
+/// wrapped round into the past.
+fn in_window(tick: u64, now: u64, every: u64) -> Result<(), (&'static str, String)> {
+    if tick.saturating_add(every.saturating_mul(4)) < now {
+        return Err((
+            "stale_tick",
+            format!("command for tick {tick} arrived at tick {now}"),
+        ));
+    }
+    if tick > now.saturating_add(every) {
+        return Err((
+            "future_tick",
+            format!("command for tick {tick}, but the match is at tick {now}"),
+        ));
+    }
+    Ok(())
+}
+
+/// The text a panic was raised with, if it has one.
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> &str {
+    payload
+        .downcast_ref::<&str>()
+        .copied()
+        .or_else(|| payload.downcast_ref::<String>().map(String::as_str))
+        .unwrap_or("(no message)")
 }
 
 /// `frame` with `"sent_us"` (now, µs since the Unix epoch) as its second field, right
@@ -404,7 +462,93 @@ fn stamped(frame: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::stamped;
+    use super::{in_window, spawn, stamped};
+    use crate::server::slot::Slot;
+    use crate::server::state::{AppState, Control};
+    use crate::server::ServerConfig;
+    use crate::sim::Scenario;
+    use std::sync::atomic::Ordering::Relaxed;
+    use std::sync::Arc;
+
+    #[test]
+    fn ticks_near_the_end_of_u64_are_in_the_future_not_wrapped_into_the_past() {
+        let every = 6;
+        for tick in [u64::MAX, u64::MAX - 1, u64::MAX - 4 * every, u64::MAX / 2] {
+            assert_eq!(
+                in_window(tick, 100, every).unwrap_err().0,
+                "future_tick",
+                "{tick}"
+            );
+        }
+        assert_eq!(in_window(0, 1_000, every).unwrap_err().0, "stale_tick");
+        assert!(in_window(u64::MAX, u64::MAX, every).is_ok());
+        assert!(in_window(100 - 4 * every, 100, every).is_ok());
+        assert!(in_window(100 + every, 100, every).is_ok());
+        assert_eq!(
+            in_window(101 + every, 100, every).unwrap_err().0,
+            "future_tick"
+        );
+        assert_eq!(
+            in_window(99 - 4 * every, 100, every).unwrap_err().0,
+            "stale_tick"
+        );
+    }
+
+    /// A server's shared state with no sockets, whose matches tick on this test's
+    /// runtime; the stop sender keeps matches from seeing a shutdown.
+    fn app() -> (Arc<AppState>, tokio::sync::watch::Sender<bool>) {
+        let (stop, shutdown) = tokio::sync::watch::channel(false);
+        let app = AppState {
+            ticking: tokio::runtime::Handle::current(),
+            config: ServerConfig::default(),
+            admin_token: "admin".into(),
+            caps: crate::motion::fixtures::cmu_capabilities(),
+            metrics: Arc::default(),
+            matches: Default::default(),
+            shutdown,
+            next_conn: Default::default(),
+            replay_dir: None,
+            connections: Arc::new(crate::server::listener::Connections::new(16, 64)),
+        };
+        (Arc::new(app), stop)
+    }
+
+    #[tokio::test]
+    async fn a_panic_ends_the_match_with_error_and_gives_its_place_back() {
+        let (app, _stop) = app();
+        let scenario = Scenario::from_value(serde_json::json!({"sport": "baseball"})).unwrap();
+        let slot = Slot::reserve(&app.metrics, 1).unwrap();
+        let entry = spawn(&app, "m".into(), scenario, slot).unwrap();
+        assert!(
+            Slot::reserve(&app.metrics, 1).is_none(),
+            "the match holds the place"
+        );
+        let mut published = entry.published.clone();
+        entry.control.send(Control::Panic).await.unwrap();
+        let ended = tokio::time::timeout(
+            std::time::Duration::from_secs(10),
+            published.wait_for(|p| p.end.is_some()),
+        )
+        .await
+        .expect("the match ends")
+        .unwrap()
+        .clone();
+        let end: serde_json::Value = serde_json::from_str(ended.end.unwrap().as_str()).unwrap();
+        assert_eq!(end["reason"], "error");
+        assert_eq!(end["type"], "end");
+        assert!(entry.ended.load(Relaxed));
+        assert_eq!(app.metrics.match_panics.load(Relaxed), 1);
+        // The task gives its place back when it is dropped, just after the end.
+        let freed = async {
+            while app.metrics.matches_running.load(Relaxed) != 0 {
+                tokio::time::sleep(std::time::Duration::from_millis(5)).await;
+            }
+        };
+        tokio::time::timeout(std::time::Duration::from_secs(5), freed)
+            .await
+            .expect("the gauge goes back to 0");
+        assert!(Slot::reserve(&app.metrics, 1).is_some());
+    }
 
     #[test]
     fn a_stamp_is_the_second_field_and_keeps_the_frame_valid() {

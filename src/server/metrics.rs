@@ -18,6 +18,8 @@ pub struct Metrics {
     tick_sum_ns: AtomicU64,
     pub matches_created: AtomicU64,
     pub matches_running: AtomicU64,
+    /// Match tasks that panicked (each ended its match with reason `error`).
+    pub match_panics: AtomicU64,
     pub spectators: AtomicU64,
     pub bots: AtomicU64,
     pub frames_sent: AtomicU64,
@@ -85,6 +87,12 @@ impl Metrics {
             "Matches running.",
             "gauge",
             self.matches_running.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_match_panics_total",
+            "Matches ended with reason error: their task panicked (a bug; see the log).",
+            "counter",
+            self.match_panics.load(Relaxed),
         );
         counter(
             "fieldhouse_frames_sent_total",

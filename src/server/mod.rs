@@ -6,6 +6,8 @@
 //! * [`config`]: settings, defaults and the TOML file.
 //! * [`state`]: the shared table of matches and what a match publishes.
 //! * [`match_task`]: the tick loop of one match (realtime, fast, lockstep).
+//! * [`slot`]: a match's place among the `max_matches`, taken atomically.
+//! * [`sweep`]: ended matches leave the table after a while.
 //! * [`ws`]: spectator and bot WebSockets.
 //! * [`replays`]: recorded matches: listed, downloaded, played with controls.
 //! * [`api`]: the REST API, health, readiness and metrics.
@@ -32,7 +34,9 @@ pub mod listener;
 pub mod match_task;
 pub mod metrics;
 pub mod replays;
+pub mod slot;
 pub mod state;
+pub mod sweep;
 pub mod upgrade;
 pub mod web;
 pub mod ws;
@@ -109,6 +113,7 @@ pub async fn serve(
     if config.demo {
         demo::start_all(&app);
     }
+    tokio::spawn(sweep::run(app.clone()));
     let agones = config.agones_sdk_port.map(agones::Sdk::on_port);
     if let Some(sdk) = &agones {
         tokio::spawn(sdk.clone().ready_then_healthy(app.shutdown.clone()));
@@ -190,6 +195,7 @@ pub fn router(app: Arc<AppState>) -> Router {
         .route("/web/{file}", get(web::file))
         .fallback(api::fallback)
         .layer(axum::middleware::map_response(api::json_errors))
+        .layer(axum::middleware::map_response(web::security_headers))
         // Requests are logged by path only: a bot's token may ride in the query string
         // (`?token=T`), and no token may reach the logs.
         .layer(TraceLayer::new_for_http().make_span_with(

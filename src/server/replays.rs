@@ -169,7 +169,7 @@ enum Control {
 /// Reads a viewer's message: only objects are messages (serde would also read one from
 /// an array).
 fn control(text: &str) -> Result<Incoming, String> {
-    let value: Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
+    let value = crate::strict_json::parse(text.as_bytes()).map_err(|e| e.to_string())?;
     if !value.is_object() {
         return Err("a control is a JSON object".into());
     }

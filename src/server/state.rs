@@ -8,7 +8,8 @@ use crate::protocol::MatchInfo;
 use crate::sim::{Action, Mode, Scenario};
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicU64};
-use std::sync::{Arc, Mutex, RwLock};
+use std::sync::{Arc, Mutex, OnceLock, RwLock};
+use std::time::Instant;
 use tokio::sync::{mpsc, watch};
 use tokio_tungstenite::tungstenite::Utf8Bytes;
 
@@ -22,12 +23,35 @@ pub struct Published {
     pub end: Option<Utf8Bytes>,
 }
 
+/// What a match task sends a bot's socket. A perception carries its tick: the bot owes
+/// one answer to it, and that answer is never charged to its rate limit.
+#[derive(Debug)]
+pub struct ToBot {
+    pub text: Utf8Bytes,
+    pub perception: Option<u64>,
+}
+
+impl ToBot {
+    pub fn message(text: String) -> ToBot {
+        ToBot {
+            text: Utf8Bytes::from(text),
+            perception: None,
+        }
+    }
+    pub fn perception(tick: u64, text: String) -> ToBot {
+        ToBot {
+            text: Utf8Bytes::from(text),
+            perception: Some(tick),
+        }
+    }
+}
+
 /// What sockets and the API tell a match task.
 pub enum Control {
     BotJoin {
         agent: usize,
         conn: u64,
-        out: mpsc::Sender<Utf8Bytes>,
+        out: mpsc::Sender<ToBot>,
     },
     BotLeave {
         agent: usize,
@@ -40,6 +64,10 @@ pub enum Control {
         action: Action,
     },
     Stop,
+    /// Makes the match task panic, standing for a bug, to test that a panic ends the
+    /// match cleanly.
+    #[cfg(test)]
+    Panic,
 }
 
 pub struct MatchEntry {
@@ -53,6 +81,9 @@ pub struct MatchEntry {
     pub spectators: AtomicU64,
     pub tick: AtomicU64,
     pub ended: AtomicBool,
+    /// When it ended: an ended match is listed for `ended_match_ttl_s` after this,
+    /// then swept from the table.
+    pub ended_at: OnceLock<Instant>,
     /// Who controls each agent now (`true`: a bot).
     pub controlled: Mutex<Vec<bool>>,
     /// The id of its replay, if the server records matches.

@@ -12,7 +12,7 @@ use super::admission::{Admitted, AdmittedSpectator};
 use super::api::ApiError;
 use super::auth;
 use super::budget::{MessageBudget, Verdict};
-use super::state::{AppState, Control, MatchEntry};
+use super::state::{AppState, Control, MatchEntry, ToBot};
 use super::upgrade::{FrameFlood, Socket, Upgrade};
 use crate::protocol::{decode, encode, ClientMessage, ErrorMessage, Hello, Limits};
 use axum::extract::{Path, Query, State};
@@ -20,7 +20,7 @@ use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 use futures_util::stream::{SplitSink, SplitStream};
 use futures_util::{SinkExt, StreamExt};
-use std::collections::HashMap;
+use std::collections::{HashMap, VecDeque};
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
 use std::time::Duration;
@@ -341,11 +341,37 @@ pub async fn play(
     ws.on_upgrade(&config, move |socket| bot(socket, entry, app, k, agent))
 }
 
+/// The perceptions a bot has been sent and not yet answered, by tick: its answer to
+/// each is owed, so it passes free of the rate limit, once. A lock-step bot answers
+/// every perception at once, and a match may send them faster than any fixed rate;
+/// charging those answers disconnected bots that did exactly what the protocol asks.
+/// Only the newest [`Owed::MAX`] are remembered: an answer to an older one is charged.
+#[derive(Default)]
+struct Owed(VecDeque<u64>);
+
+impl Owed {
+    const MAX: usize = 64;
+
+    fn owe(&mut self, tick: u64) {
+        if self.0.len() == Self::MAX {
+            self.0.pop_front();
+        }
+        self.0.push_back(tick);
+    }
+
+    /// Whether a command for `tick` answers an unanswered perception; it is answered
+    /// from now on.
+    fn settle(&mut self, tick: u64) -> bool {
+        let found = self.0.iter().position(|&t| t == tick);
+        found.map(|k| self.0.remove(k)).is_some()
+    }
+}
+
 async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usize, agent: String) {
     let metrics = app.metrics.clone();
     metrics.bots.fetch_add(1, Relaxed);
     let conn = app.next_conn.fetch_add(1, Relaxed);
-    let (out_tx, mut out_rx) = mpsc::channel::<Utf8Bytes>(16);
+    let (out_tx, mut out_rx) = mpsc::channel::<ToBot>(16);
     let (mut sink, mut stream) = socket.split();
     let shutdown = app.shutdown.clone();
     let mut send = Sender {
@@ -365,9 +391,10 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
             .await
             .is_ok();
     let mut budget = budget(&app);
+    let mut owed = Owed::default();
     let error = |code: &str, message: &str| {
         metrics.client_errors.fetch_add(1, Relaxed);
-        let _ = out_tx.try_send(Utf8Bytes::from(encode(&ErrorMessage::new(code, message))));
+        let _ = out_tx.try_send(ToBot::message(encode(&ErrorMessage::new(code, message))));
     };
     // The match's end comes through what it publishes, so a bot whose queue is full
     // still gets it.
@@ -380,10 +407,13 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
         loop {
             tokio::select! {
                 outgoing = out_rx.recv() => {
-                    let Some(text) = outgoing else { break None };
+                    let Some(ToBot { text, perception }) = outgoing else { break None };
                     let replaced = text.as_str().contains("\"code\":\"replaced\"");
                     if send.text(text).await != Sent::Ok {
                         break None;
+                    }
+                    if let Some(tick) = perception {
+                        owed.owe(tick);
                     }
                     if replaced {
                         break Some((POLICY, "another connection took over this agent"));
@@ -407,37 +437,43 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
                     if let Some(close) = refusal(&read, &metrics) {
                         break Some(close);
                     }
-                    if matches!(read, Read::Closed) {
-                        break None;
-                    }
-                    if matches!(read, Read::Ignore) {
-                        continue;
-                    }
-                    match budget.charge() {
-                        Verdict::Take => {}
-                        Verdict::Refuse { warn } => {
-                            if warn {
-                                error("rate_limited", "too many messages; slow down or be disconnected");
-                            }
-                            continue;
-                        }
-                        Verdict::Flooding => {
-                            metrics.closed_for_rate.fetch_add(1, Relaxed);
-                            break Some((POLICY, "too many messages"));
-                        }
-                    }
-                    match read {
-                        Read::Binary => error("binary", "binary frames are not part of the protocol; send JSON text"),
-                        Read::Text(text) => match decode(&text) {
-                            Ok(ClientMessage::Command { tick, action }) => {
-                                let command = Control::Command { agent: k, conn, tick, action };
-                                if entry.control.send(command).await.is_err() {
-                                    break None;
+                    let message = match read {
+                        Read::Closed => break None,
+                        Read::Ignore => continue,
+                        Read::Text(text) => Some(decode(&text)),
+                        _ => None,
+                    };
+                    // Read first, to see whether it answers a perception: only what is
+                    // not owed pays the rate limit. (Messages are at most
+                    // max_message_bytes, so reading a flood costs little.)
+                    let answers = matches!(
+                        &message,
+                        Some(Ok(ClientMessage::Command { tick, .. })) if owed.settle(*tick)
+                    );
+                    if !answers {
+                        match budget.charge() {
+                            Verdict::Take => {}
+                            Verdict::Refuse { warn } => {
+                                if warn {
+                                    error("rate_limited", "too many messages; slow down or be disconnected");
                                 }
+                                continue;
                             }
-                            Err((code, message)) => error(code, &message),
-                        },
-                        _ => {}
+                            Verdict::Flooding => {
+                                metrics.closed_for_rate.fetch_add(1, Relaxed);
+                                break Some((POLICY, "too many messages"));
+                            }
+                        }
+                    }
+                    match message {
+                        None => error("binary", "binary frames are not part of the protocol; send JSON text"),
+                        Some(Ok(ClientMessage::Command { tick, action })) => {
+                            let command = Control::Command { agent: k, conn, tick, action };
+                            if entry.control.send(command).await.is_err() {
+                                break None;
+                            }
+                        }
+                        Some(Err((code, message))) => error(code, &message),
                     }
                 }
             }

@@ -12,6 +12,8 @@ pub mod scenario;
 
 #[cfg(test)]
 mod hostile_tests;
+#[cfg(test)]
+mod time_limits_tests;
 
 pub use scenario::{
     AgentSpec, LaunchSpec, LimitsSpec, Mode, Options, Scenario, ScenarioError, Sport,

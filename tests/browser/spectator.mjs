@@ -8,7 +8,7 @@
 // stops by itself within DEADLINE_MS whatever happens.
 import { chromium } from "playwright-core";
 import { spawn } from "node:child_process";
-import { mkdirSync, mkdtempSync, rmSync } from "node:fs";
+import { mkdirSync, mkdtempSync, rmSync, writeFileSync } from "node:fs";
 import { createServer } from "node:net";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
@@ -68,7 +68,26 @@ function startServer(port) {
   });
 }
 
+/**
+ * Replay files an attacker could leave in the replay directory: HTML in every string
+ * the lobby shows (issue 19: a `sport` holding an <img onerror> ran script there), and
+ * a file name that is HTML. Each payload sets `window.__xss` if it ever runs.
+ */
+const HOSTILE = {
+  sport: `<img src=x onerror="window.__xss=1">`,
+  name: `<script>window.__xss=2</script>evil`,
+  caught: `<img src=x onerror="window.__xss=3">`,
+  file: `<img src=x onerror=window.__xss=4>`,
+};
+function plantHostileReplays() {
+  const header = { record: "header", format: 1, match: { id: "evil", name: HOSTILE.name, sport: HOSTILE.sport }, started_unix_ms: "<b>when</b>" };
+  const footer = { record: "footer", reason: "finished", result: { caught: HOSTILE.caught, dropped: "<i>1</i>", balls: 2 } };
+  writeFileSync(join(replayDir, "hostile.jsonl"), `${JSON.stringify(header)}\n${JSON.stringify(footer)}\n`);
+  writeFileSync(join(replayDir, `${HOSTILE.file}.jsonl`), "not a header\n");
+}
+
 async function main() {
+  plantHostileReplays();
   const port = await freePort();
   const base = `http://127.0.0.1:${port}`;
   server = await startServer(port);
@@ -80,6 +99,11 @@ async function main() {
   });
   console.log(`browser: chromium ${browser.version()}`);
   const context = await browser.newContext({ viewport: { width: 1280, height: 900 } });
+  // Every Content-Security-Policy violation the page causes, whatever the console says.
+  await context.addInitScript(() => {
+    window.__violations = [];
+    document.addEventListener("securitypolicyviolation", (e) => window.__violations.push(`${e.violatedDirective} ${e.blockedURI}`));
+  });
   page = await context.newPage();
   const errors = [];
   page.on("console", (m) => { if (m.type() === "error") errors.push(`console: ${m.text()}`); });
@@ -100,6 +124,24 @@ async function main() {
   const source = await page.locator("#source").textContent();
   check(/^motion: CMU motion capture, embedded: \d+ clips$/.test(source), `lobby: names the motion source without a path: ${source}`);
   await shot("lobby");
+
+  // Hostile replay files: every string shows as text, nothing runs, and the page's
+  // Content-Security-Policy (which would block the script anyway) is never violated.
+  const hostileRow = page.locator(`#replays tr:has(a[href="#/replays/hostile"])`);
+  await hostileRow.waitFor({ timeout: 10_000 });
+  const hostileText = await hostileRow.textContent();
+  for (const [what, text] of [["sport", HOSTILE.sport], ["name", HOSTILE.name], ["score", HOSTILE.caught]]) {
+    check(hostileText.includes(text), `xss: a replay's ${what} shows as text: ${hostileText}`);
+  }
+  const unreadable = await page.locator("#replays").textContent();
+  check(unreadable.includes(HOSTILE.file), `xss: a replay file named with HTML shows its name as text`);
+  const xss = await page.evaluate(() => window.__xss);
+  check(xss === undefined, `xss: no payload ran (window.__xss is ${xss})`);
+  const lobbyViolations = await page.evaluate(() => window.__violations);
+  check(lobbyViolations.length === 0, `csp: the lobby violates none of its policy:\n${lobbyViolations.join("\n")}`);
+  const csp = response => response.headers()["content-security-policy"] ?? "";
+  const policy = csp(await page.request.get(`${base}/`));
+  check(policy.includes("script-src 'self'") && !policy.includes("unsafe-inline"), `csp: the page is served with a policy without inline script: ${policy}`);
 
   // A live match: the HUD's tick rises and the canvas changes.
   await page.click(`#matches a[href="#/matches/demo-baseball"]`);
@@ -254,6 +296,8 @@ async function main() {
   // Connection failures while the server was down are expected; nothing else may be.
   const unexpected = errors.filter((e) => !/WebSocket connection to .* failed|ERR_CONNECTION_REFUSED/.test(e));
   check(unexpected.length === 0, `console: no errors:\n${unexpected.join("\n")}`);
+  const violations = await page.evaluate(() => window.__violations);
+  check(violations.length === 0, `csp: the page's own code violates none of its policy:\n${violations.join("\n")}`);
 }
 
 /** Polls `look` every 200 ms until it returns something truthy; fails after `ms`. */
