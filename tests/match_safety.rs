@@ -271,6 +271,10 @@ async fn ended_matches_leave_the_list_after_their_time_to_live() {
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
     assert!(seen_ended, "listed as ended for a while before it left");
+    println!(
+        "created, ended and gone from the list in {:?}",
+        started.elapsed()
+    );
     // ttl (1 s) + the sweep period (1 s) + the match's own run, with slack for a busy
     // machine.
     assert!(
@@ -336,6 +340,7 @@ async fn a_lockstep_bot_answering_each_perception_once_is_never_rate_limited() {
     let before = server.tick(&id);
     let (answers, errors, closed) = answer_every_perception(&mut bot, 0, 3).await;
     let ticks = server.tick(&id) - before;
+    println!("{answers} answers, {ticks} ticks in 3 s at a limit of 20 messages a second");
     assert_eq!(
         closed, None,
         "closed after {answers} answers, errors {errors:?}"
@@ -355,4 +360,40 @@ async fn a_lockstep_bot_sending_more_than_its_answers_is_still_limited() {
         errors.contains(&"rate_limited".to_string()) || closed == Some(1008),
         "{answers} answers with an extra message each, errors {errors:?}, close {closed:?}"
     );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn at_most_max_matches_ended_matches_are_kept_the_most_recent() {
+    let server = with_settings(
+        "two-ended",
+        "max_matches = 2\nended_match_ttl_s = 600\n",
+        &[],
+    );
+    let mut ids = Vec::new();
+    for _ in 0..5 {
+        let (id, _) =
+            server.create(json!({"sport": "baseball", "mode": "fast", "duration_s": 0.5}));
+        let started = Instant::now();
+        while server.get(&format!("/api/matches/{id}"))["status"] != "ended" {
+            assert!(
+                started.elapsed() < Duration::from_secs(10),
+                "{id} never ended"
+            );
+            tokio::time::sleep(Duration::from_millis(50)).await;
+        }
+        ids.push(id);
+    }
+    // The sweep runs at least once a second, and at every creation.
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    let listed: Vec<String> = server.get("/api/matches")["matches"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["id"].as_str().unwrap().to_string())
+        .collect();
+    let mut newest = ids[3..].to_vec();
+    newest.sort();
+    let mut kept = listed.clone();
+    kept.sort();
+    assert_eq!(kept, newest, "listed {listed:?} of {ids:?}");
 }
