@@ -4,7 +4,7 @@
 use super::basketball::CapabilityArgs;
 use anyhow::{bail, Context};
 use clap::Args;
-use fieldhouse::replay::Recorder;
+use fieldhouse::replay::{self, Recorder};
 use fieldhouse::session::Session;
 use fieldhouse::sim::{Scenario, Sport, World};
 use fieldhouse::words::{figure, plural};
@@ -103,7 +103,8 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("{stem}.jsonl")));
-    let mut recorder = Recorder::create(&path, &info, &scenario, &motion).with_context(|| {
+    let header = replay::header(&info, &scenario, &motion);
+    let mut recorder = Recorder::create(&path, &header).with_context(|| {
         format!(
             "cannot create {} (an existing file is never overwritten)",
             path.display()

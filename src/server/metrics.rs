@@ -28,6 +28,7 @@ pub struct Metrics {
     pub closed_for_rate: AtomicU64,
     pub slow_clients_dropped: AtomicU64,
     pub replay_errors: AtomicU64,
+    pub replays_deleted: AtomicU64,
     pub refused_origin: AtomicU64,
     pub refused_per_ip: AtomicU64,
 }
@@ -117,8 +118,14 @@ impl Metrics {
             self.replay_errors.load(Relaxed),
         );
         counter(
+            "fieldhouse_replays_deleted_total",
+            "Replay files deleted by retention (replay_retention_bytes, replay_retention_days).",
+            "counter",
+            self.replays_deleted.load(Relaxed),
+        );
+        counter(
             "fieldhouse_slow_clients_dropped_total",
-            "Spectators dropped for lagging too long.",
+            "Spectators and replay viewers dropped for lagging too long.",
             "counter",
             self.slow_clients_dropped.load(Relaxed),
         );

@@ -8,6 +8,10 @@
 //! * [`match_task`]: the tick loop of one match (realtime, fast, lockstep).
 //! * [`ws`]: spectator and bot WebSockets.
 //! * [`replays`]: recorded matches: listed, downloaded, played with controls.
+//! * [`replay_dir`]: which files in the replay directory are replays, opened safely.
+//! * [`range`]: HTTP byte ranges, for resuming a download.
+//! * [`recording`]: writing a match's replay on a thread of its own, bounded.
+//! * [`retention`]: deleting the oldest replays past the configured size and age.
 //! * [`api`]: the REST API, health, readiness and metrics.
 //! * [`auth`]: tokens, compared in constant time.
 //! * [`admission`]: who may open a WebSocket: origin policy, connections per address.
@@ -24,7 +28,11 @@ pub mod config;
 pub mod demo;
 pub mod match_task;
 pub mod metrics;
+pub mod range;
+pub mod recording;
+pub mod replay_dir;
 pub mod replays;
+pub mod retention;
 pub mod state;
 pub mod web;
 pub mod ws;
@@ -74,11 +82,14 @@ pub async fn serve(
         shutdown: stop_rx,
         next_conn: AtomicU64::new(0),
         replay_dir: config.replay_dir.clone(),
+        replays: replay_dir::Replays::default(),
+        replay_written: tokio::sync::Notify::new(),
         connections: admission::Connections::default(),
     });
     if config.demo {
         demo::start_all(&app);
     }
+    tokio::spawn(retention::run(app.clone()));
     let agones = config.agones_sdk_port.map(agones::Sdk::on_port);
     if let Some(sdk) = &agones {
         tokio::spawn(sdk.clone().ready_then_healthy(app.shutdown.clone()));
