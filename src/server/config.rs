@@ -190,9 +190,9 @@ impl ServerConfig {
             self.max_connections_per_ip as u64,
             1,
         )?;
-        // Smaller than a few frames, a file would be mostly header and footer.
-        at_least("replay_max_match_bytes", self.replay_max_match_bytes, 64 * 1024)?;
-        at_least("replay_segment_bytes", self.replay_segment_bytes, 64 * 1024)?;
+        // Smaller than a few dozen frames, a file would be mostly header and footer.
+        at_least("replay_max_match_bytes", self.replay_max_match_bytes, 16 * 1024)?;
+        at_least("replay_segment_bytes", self.replay_segment_bytes, 16 * 1024)?;
         if let Some(bad) = self.allowed_origins.iter().find(|o| !valid_origin(o)) {
             return Err(format!(
                 "allowed_origins: \"{bad}\" is not an origin; write scheme://host[:port] (https://example.com) or *"
