@@ -252,18 +252,20 @@ impl<F: Files> Writer<F> {
                 }
             }
             Limit::Total(most) if self.written + bytes > most => {
+                // Said before the footer is written: whoever sees the footer can also
+                // see why the recording stopped.
+                let why = format!(
+                    "the replay reached replay_max_match_bytes ({most} bytes) at tick {}; \
+                     recording stopped there",
+                    self.last_tick
+                );
+                let _ = self.stopped.set(why);
                 let r = self.recorder.take().expect("checked above");
-                let finished = r.finish(self.last_tick, "size_limit", &Value::Null);
+                if let Err(e) = r.finish(self.last_tick, "size_limit", &Value::Null) {
+                    tracing::warn!(error = %e, "cannot end a replay at its size limit");
+                }
                 self.files.closed(self.segment);
-                let why = match finished {
-                    Ok(()) => format!(
-                        "the replay reached replay_max_match_bytes ({most} bytes) at tick {}; \
-                         recording stopped there",
-                        self.last_tick
-                    ),
-                    Err(e) => e.to_string(),
-                };
-                return self.stop(why);
+                return;
             }
             _ => {}
         }
