@@ -436,10 +436,17 @@ async fn a_fast_match_stops_recording_at_its_size_limit_and_its_replay_verifies(
     };
     assert_eq!(replay["reason"], "size_limit");
     assert!(replay["bytes"].as_u64().unwrap() <= 200_000 + 4096, "{replay}");
-    // The match hears why at its next frame.
-    let shown = server.get(&format!("/api/matches/{id}"));
-    let why = shown["replay_error"].as_str().unwrap_or_default();
-    assert!(why.contains("replay_max_match_bytes"), "{shown}");
+    // The match hears why at its next frame, and shows it.
+    let deadline = Instant::now() + Duration::from_secs(5);
+    loop {
+        let shown = server.get(&format!("/api/matches/{id}"));
+        let why = shown["replay_error"].as_str().unwrap_or_default();
+        if why.contains("replay_max_match_bytes") {
+            break;
+        }
+        assert!(Instant::now() < deadline, "{shown}");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
     let file = dir.join(format!("{}.jsonl", replay["id"].as_str().unwrap()));
     let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
         .args(["replay", "verify"])
