@@ -31,7 +31,14 @@ fn memory_kb(server: &Server, field: &str) -> u64 {
     let status = std::fs::read_to_string(format!("/proc/{}/status", server.child.id())).unwrap();
     status
         .lines()
-        .find_map(|l| l.strip_prefix(field)?.trim().strip_suffix("kB")?.trim().parse().ok())
+        .find_map(|l| {
+            l.strip_prefix(field)?
+                .trim()
+                .strip_suffix("kB")?
+                .trim()
+                .parse()
+                .ok()
+        })
         .unwrap()
 }
 
@@ -56,7 +63,12 @@ fn write_replay(path: &Path, frames: u64, frame_bytes: usize, complete: bool) {
     writeln!(out, "{header}").unwrap();
     let pad = "x".repeat(frame_bytes.saturating_sub(60));
     for k in 0..frames {
-        writeln!(out, r#"{{"type":"frame","match":"made","tick":{},"pad":"{pad}"}}"#, 2 * k).unwrap();
+        writeln!(
+            out,
+            r#"{{"type":"frame","match":"made","tick":{},"pad":"{pad}"}}"#,
+            2 * k
+        )
+        .unwrap();
     }
     if complete {
         let footer = json!({"record": "footer", "tick": 2 * frames.saturating_sub(1), "frames": frames, "hash": "-", "reason": "finished", "result": {}});
@@ -66,7 +78,10 @@ fn write_replay(path: &Path, frames: u64, frame_bytes: usize, complete: bool) {
 }
 
 fn status_of(server: &Server, path: &str) -> u16 {
-    match ureq::get(&server.http(path)).timeout(Duration::from_secs(5)).call() {
+    match ureq::get(&server.http(path))
+        .timeout(Duration::from_secs(5))
+        .call()
+    {
         Ok(r) => r.status(),
         Err(ureq::Error::Status(code, _)) => code,
         Err(e) => panic!("{path}: {e}"),
@@ -81,7 +96,11 @@ fn listed(server: &Server) -> Vec<Value> {
         .expect("the listing answers")
         .into_json::<Value>()
         .unwrap();
-    assert!(started.elapsed() < Duration::from_secs(3), "listing took {:?}", started.elapsed());
+    assert!(
+        started.elapsed() < Duration::from_secs(3),
+        "listing took {:?}",
+        started.elapsed()
+    );
     list["replays"].as_array().unwrap().clone()
 }
 
@@ -98,37 +117,55 @@ async fn links_devices_and_fifos_in_the_replay_directory_are_neither_served_nor_
     let secret = outside.join("secret.txt");
     std::fs::write(&secret, "ADMIN_TOKEN=do-not-serve-me\n").unwrap();
     write_replay(&dir.join("real.jsonl"), 10, 200, true);
-    let link = |target: &Path, name: &str| std::os::unix::fs::symlink(target, dir.join(name)).unwrap();
+    let link =
+        |target: &Path, name: &str| std::os::unix::fs::symlink(target, dir.join(name)).unwrap();
     link(&secret, "secret.jsonl");
     link(Path::new("/etc/passwd"), "passwd.jsonl");
     link(Path::new("/proc/self/environ"), "environ.jsonl");
     link(Path::new("/dev/zero"), "zero.jsonl");
     link(&dir.join("real.jsonl"), "alias.jsonl");
     std::fs::hard_link(&secret, dir.join("hard.jsonl")).unwrap();
-    let made = Command::new("mkfifo").arg(dir.join("fifo.jsonl")).status().unwrap();
+    let made = Command::new("mkfifo")
+        .arg(dir.join("fifo.jsonl"))
+        .status()
+        .unwrap();
     assert!(made.success());
     let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
     // The lobby polls the listing: it answers at once, with the real replay only.
     for _ in 0..3 {
         assert_eq!(ids(&listed(&server)), ["real"]);
     }
-    for name in ["secret", "passwd", "environ", "zero", "alias", "hard", "fifo"] {
-        assert_eq!(status_of(&server, &format!("/api/replays/{name}")), 404, "{name}");
-        let refused = tokio_tungstenite::connect_async(server.ws(&format!("/ws/replays/{name}"))).await;
+    for name in [
+        "secret", "passwd", "environ", "zero", "alias", "hard", "fifo",
+    ] {
+        assert_eq!(
+            status_of(&server, &format!("/api/replays/{name}")),
+            404,
+            "{name}"
+        );
+        let refused =
+            tokio_tungstenite::connect_async(server.ws(&format!("/ws/replays/{name}"))).await;
         match refused {
-            Err(tokio_tungstenite::tungstenite::Error::Http(r)) => assert_eq!(r.status(), 404, "{name}"),
+            Err(tokio_tungstenite::tungstenite::Error::Http(r)) => {
+                assert_eq!(r.status(), 404, "{name}")
+            }
             other => panic!("{name}: {:?}", other.map(|_| "opened")),
         }
     }
     // Nothing was read through a link, and the server is still up.
-    let body = ureq::get(&server.http("/api/replays/secret")).call().map_or_else(
-        |e| match e {
-            ureq::Error::Status(_, r) => r.into_string().unwrap(),
-            e => panic!("{e}"),
-        },
-        |r| r.into_string().unwrap(),
+    let body = ureq::get(&server.http("/api/replays/secret"))
+        .call()
+        .map_or_else(
+            |e| match e {
+                ureq::Error::Status(_, r) => r.into_string().unwrap(),
+                e => panic!("{e}"),
+            },
+            |r| r.into_string().unwrap(),
+        );
+    assert!(
+        !body.contains("do-not-serve-me") && !body.contains(dir.to_str().unwrap()),
+        "{body}"
     );
-    assert!(!body.contains("do-not-serve-me") && !body.contains(dir.to_str().unwrap()), "{body}");
     assert_eq!(status_of(&server, "/healthz"), 200);
     assert_eq!(status_of(&server, "/api/replays/real"), 200);
 }
@@ -156,7 +193,10 @@ async fn a_header_line_without_end_is_listed_as_unreadable_quickly_and_in_little
         other => panic!("{:?}", other.map(|_| "opened")),
     }
     let grew = memory_kb(&server, "VmHWM:").saturating_sub(before);
-    assert!(grew < 10_000, "the peak memory grew {grew} kB reading a 50 MB line");
+    assert!(
+        grew < 10_000,
+        "the peak memory grew {grew} kB reading a 50 MB line"
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -181,7 +221,10 @@ async fn downloads_serve_exactly_the_range_asked() {
     let whole = get(None);
     assert_eq!(whole.status(), 200);
     assert_eq!(whole.header("accept-ranges"), Some("bytes"));
-    assert_eq!(whole.header("content-length"), Some(len.to_string().as_str()));
+    assert_eq!(
+        whole.header("content-length"),
+        Some(len.to_string().as_str())
+    );
     let mut body = Vec::new();
     whole.into_reader().read_to_end(&mut body).unwrap();
     assert!(body == bytes, "the whole file, byte for byte");
@@ -190,7 +233,11 @@ async fn downloads_serve_exactly_the_range_asked() {
         ("bytes=1000-", 1000, len - 1),
         ("bytes=-500", len - 500, len - 1),
         ("bytes=123456-123457", 123_456, 123_457),
-        (&format!("bytes={}-{}", len - 10, len + 1000) as &str, len - 10, len - 1),
+        (
+            &format!("bytes={}-{}", len - 10, len + 1000) as &str,
+            len - 10,
+            len - 1,
+        ),
     ] {
         let part = get(Some(range));
         assert_eq!(part.status(), 206, "{range}");
@@ -205,13 +252,20 @@ async fn downloads_serve_exactly_the_range_asked() {
     }
     let past = get(Some(&format!("bytes={len}-")));
     assert_eq!(past.status(), 416);
-    assert_eq!(past.header("content-range").map(str::to_string), Some(format!("bytes */{len}")));
+    assert_eq!(
+        past.header("content-range").map(str::to_string),
+        Some(format!("bytes */{len}"))
+    );
 }
 
 /// Starts a download and reads only its first bytes: a client on a slow link.
 fn slow_download(server: &Server, id: &str) -> std::net::TcpStream {
     let mut socket = std::net::TcpStream::connect(&server.addr).unwrap();
-    write!(socket, "GET /api/replays/{id} HTTP/1.1\r\nHost: test\r\n\r\n").unwrap();
+    write!(
+        socket,
+        "GET /api/replays/{id} HTTP/1.1\r\nHost: test\r\n\r\n"
+    )
+    .unwrap();
     let mut first = [0; 4096];
     socket.read_exact(&mut first).unwrap();
     assert!(first.starts_with(b"HTTP/1.1 200"));
@@ -239,7 +293,10 @@ async fn viewers_and_slow_downloads_of_a_big_replay_cost_a_fraction_of_its_size(
     tokio::time::sleep(Duration::from_millis(500)).await;
     let grew = memory_kb(&server, "VmRSS:").saturating_sub(before);
     eprintln!("8 viewers and 8 slow downloads of a {size_kb} kB replay: resident memory grew {grew} kB (from {before} kB)");
-    assert!(grew < size_kb / 4, "memory grew {grew} kB for a {size_kb} kB replay");
+    assert!(
+        grew < size_kb / 4,
+        "memory grew {grew} kB for a {size_kb} kB replay"
+    );
     // A seek flood is answered from the index, not by scanning the frames.
     let cpu = cpu_ticks(&server);
     let (mut sink, mut stream) = viewers.swap_remove(0).split();
@@ -254,7 +311,9 @@ async fn viewers_and_slow_downloads_of_a_big_replay_cost_a_fraction_of_its_size(
                 .expect("answers keep coming")
                 .expect("the socket is open")
                 .unwrap();
-            let Message::Text(text) = message else { continue };
+            let Message::Text(text) = message else {
+                continue;
+            };
             let f: Value = serde_json::from_str(&text).unwrap();
             if f["tick"].as_u64() == Some(tick(answered)) {
                 answered += 1;
@@ -263,7 +322,9 @@ async fn viewers_and_slow_downloads_of_a_big_replay_cost_a_fraction_of_its_size(
     });
     for k in 0..seeks {
         let seek = json!({"type": "control", "action": "seek", "tick": tick(k)});
-        sink.send(Message::Text(seek.to_string().into())).await.unwrap();
+        sink.send(Message::Text(seek.to_string().into()))
+            .await
+            .unwrap();
     }
     answers.await.unwrap();
     let used = cpu_ticks(&server) - cpu;
@@ -280,7 +341,12 @@ fn server_with(name: &str, settings: &str, flags: &[&str]) -> (Server, PathBuf) 
     std::fs::write(&config, settings).unwrap();
     let replays = dir.join("replays");
     std::fs::create_dir_all(&replays).unwrap();
-    let mut args = vec!["--config", config.to_str().unwrap(), "--replay-dir", replays.to_str().unwrap()];
+    let mut args = vec![
+        "--config",
+        config.to_str().unwrap(),
+        "--replay-dir",
+        replays.to_str().unwrap(),
+    ];
     args.extend(flags);
     (Server::start(&args), replays)
 }
@@ -293,11 +359,17 @@ async fn a_replay_viewer_that_stops_reading_is_closed_within_the_send_timeout() 
     let mut viewer = connect(&server.ws("/ws/replays/wide")).await;
     next(&mut viewer).await;
     let speed = json!({"type": "control", "action": "speed", "speed": 8.0});
-    viewer.send(Message::Text(speed.to_string().into())).await.unwrap();
+    viewer
+        .send(Message::Text(speed.to_string().into()))
+        .await
+        .unwrap();
     // And now it reads no more.
     let deadline = Instant::now() + Duration::from_secs(8);
     while metric(&server, "fieldhouse_slow_clients_dropped_total") < 1.0 {
-        assert!(Instant::now() < deadline, "a viewer that stopped reading was kept");
+        assert!(
+            Instant::now() < deadline,
+            "a viewer that stopped reading was kept"
+        );
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
     let log = server.log.lock().unwrap().join("\n");
@@ -307,7 +379,12 @@ async fn a_replay_viewer_that_stops_reading_is_closed_within_the_send_timeout() 
 /// Sets a file's modification time to `days_ago` days ago.
 fn age(path: &Path, days_ago: u64) {
     let then = std::time::SystemTime::now() - Duration::from_secs(days_ago * 86_400);
-    std::fs::File::options().write(true).open(path).unwrap().set_modified(then).unwrap();
+    std::fs::File::options()
+        .write(true)
+        .open(path)
+        .unwrap()
+        .set_modified(then)
+        .unwrap();
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -370,7 +447,10 @@ async fn retention_deletes_the_oldest_replays_and_never_the_one_being_written() 
     let log = server.log.lock().unwrap().join("\n");
     assert!(log.contains("deleted an old replay"), "{log}");
     // The recording goes on.
-    let recording = present().into_iter().find(|n| n.starts_with(&live)).unwrap();
+    let recording = present()
+        .into_iter()
+        .find(|n| n.starts_with(&live))
+        .unwrap();
     let size = |name: &str| std::fs::metadata(dir.join(name)).map_or(0, |m| m.len());
     let before = size(&recording);
     tokio::time::sleep(Duration::from_millis(500)).await;
@@ -398,20 +478,30 @@ async fn a_never_ending_match_rotates_its_replay_into_segments_that_verify() {
         assert!(Instant::now() < deadline, "{segments:?}");
         tokio::time::sleep(Duration::from_millis(200)).await;
     };
-    let first_ticks: Vec<u64> = segments.iter().map(|s| s["first_tick"].as_u64().unwrap()).collect();
+    let first_ticks: Vec<u64> = segments
+        .iter()
+        .map(|s| s["first_tick"].as_u64().unwrap())
+        .collect();
     assert_eq!(first_ticks[0], 0);
     assert!(first_ticks[1] > 0, "{segments:?}");
     assert_eq!(segments[1]["segment"], 1);
     assert_eq!(segments[0]["reason"], "rotated");
     for segment in &segments[..2] {
-        assert!(segment["bytes"].as_u64().unwrap() < 16_384 + 8_192, "{segment}");
+        assert!(
+            segment["bytes"].as_u64().unwrap() < 16_384 + 8_192,
+            "{segment}"
+        );
         let file = dir.join(format!("{}.jsonl", segment["id"].as_str().unwrap()));
         let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
             .args(["replay", "verify"])
             .arg(&file)
             .output()
             .unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
     }
     // A later segment plays from its own first tick.
     let second = segments[1]["id"].as_str().unwrap();
@@ -424,18 +514,28 @@ async fn a_never_ending_match_rotates_its_replay_into_segments_that_verify() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_fast_match_stops_recording_at_its_size_limit_and_its_replay_verifies() {
-    let (server, dir) = server_with("size-limit", "replay_max_match_bytes = 200000\n", &["--no-demo"]);
+    let (server, dir) = server_with(
+        "size-limit",
+        "replay_max_match_bytes = 200000\n",
+        &["--no-demo"],
+    );
     let (id, _) = server.create(json!({"sport": "cricket", "mode": "fast", "duration_s": 600.0}));
     let deadline = Instant::now() + Duration::from_secs(30);
     let replay = loop {
-        if let Some(r) = listed(&server).into_iter().find(|r| r["match"] == id.as_str() && r["complete"] == true) {
+        if let Some(r) = listed(&server)
+            .into_iter()
+            .find(|r| r["match"] == id.as_str() && r["complete"] == true)
+        {
             break r;
         }
         assert!(Instant::now() < deadline);
         tokio::time::sleep(Duration::from_millis(100)).await;
     };
     assert_eq!(replay["reason"], "size_limit");
-    assert!(replay["bytes"].as_u64().unwrap() <= 200_000 + 4096, "{replay}");
+    assert!(
+        replay["bytes"].as_u64().unwrap() <= 200_000 + 4096,
+        "{replay}"
+    );
     // The match hears why at its next frame, and shows it.
     let deadline = Instant::now() + Duration::from_secs(5);
     loop {
@@ -453,7 +553,11 @@ async fn a_fast_match_stops_recording_at_its_size_limit_and_its_replay_verifies(
         .arg(&file)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -466,7 +570,8 @@ async fn other_matches_keep_ticking_while_a_large_replay_closes() {
     let (live, _) = server.create(json!({"sport": "baseball", "mode": "realtime"}));
     let mut spectator = connect(&server.ws(&format!("/ws/matches/{live}"))).await;
     next(&mut spectator).await;
-    let (fast, _) = server.create(json!({"sport": "cricket", "mode": "fast", "duration_s": 100000.0}));
+    let (fast, _) =
+        server.create(json!({"sport": "cricket", "mode": "fast", "duration_s": 100000.0}));
     // Let it write for a while, then delete it: its replay is flushed, synced and
     // closed while the real-time match must go on at 30 frames a second.
     tokio::time::sleep(Duration::from_secs(3)).await;
@@ -497,5 +602,8 @@ async fn other_matches_keep_ticking_while_a_large_replay_closes() {
         bytes / 1_000_000,
         deleting.elapsed()
     );
-    assert!(worst < Duration::from_millis(300), "live frames stopped for {worst:?}");
+    assert!(
+        worst < Duration::from_millis(300),
+        "live frames stopped for {worst:?}"
+    );
 }

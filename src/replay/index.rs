@@ -61,7 +61,11 @@ fn next_line(reader: &mut impl BufRead, buf: &mut Vec<u8>, max: usize) -> io::Re
     loop {
         let available = reader.fill_buf()?;
         if available.is_empty() {
-            return Ok(if buf.is_empty() { Line::End } else { Line::Torn });
+            return Ok(if buf.is_empty() {
+                Line::End
+            } else {
+                Line::Torn
+            });
         }
         let (taken, done) = match available.iter().position(|&b| b == b'\n') {
             Some(k) => (k, true),
@@ -241,7 +245,10 @@ mod tests {
     }
 
     fn frame(tick: u64) -> String {
-        format!(r#"{{"type":"frame","tick":{tick},"x":"{}"}}"#, "y".repeat(tick as usize % 7))
+        format!(
+            r#"{{"type":"frame","tick":{tick},"x":"{}"}}"#,
+            "y".repeat(tick as usize % 7)
+        )
     }
 
     #[test]

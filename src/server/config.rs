@@ -191,7 +191,11 @@ impl ServerConfig {
             1,
         )?;
         // Smaller than a few dozen frames, a file would be mostly header and footer.
-        at_least("replay_max_match_bytes", self.replay_max_match_bytes, 16 * 1024)?;
+        at_least(
+            "replay_max_match_bytes",
+            self.replay_max_match_bytes,
+            16 * 1024,
+        )?;
         at_least("replay_segment_bytes", self.replay_segment_bytes, 16 * 1024)?;
         if let Some(bad) = self.allowed_origins.iter().find(|o| !valid_origin(o)) {
             return Err(format!(

@@ -4,11 +4,11 @@
 //! the match's replay file if the server keeps replays.
 
 use super::auth::new_token;
+use super::config::ServerConfig;
 use super::metrics::Metrics;
+use super::recording::{InDir, Limit, Recording};
 use super::state::{AppState, Control, MatchEntry, Published};
 use crate::protocol::{encode, End, ErrorMessage, MatchInfo, Perception};
-use super::config::ServerConfig;
-use super::recording::{InDir, Limit, Recording};
 use crate::replay;
 use crate::session::Session;
 use crate::sim::{Mode, Scenario, ScenarioError, World};

@@ -73,7 +73,14 @@ mod tests {
         assert_eq!(w("bytes=-0"), Wanted::Unsatisfiable);
         assert_eq!(wanted(Some("bytes=0-"), 0), Wanted::Unsatisfiable);
         // What is not one valid range of bytes is ignored: the whole file.
-        for ignored in ["bytes=5-2", "items=0-9", "bytes=0-1,5-6", "bytes=a-b", "bytes=-", "bytes=+1-2"] {
+        for ignored in [
+            "bytes=5-2",
+            "items=0-9",
+            "bytes=0-1,5-6",
+            "bytes=a-b",
+            "bytes=-",
+            "bytes=+1-2",
+        ] {
             assert_eq!(w(ignored), Wanted::Whole, "{ignored}");
         }
     }

@@ -99,7 +99,10 @@ impl Recording {
             }
         };
         let (records, inbox) = mpsc::channel();
-        let (queued, stopped) = (Arc::<AtomicU64>::default(), Arc::<OnceLock<String>>::default());
+        let (queued, stopped) = (
+            Arc::<AtomicU64>::default(),
+            Arc::<OnceLock<String>>::default(),
+        );
         let writer = Writer {
             files,
             header,
@@ -279,7 +282,10 @@ impl<F: Files> Writer<F> {
 
     /// Ends this segment's file and starts the next, whose first frame is at `tick`.
     fn rotate(&mut self, tick: u64) -> io::Result<()> {
-        let r = self.recorder.take().expect("rotating a recording that runs");
+        let r = self
+            .recorder
+            .take()
+            .expect("rotating a recording that runs");
         let finished = r.finish(self.last_tick, "rotated", &Value::Null);
         self.files.closed(self.segment);
         finished?;
@@ -338,14 +344,26 @@ impl Files for InDir {
             .write(true)
             .create_new(true)
             .open(&path)
-            .map_err(|e| io::Error::new(e.kind(), format!("cannot create {}: {e}", path.display())))?;
-        self.app.replays.writing.lock().expect("not poisoned").insert(path);
+            .map_err(|e| {
+                io::Error::new(e.kind(), format!("cannot create {}: {e}", path.display()))
+            })?;
+        self.app
+            .replays
+            .writing
+            .lock()
+            .expect("not poisoned")
+            .insert(path);
         Ok((io::BufWriter::new(file), id))
     }
 
     fn closed(&mut self, segment: u32) {
         let path = replay_dir::path_of(&self.dir, &self.id(segment));
-        self.app.replays.writing.lock().expect("not poisoned").remove(&path);
+        self.app
+            .replays
+            .writing
+            .lock()
+            .expect("not poisoned")
+            .remove(&path);
         self.app.replay_written.notify_one();
     }
 }
@@ -385,11 +403,14 @@ mod tests {
         }
     }
 
+    /// A segment's bytes, and whether it is still being written.
+    type Segment = (Arc<Mutex<Vec<u8>>>, bool);
+
     /// Segments in memory; remembers which are still open.
     #[derive(Clone)]
     struct Memory {
         delay: Duration,
-        segments: Arc<Mutex<Vec<(Arc<Mutex<Vec<u8>>>, bool)>>>,
+        segments: Arc<Mutex<Vec<Segment>>>,
     }
 
     impl Memory {
@@ -490,7 +511,10 @@ mod tests {
         for tick in 0..40 {
             recording.frame(tick, frame(tick)).unwrap();
         }
-        recording.finish(39, "shutdown", &Value::Null).await.unwrap();
+        recording
+            .finish(39, "shutdown", &Value::Null)
+            .await
+            .unwrap();
         let segments = files.lines();
         assert!(segments.len() >= 4, "{} segments", segments.len());
         let mut next_tick = 0;
@@ -514,8 +538,7 @@ mod tests {
     #[tokio::test]
     async fn a_recording_stops_at_its_size_limit_with_a_footer_that_says_so() {
         let files = Memory::new(Duration::ZERO);
-        let (recording, _) =
-            Recording::start(files.clone(), header(), Limit::Total(1000)).unwrap();
+        let (recording, _) = Recording::start(files.clone(), header(), Limit::Total(1000)).unwrap();
         let mut refused = None;
         for tick in 0..100 {
             if let Err(why) = recording.frame(tick, frame(tick)) {
@@ -530,7 +553,10 @@ mod tests {
         let footer = lines.last().unwrap();
         assert_eq!(footer["reason"], "size_limit");
         assert_eq!(footer["frames"].as_u64().unwrap() as usize, lines.len() - 2);
-        assert!(recording.finish(99, "finished", &Value::Null).await.is_err());
+        assert!(recording
+            .finish(99, "finished", &Value::Null)
+            .await
+            .is_err());
     }
 
     #[tokio::test]

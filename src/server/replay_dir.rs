@@ -128,9 +128,8 @@ impl Replays {
     /// blocking thread) if none has it.
     pub async fn index(&self, file: &File, meta: &Metadata) -> Result<Arc<Index>, String> {
         let version = Version::of(meta);
-        let cached = |indexes: &HashMap<Version, Weak<Index>>| {
-            indexes.get(&version).and_then(Weak::upgrade)
-        };
+        let cached =
+            |indexes: &HashMap<Version, Weak<Index>>| indexes.get(&version).and_then(Weak::upgrade);
         if let Some(index) = cached(&self.indexes.lock().expect("not poisoned")) {
             return Ok(index);
         }

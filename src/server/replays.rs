@@ -142,7 +142,13 @@ pub async fn download(
     let mut file = tokio::fs::File::from_std(file);
     file.seek(std::io::SeekFrom::Start(start))
         .await
-        .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "unreadable", e.to_string()))?;
+        .map_err(|e| {
+            ApiError::new(
+                StatusCode::INTERNAL_SERVER_ERROR,
+                "unreadable",
+                e.to_string(),
+            )
+        })?;
     let body = Body::from_stream(ReaderStream::with_capacity(
         file.take(end - start),
         DOWNLOAD_BUFFER_BYTES,
@@ -150,7 +156,10 @@ pub async fn download(
     let mut response = Response::builder()
         .status(status)
         .header(CONTENT_TYPE, "application/x-ndjson")
-        .header(CONTENT_DISPOSITION, format!("attachment; filename=\"{id}.jsonl\""))
+        .header(
+            CONTENT_DISPOSITION,
+            format!("attachment; filename=\"{id}.jsonl\""),
+        )
         .header(ACCEPT_RANGES, "bytes")
         .header(CONTENT_LENGTH, end - start);
     if status == StatusCode::PARTIAL_CONTENT {
@@ -205,9 +214,8 @@ impl Viewed {
     /// Frames `from..`, a batch of them, read on a blocking thread.
     async fn batch(&self, from: usize) -> Result<VecDeque<String>, String> {
         let (index, file) = (self.index.clone(), self.file.clone());
-        let read = tokio::task::spawn_blocking(move || {
-            index.read(&file, from, BATCH_FRAMES, BATCH_BYTES)
-        });
+        let read =
+            tokio::task::spawn_blocking(move || index.read(&file, from, BATCH_FRAMES, BATCH_BYTES));
         match read.await {
             Ok(Ok(frames)) => Ok(frames.into()),
             Ok(Err(e)) => Err(e.to_string()),
