@@ -11,11 +11,28 @@
 //!    after tick `t`;
 //! 3. a footer: `{"record": "footer", "tick": t, "frames": n, "hash": "<sha256>",
 //!    "reason": "finished", "result": {...}}`, the hash over every frame line and its
-//!    newline. Wall-clock time appears only in the header and is not hashed.
+//!    newline. Wall-clock time appears only in the header and is not hashed. Besides
+//!    the match's own end reasons (`finished`, `deleted`, `shutdown`), a footer may say
+//!    `size_limit` (the server stopped recording at its per-match limit; the match went
+//!    on, `result` is null) or `rotated` (see segments; `result` is null).
 //!
-//! Records are appended and flushed frame by frame, so a process killed mid-match
-//! leaves complete records behind and at most one torn line, which reading detects and
-//! ignores; a finished file is flushed and synced before the match is reported ended.
+//! **Segments.** A recording that may never end (the server's real-time matches
+//! without bot slots) is rotated into files of bounded size. Every file is a complete
+//! replay by itself; a later one's header adds `"segment": n` (1, 2, ...),
+//! `"first_tick": t` (the tick of its first frame) and `"previous": "<replay id>"`
+//! (the file before it). A file without these fields is segment 0 from tick 0, so files
+//! written before segments existed read as they did (the format stays 1: fields were
+//! added, none changed meaning). Checking a later segment re-simulates from tick 0 and
+//! compares frames from its first tick on, which is exact for matches without bots
+//! (the only ones rotated: a bot log would be split across files).
+//!
+//! Records are appended and flushed as they go (the server's writer flushes after each
+//! batch it takes from its queue), so a process killed mid-match leaves complete
+//! records behind and at most one torn line, which reading detects and ignores; a
+//! finished file is flushed and synced before the match is reported ended.
+//!
+//! **Reading.** [`read`] and [`parse`] take a whole file, for tools; the server reads
+//! through an [`Index`] and [`peek`], which bound every line they read.
 
 mod index;
 mod verify;

@@ -89,6 +89,7 @@ pub async fn list(State(app): State<Arc<AppState>>) -> Result<Json<Value>, ApiEr
         replay_dir::scan(&dir)
             .into_iter()
             .map(|found| {
+                let recording = app.replays.is_writing(&found.path);
                 let (id, bytes) = (found.id, found.meta.len());
                 match replay::peek(&found.file) {
                     Ok((header, footer)) => json!({
@@ -101,10 +102,11 @@ pub async fn list(State(app): State<Arc<AppState>>) -> Result<Json<Value>, ApiEr
                         "segment": header["segment"].as_u64().unwrap_or(0),
                         "first_tick": replay::first_tick(&header),
                         "complete": footer.is_some(),
+                        "recording": recording,
                         "reason": footer.as_ref().map(|f| f["reason"].clone()),
                         "result": footer.as_ref().map(|f| f["result"].clone()),
                     }),
-                    Err(e) => json!({"id": id, "bytes": bytes, "error": e}),
+                    Err(e) => json!({"id": id, "bytes": bytes, "recording": recording, "error": e}),
                 }
             })
             .collect::<Vec<_>>()
