@@ -562,11 +562,9 @@ async fn a_fast_match_stops_recording_at_its_size_limit_and_its_replay_verifies(
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn other_matches_keep_ticking_while_a_large_replay_closes() {
-    let (server, _dir) = server_with(
-        "closing-big-replay",
-        "replay_max_match_bytes = 2000000000\n",
-        &["--no-demo"],
-    );
+    // A fast match writes about 60 MB a second here: under the default 1 GiB limit.
+    let dir = empty_dir("closing-big-replay");
+    let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
     let (live, _) = server.create(json!({"sport": "baseball", "mode": "realtime"}));
     let mut spectator = connect(&server.ws(&format!("/ws/matches/{live}"))).await;
     next(&mut spectator).await;
@@ -574,7 +572,7 @@ async fn other_matches_keep_ticking_while_a_large_replay_closes() {
         server.create(json!({"sport": "cricket", "mode": "fast", "duration_s": 100000.0}));
     // Let it write for a while, then delete it: its replay is flushed, synced and
     // closed while the real-time match must go on at 30 frames a second.
-    tokio::time::sleep(Duration::from_secs(3)).await;
+    tokio::time::sleep(Duration::from_secs(6)).await;
     let gaps = tokio::spawn(async move {
         let (mut last, mut worst) = (Instant::now(), Duration::ZERO);
         let until = Instant::now() + Duration::from_secs(3);
@@ -592,6 +590,9 @@ async fn other_matches_keep_ticking_while_a_large_replay_closes() {
         .call()
         .unwrap();
     let worst = gaps.await.unwrap();
+    // Frames come every 33 ms, and the fast match takes turns on the same thread, so
+    // gaps of some 40 ms are normal; syncing the replay on that thread stopped them for
+    // 200–300 ms (2.9 s for a 2 GB replay).
     let bytes: u64 = listed(&server)
         .iter()
         .filter(|r| r["match"] == fast.as_str())
@@ -603,7 +604,9 @@ async fn other_matches_keep_ticking_while_a_large_replay_closes() {
         deleting.elapsed()
     );
     assert!(
-        worst < Duration::from_millis(300),
+        worst < Duration::from_millis(150),
         "live frames stopped for {worst:?}"
     );
+    drop(server);
+    let _ = std::fs::remove_dir_all(&dir);
 }
