@@ -47,12 +47,15 @@ use std::collections::BTreeMap;
 use std::future::Future;
 use std::sync::atomic::AtomicU64;
 use std::sync::{Arc, RwLock};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 use tokio::net::TcpListener;
 use tokio::sync::watch;
 use tower_http::limit::RequestBodyLimitLayer;
 use tower_http::timeout::TimeoutLayer;
 use tower_http::trace::TraceLayer;
+
+/// How long a stopping server waits for its replays to be written, synced and closed.
+const REPLAYS_FINISH_WITHIN: Duration = Duration::from_secs(10);
 
 /// Runs the server on `listener` until `shutdown` completes; then every match ends,
 /// every socket is closed with 1001, and it returns.
@@ -117,7 +120,14 @@ pub async fn serve(
         .with_graceful_shutdown(graceful)
         .await;
     // The matches have ended by now: the graceful shutdown gave them 200 ms after the
-    // stop, and a match ends at the next tick.
+    // stop, and a match ends at the next tick. Their replays are finished on writer
+    // threads, which the process must not end under: wait for them (a while at most).
+    let writing = Instant::now();
+    while !app.replays.writing.lock().expect("not poisoned").is_empty()
+        && writing.elapsed() < REPLAYS_FINISH_WITHIN
+    {
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
     ticking.shutdown_background();
     if let Some(sdk) = &agones {
         sdk.shutdown().await;
