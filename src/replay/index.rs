@@ -11,9 +11,11 @@ use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read, Seek, SeekFrom};
 use std::os::unix::fs::FileExt;
 
-/// The longest record read after the header: frames are kilobytes, so a longer line is
-/// not one, and the readable prefix ends there rather than memory running out.
-pub const MAX_LINE_BYTES: usize = 16 * 1024 * 1024;
+/// The longest record read after the header: frames are kilobytes (the longest line of
+/// a basketball replay with cost maps was 1.4 kB), so a longer line is not one, and the
+/// readable prefix ends there rather than memory running out. It also bounds what one
+/// viewer holds of a file at a time.
+pub const MAX_LINE_BYTES: usize = 1024 * 1024;
 
 /// A frame's place in its file.
 #[derive(Debug, Clone, Copy, PartialEq)]

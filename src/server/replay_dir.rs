@@ -121,6 +121,9 @@ pub struct Replays {
     /// One scan at a time: a crowd of viewers arriving at once, at one file or many,
     /// costs one core at most.
     scanning: tokio::sync::Mutex<()>,
+    /// What the listing said of each file, by id, while the file stays as it was: the
+    /// lobby asks every 2 s, and a file unchanged since is not read again.
+    listed: Mutex<HashMap<String, (Version, serde_json::Value)>>,
 }
 
 impl Replays {
@@ -147,6 +150,41 @@ impl Replays {
         indexes.retain(|_, weak| weak.strong_count() > 0);
         indexes.insert(version, Arc::downgrade(&index));
         Ok(index)
+    }
+
+    /// The listing's entry for `found`: remembered while the file is unchanged, else
+    /// made by `describe` (which reads the file). Entries of files gone are forgotten
+    /// by [`Replays::forget_all_but`].
+    pub fn listing(
+        &self,
+        found: &Found,
+        describe: impl FnOnce() -> serde_json::Value,
+    ) -> serde_json::Value {
+        let version = Version::of(&found.meta);
+        let known = self
+            .listed
+            .lock()
+            .expect("not poisoned")
+            .get(&found.id)
+            .cloned();
+        match known {
+            Some((v, entry)) if v == version => entry,
+            _ => {
+                let entry = describe();
+                let remembered = (version, entry.clone());
+                self.listed
+                    .lock()
+                    .expect("not poisoned")
+                    .insert(found.id.clone(), remembered);
+                entry
+            }
+        }
+    }
+
+    /// Forgets the listing's entries of files not in `ids`.
+    pub fn forget_all_but(&self, ids: &HashSet<&str>) {
+        let mut listed = self.listed.lock().expect("not poisoned");
+        listed.retain(|id, _| ids.contains(id.as_str()));
     }
 
     /// Whether `path` is being written.

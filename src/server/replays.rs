@@ -86,34 +86,44 @@ pub async fn list(State(app): State<Arc<AppState>>) -> Result<Json<Value>, ApiEr
         return Ok(Json(json!({"replays": []})));
     };
     let replays = tokio::task::spawn_blocking(move || {
-        replay_dir::scan(&dir)
-            .into_iter()
+        let found = replay_dir::scan(&dir);
+        let listed = found
+            .iter()
             .map(|found| {
-                let recording = app.replays.is_writing(&found.path);
-                let (id, bytes) = (found.id, found.meta.len());
-                match replay::peek(&found.file) {
-                    Ok((header, footer)) => json!({
-                        "id": id,
-                        "bytes": bytes,
-                        "match": header["match"]["id"],
-                        "name": header["match"]["name"],
-                        "sport": header["match"]["sport"],
-                        "started_unix_ms": header["started_unix_ms"],
-                        "segment": header["segment"].as_u64().unwrap_or(0),
-                        "first_tick": replay::first_tick(&header),
-                        "complete": footer.is_some(),
-                        "recording": recording,
-                        "reason": footer.as_ref().map(|f| f["reason"].clone()),
-                        "result": footer.as_ref().map(|f| f["result"].clone()),
-                    }),
-                    Err(e) => json!({"id": id, "bytes": bytes, "recording": recording, "error": e}),
-                }
+                // Whether it is being written changes without the file changing.
+                let mut entry = app.replays.listing(found, || describe(found));
+                entry["recording"] = app.replays.is_writing(&found.path).into();
+                entry
             })
-            .collect::<Vec<_>>()
+            .collect::<Vec<_>>();
+        app.replays
+            .forget_all_but(&found.iter().map(|f| f.id.as_str()).collect());
+        listed
     })
     .await
     .unwrap_or_default();
     Ok(Json(json!({"replays": replays})))
+}
+
+/// A replay's entry in the listing, from its header and footer (read with bounds).
+fn describe(found: &replay_dir::Found) -> Value {
+    let (id, bytes) = (&found.id, found.meta.len());
+    match replay::peek(&found.file) {
+        Ok((header, footer)) => json!({
+            "id": id,
+            "bytes": bytes,
+            "match": header["match"]["id"],
+            "name": header["match"]["name"],
+            "sport": header["match"]["sport"],
+            "started_unix_ms": header["started_unix_ms"],
+            "segment": header["segment"].as_u64().unwrap_or(0),
+            "first_tick": replay::first_tick(&header),
+            "complete": footer.is_some(),
+            "reason": footer.as_ref().map(|f| f["reason"].clone()),
+            "result": footer.as_ref().map(|f| f["result"].clone()),
+        }),
+        Err(e) => json!({"id": id, "bytes": bytes, "error": e}),
+    }
 }
 
 /// Streams replay `id` from the handle opened, a buffer at a time, so a download costs
