@@ -42,6 +42,14 @@ fn memory_kb(server: &Server, field: &str) -> u64 {
         .unwrap()
 }
 
+/// Bytes the server has read, from files and sockets (`rchar` in `/proc/PID/io`).
+fn bytes_read(server: &Server) -> u64 {
+    let io = std::fs::read_to_string(format!("/proc/{}/io", server.child.id())).unwrap();
+    io.lines()
+        .find_map(|l| l.strip_prefix("rchar:")?.trim().parse().ok())
+        .unwrap()
+}
+
 /// CPU time the server has used, in clock ticks (user + system).
 fn cpu_ticks(server: &Server) -> u64 {
     let stat = std::fs::read_to_string(format!("/proc/{}/stat", server.child.id())).unwrap();
@@ -186,6 +194,13 @@ async fn a_header_line_without_end_is_listed_as_unreadable_quickly_and_in_little
     let replays = listed(&server);
     assert_eq!(ids(&replays), ["endless"]);
     assert!(replays[0]["error"].is_string(), "{replays:?}");
+    // The lobby asks every 2 s: a file unchanged since is not read again.
+    let read_before = bytes_read(&server);
+    for _ in 0..5 {
+        assert_eq!(listed(&server), replays);
+    }
+    let read = bytes_read(&server) - read_before;
+    assert!(read < 100_000, "5 more listings read {read} bytes");
     // Viewing it is refused before the upgrade, also without reading it all.
     let refused = tokio_tungstenite::connect_async(server.ws("/ws/replays/endless")).await;
     match refused {
