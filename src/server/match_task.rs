@@ -1,7 +1,8 @@
 //! A match is a task that owns one [`World`] (in a [`Session`]) and ticks it: on the
 //! wall clock (`realtime`), as fast as possible (`fast`), or in lock-step with its bots
-//! (`lockstep`). Each frame is encoded once, published for the sockets, and appended to
-//! the match's replay file if the server keeps replays.
+//! (`lockstep`). Each frame is encoded once, published for the sockets, and handed to
+//! the match's replay (written on a thread of its own: see [`super::recording`]) if the
+//! server keeps replays.
 
 use super::auth::new_token;
 use super::config::ServerConfig;
