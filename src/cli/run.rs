@@ -112,7 +112,10 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     })?;
     let mut session = Session::new(world, id, scenario.tick_hz, scenario.frame_hz);
     let write_error = |e: std::io::Error| anyhow::anyhow!("writing {}: {e}", path.display());
-    recorder.frame(&session.frame()).map_err(write_error)?;
+    recorder
+        .frame(&session.frame())
+        .and_then(|()| recorder.flush())
+        .map_err(write_error)?;
     let end_tick = scenario
         .duration_s
         .map(|d| (d * scenario.tick_hz).round() as u64);
@@ -137,7 +140,10 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let mut frames = 1u64;
     while !session.world.finished() {
         if let Some(frame) = session.step() {
-            recorder.frame(&frame).map_err(write_error)?;
+            recorder
+                .frame(&frame)
+                .and_then(|()| recorder.flush())
+                .map_err(write_error)?;
             frames += 1;
         }
         if let Some(b) = &bar {
@@ -147,7 +153,10 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
         }
     }
     if let Some(frame) = session.last_frame() {
-        recorder.frame(&frame).map_err(write_error)?;
+        recorder
+            .frame(&frame)
+            .and_then(|()| recorder.flush())
+            .map_err(write_error)?;
         frames += 1;
     }
     if let Some(b) = bar {
