@@ -74,7 +74,8 @@ pub fn spawn(
             dir: dir.to_path_buf(),
             stem: format!("{id}-{}", unix_seconds()),
         };
-        let made = Recording::start(files, header, recording_limit(&app.config, &scenario))
+        let limit = recording_limit(&app.config, &scenario);
+        let made = Recording::start(files, header, limit, app.replays.queued.clone())
             .map_err(|e| e.to_string())
             .and_then(|(r, id)| r.frame(0, first.clone()).map(|()| (r, id)));
         made.map_err(|e| {

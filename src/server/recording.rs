@@ -25,9 +25,45 @@ use std::sync::mpsc;
 use std::sync::{Arc, OnceLock};
 use tokio::sync::oneshot;
 
-/// The most a recording may have waiting to be written: a minute of the fastest match
+/// The most a recording may have waiting to be written: a second of the fastest match
 /// is less, so a queue this long means the disk cannot keep up.
 pub const MAX_QUEUED_BYTES: u64 = 64 * 1024 * 1024;
+
+/// The most all recordings together may have waiting: many matches on a stalled disk
+/// must not each hold [`MAX_QUEUED_BYTES`].
+pub const MAX_QUEUED_ALL_BYTES: u64 = 256 * 1024 * 1024;
+
+/// Bytes handed over and not yet written: this recording's, and all recordings'.
+#[derive(Clone, Default)]
+struct Queued {
+    mine: Arc<AtomicU64>,
+    all: Arc<AtomicU64>,
+}
+
+impl Queued {
+    /// Counts `bytes` in, unless that takes either count past its bound: then says why.
+    fn add(&self, bytes: u64) -> Result<(), String> {
+        let mine = self.mine.fetch_add(bytes, Relaxed) + bytes;
+        let all = self.all.fetch_add(bytes, Relaxed) + bytes;
+        if mine <= MAX_QUEUED_BYTES && all <= MAX_QUEUED_ALL_BYTES {
+            return Ok(());
+        }
+        self.sub(bytes);
+        Err(format!(
+            "the disk is not keeping up: {} MiB of replay waited to be written",
+            if mine > MAX_QUEUED_BYTES {
+                MAX_QUEUED_BYTES >> 20
+            } else {
+                MAX_QUEUED_ALL_BYTES >> 20
+            }
+        ))
+    }
+
+    fn sub(&self, bytes: u64) {
+        self.mine.fetch_sub(bytes, Relaxed);
+        self.all.fetch_sub(bytes, Relaxed);
+    }
+}
 
 /// How much one recording may write.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -76,7 +112,7 @@ impl Record {
 /// the writer write what it was given, flush, and stop (the file has no footer).
 pub struct Recording {
     records: mpsc::Sender<Record>,
-    queued: Arc<AtomicU64>,
+    queued: Queued,
     /// Why the writer stopped, once it has.
     stopped: Arc<OnceLock<String>>,
 }
@@ -84,11 +120,13 @@ pub struct Recording {
 impl Recording {
     /// Creates the first file and writes `header` (here, so a directory that cannot be
     /// written is known at once), then starts the writer thread. Returns the recording
-    /// and the first file's replay id.
+    /// and the first file's replay id. `all_queued` counts what every recording has
+    /// waiting.
     pub fn start<F: Files>(
         mut files: F,
         header: Value,
         limit: Limit,
+        all_queued: Arc<AtomicU64>,
     ) -> io::Result<(Recording, String)> {
         let (out, id) = files.create(0)?;
         let recorder = match Recorder::new(out, &header) {
@@ -99,10 +137,11 @@ impl Recording {
             }
         };
         let (records, inbox) = mpsc::channel();
-        let (queued, stopped) = (
-            Arc::<AtomicU64>::default(),
-            Arc::<OnceLock<String>>::default(),
-        );
+        let queued = Queued {
+            mine: Arc::default(),
+            all: all_queued,
+        };
+        let stopped = Arc::<OnceLock<String>>::default();
         let writer = Writer {
             files,
             header,
@@ -142,13 +181,11 @@ impl Recording {
             return Err(why.clone());
         }
         let bytes = record.bytes();
-        if self.queued.fetch_add(bytes, Relaxed) + bytes > MAX_QUEUED_BYTES {
-            return Err(format!(
-                "the disk is not keeping up: {} MiB of replay waited to be written",
-                MAX_QUEUED_BYTES >> 20
-            ));
-        }
-        self.records.send(record).map_err(|_| self.gone())
+        self.queued.add(bytes)?;
+        self.records.send(record).map_err(|_| {
+            self.queued.sub(bytes);
+            self.gone()
+        })
     }
 
     fn gone(&self) -> String {
@@ -188,7 +225,7 @@ struct Writer<F: Files> {
     written: u64,
     /// The tick of the last frame written.
     last_tick: u64,
-    queued: Arc<AtomicU64>,
+    queued: Queued,
     stopped: Arc<OnceLock<String>>,
 }
 
@@ -215,7 +252,7 @@ impl<F: Files> Writer<F> {
     }
 
     fn take(&mut self, record: Record) {
-        self.queued.fetch_sub(record.bytes(), Relaxed);
+        self.queued.sub(record.bytes());
         match record {
             Record::Frame { tick, text } => self.frame(tick, &text),
             Record::Log(line) => {
@@ -370,7 +407,7 @@ impl Files for InDir {
 
 #[cfg(test)]
 mod tests {
-    use super::{Files, Limit, Recording, MAX_QUEUED_BYTES};
+    use super::{Files, Limit, Recording, MAX_QUEUED_ALL_BYTES, MAX_QUEUED_BYTES};
     use crate::replay::Durable;
     use axum::extract::ws::Utf8Bytes;
     use serde_json::{json, Value};
@@ -378,7 +415,9 @@ mod tests {
     use std::sync::{Arc, Mutex};
     use std::time::{Duration, Instant};
 
-    /// A disk as slow as the test wants: every write and the sync take `delay`.
+    /// A disk as slow as the test wants: every write after the header's, and the sync,
+    /// take `delay` (the header is written by `start`, which the API calls, not the tick
+    /// thread).
     #[derive(Clone)]
     struct Slow {
         delay: Duration,
@@ -387,7 +426,9 @@ mod tests {
 
     impl Write for Slow {
         fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-            std::thread::sleep(self.delay);
+            if self.bytes.lock().unwrap().contains(&b'\n') {
+                std::thread::sleep(self.delay);
+            }
             self.bytes.lock().unwrap().extend_from_slice(buf);
             Ok(buf.len())
         }
@@ -469,8 +510,13 @@ mod tests {
     async fn a_slow_disk_never_holds_up_the_caller_and_finishing_waits_without_blocking() {
         // 2 ms a write, 40 ms the sync: 200 frames take the writer about half a second.
         let files = Memory::new(Duration::from_millis(2));
-        let (recording, id) =
-            Recording::start(files.clone(), header(), Limit::Total(1 << 30)).unwrap();
+        let (recording, id) = Recording::start(
+            files.clone(),
+            header(),
+            Limit::Total(1 << 30),
+            Arc::default(),
+        )
+        .unwrap();
         assert_eq!(id, "m-0");
         let started = Instant::now();
         for tick in 0..200 {
@@ -506,8 +552,13 @@ mod tests {
     #[tokio::test]
     async fn a_never_ending_recording_rotates_into_segments_that_name_their_start() {
         let files = Memory::new(Duration::ZERO);
-        let (recording, _) =
-            Recording::start(files.clone(), header(), Limit::Segments(1000)).unwrap();
+        let (recording, _) = Recording::start(
+            files.clone(),
+            header(),
+            Limit::Segments(1000),
+            Arc::default(),
+        )
+        .unwrap();
         for tick in 0..40 {
             recording.frame(tick, frame(tick)).unwrap();
         }
@@ -538,7 +589,8 @@ mod tests {
     #[tokio::test]
     async fn a_recording_stops_at_its_size_limit_with_a_footer_that_says_so() {
         let files = Memory::new(Duration::ZERO);
-        let (recording, _) = Recording::start(files.clone(), header(), Limit::Total(1000)).unwrap();
+        let (recording, _) =
+            Recording::start(files.clone(), header(), Limit::Total(1000), Arc::default()).unwrap();
         let mut refused = None;
         for tick in 0..100 {
             if let Err(why) = recording.frame(tick, frame(tick)) {
@@ -563,13 +615,33 @@ mod tests {
     async fn a_disk_that_cannot_keep_up_stops_the_recording_at_the_queue_bound() {
         // A write takes a second: nothing is written while the queue fills.
         let files = Memory::new(Duration::from_secs(1));
-        let (recording, _) =
-            Recording::start(files.clone(), header(), Limit::Total(u64::MAX)).unwrap();
+        let all = Arc::default();
+        let start = || {
+            Recording::start(
+                files.clone(),
+                header(),
+                Limit::Total(u64::MAX),
+                Arc::clone(&all),
+            )
+            .unwrap()
+            .0
+        };
         // One shared megabyte, handed over again and again: the queue counts bytes.
         let big = Utf8Bytes::from("x".repeat(1 << 20));
-        let refused = (0..(MAX_QUEUED_BYTES >> 20) + 2)
-            .find_map(|tick| recording.frame(tick, big.clone()).err())
-            .expect("the queue is bounded");
-        assert!(refused.contains("not keeping up"), "{refused}");
+        let fill = |recording: &Recording, most: u64| {
+            (0..most).find_map(|tick| recording.frame(tick, big.clone()).err())
+        };
+        let refused = fill(&start(), (MAX_QUEUED_BYTES >> 20) + 2).expect("bounded");
+        assert!(refused.contains("not keeping up: 64 MiB"), "{refused}");
+        // Recordings that each stay under their bound are bounded together too.
+        let recordings: Vec<Recording> = (0..5).map(|_| start()).collect();
+        let refused = recordings
+            .iter()
+            .find_map(|r| fill(r, (MAX_QUEUED_BYTES >> 20) - 4))
+            .expect("bounded together");
+        assert!(
+            refused.contains(&format!("{} MiB", MAX_QUEUED_ALL_BYTES >> 20)),
+            "{refused}"
+        );
     }
 }

@@ -115,6 +115,8 @@ impl Version {
 pub struct Replays {
     /// The files being written, which retention never deletes.
     pub writing: Mutex<HashSet<PathBuf>>,
+    /// Bytes handed to every recording's writer and not yet written.
+    pub queued: Arc<std::sync::atomic::AtomicU64>,
     /// Indexes with viewers: each file is scanned once however many watch it, and its
     /// index goes when its last viewer does.
     indexes: Mutex<HashMap<Version, Weak<Index>>>,
