@@ -5,8 +5,9 @@
 //! sync without blocking a thread: the replay is complete on disk before `end` is
 //! published, and meanwhile the other matches tick.
 //!
-//! Bounds: what waits to be written is at most [`MAX_QUEUED_BYTES`] (past that the disk
-//! is not keeping up and the recording stops, as when the disk is full); one recording
+//! Bounds: what waits to be written is at most [`MAX_QUEUED_BYTES`] per recording and
+//! [`MAX_QUEUED_ALL_BYTES`] for all (past that the disk is not keeping up and the
+//! recording stops, as when the disk is full); one recording
 //! writes at most `replay_max_match_bytes`, then ends its file with the footer reason
 //! `size_limit`; a recording that may never end (a real-time match without bot slots,
 //! like the demos) instead rotates into files of `replay_segment_bytes`, each ended with
