@@ -19,7 +19,7 @@ export function showLobby() {
         : `<tr><td colspan="5" class="muted">no matches</td></tr>`;
       const recording = new Set(live.matches.filter((m) => m.status === "running").map((m) => m.replay));
       $("replays").innerHTML = recorded.replays.length
-        ? recorded.replays.map((r) => replayRow(r, recording.has(r.id))).join("")
+        ? recorded.replays.map((r) => replayRow(r, r.recording || recording.has(r.id))).join("")
         : `<tr><td colspan="5" class="muted">no replays (start the server with --replay-dir DIR to record matches)</td></tr>`;
       if (live.matches[0]) $("source").textContent = `motion: ${live.matches[0].motion_source}`;
       $("lobby-state").textContent = `updated ${new Date().toLocaleTimeString()}`;
@@ -52,13 +52,23 @@ function matchRow(m) {
 function replayRow(r, recording) {
   const file = `<a href="/api/replays/${encodeURIComponent(r.id)}" download>${size(Number(r.bytes))}</a>`;
   if (r.error) return `<tr><td>${escapeHtml(r.id)}</td><td></td><td>unreadable: ${escapeHtml(r.error)}</td><td></td><td>${file}</td></tr>`;
-  const name = escapeHtml(r.name || r.match || r.id);
+  // A never-ending match's replay comes in parts (segments), each a file.
+  const part = r.segment ? ` (part ${Number(r.segment) + 1}, from tick ${Number(r.first_tick)})` : "";
+  const name = escapeHtml((r.name || r.match || r.id) + part);
   const started = r.started_unix_ms
     ? ` <span class="muted">${escapeHtml(new Date(Number(r.started_unix_ms)).toLocaleString())}</span>`
     : "";
   return `<tr><td><a href="#/replays/${encodeURIComponent(r.id)}">${name}</a>${started}</td>` +
-    `<td>${escapeHtml(r.sport)}</td><td>${r.complete ? "complete" : recording ? "recording (match live)" : "cut short"}</td>` +
+    `<td>${escapeHtml(r.sport)}</td><td>${replayState(r, recording)}</td>` +
     `<td>${escapeHtml(formatScore(r.sport, r.result))}</td><td>${file}</td></tr>`;
+}
+
+function replayState(r, recording) {
+  if (recording) return "recording (match live)";
+  if (!r.complete) return "cut short";
+  if (r.reason === "rotated") return "complete (continues in the next part)";
+  if (r.reason === "size_limit") return "stopped at the size limit";
+  return "complete";
 }
 
 function size(bytes) {

@@ -117,10 +117,13 @@ fn info(replay: &Replay, as_json: bool, out: &mut impl Write) -> anyhow::Result<
         "name": replay.scenario.name,
         "seed": replay.scenario.seed,
         "motion": replay.header["motion"],
+        "segment": replay.header["segment"].as_u64().unwrap_or(0),
+        "first_tick": replay.first_tick(),
+        "previous": replay.header["previous"],
         "frames": replay.frames.len(),
         "commands": replay.log.len(),
         "ticks": last_tick,
-        "duration_s": last_tick as f64 / tick_hz,
+        "duration_s": last_tick.saturating_sub(replay.first_tick()) as f64 / tick_hz,
         "complete": replay.complete(),
         "problem": replay.problem,
         "reason": footer["reason"],
@@ -150,6 +153,15 @@ fn info(replay: &Replay, as_json: bool, out: &mut impl Write) -> anyhow::Result<
         plural(last_tick, "tick"),
         figure(tick_hz, 2)
     )?;
+    if replay.first_tick() > 0 {
+        writeln!(
+            out,
+            "  part {} of a rotated recording, from tick {} (the part before: {})",
+            doc["segment"].as_u64().unwrap_or(0) + 1,
+            replay.first_tick(),
+            doc["previous"].as_str().unwrap_or("unknown")
+        )?;
+    }
     match (&replay.footer, &replay.problem) {
         (Some(f), None) => writeln!(
             out,

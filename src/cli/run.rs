@@ -4,7 +4,7 @@
 use super::basketball::CapabilityArgs;
 use anyhow::{bail, Context};
 use clap::Args;
-use fieldhouse::replay::Recorder;
+use fieldhouse::replay::{self, Recorder};
 use fieldhouse::session::Session;
 use fieldhouse::sim::{Scenario, Sport, World};
 use fieldhouse::words::{figure, plural};
@@ -103,7 +103,8 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("{stem}.jsonl")));
-    let mut recorder = Recorder::create(&path, &info, &scenario, &motion).with_context(|| {
+    let header = replay::header(&info, &scenario, &motion);
+    let mut recorder = Recorder::create(&path, &header).with_context(|| {
         format!(
             "cannot create {} (an existing file is never overwritten)",
             path.display()
@@ -111,7 +112,10 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     })?;
     let mut session = Session::new(world, id, scenario.tick_hz, scenario.frame_hz);
     let write_error = |e: std::io::Error| anyhow::anyhow!("writing {}: {e}", path.display());
-    recorder.frame(&session.frame()).map_err(write_error)?;
+    recorder
+        .frame(&session.frame())
+        .and_then(|()| recorder.flush())
+        .map_err(write_error)?;
     let end_tick = scenario
         .duration_s
         .map(|d| (d * scenario.tick_hz).round() as u64);
@@ -136,7 +140,10 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let mut frames = 1u64;
     while !session.world.finished() {
         if let Some(frame) = session.step() {
-            recorder.frame(&frame).map_err(write_error)?;
+            recorder
+                .frame(&frame)
+                .and_then(|()| recorder.flush())
+                .map_err(write_error)?;
             frames += 1;
         }
         if let Some(b) = &bar {
@@ -146,7 +153,10 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
         }
     }
     if let Some(frame) = session.last_frame() {
-        recorder.frame(&frame).map_err(write_error)?;
+        recorder
+            .frame(&frame)
+            .and_then(|()| recorder.flush())
+            .map_err(write_error)?;
         frames += 1;
     }
     if let Some(b) = bar {

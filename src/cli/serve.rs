@@ -28,6 +28,13 @@ pub struct ServeArgs {
     /// `GET /api/replays` lists them and `/ws/replays/{id}` plays them.
     #[arg(long, value_name = "DIR", env = "FIELDHOUSE_REPLAY_DIR")]
     replay_dir: Option<PathBuf>,
+    /// Keep the replays in --replay-dir under this many bytes in all, deleting the
+    /// oldest first (never one being written). Default 2 GiB (2147483648).
+    #[arg(long, value_name = "BYTES")]
+    replay_retention_bytes: Option<u64>,
+    /// Delete replays older than this many days (0: no age limit). Default 7.
+    #[arg(long, value_name = "DAYS")]
+    replay_keep_days: Option<u32>,
     /// Put each frame's send time (`"sent_us"`, µs since the Unix epoch) into the
     /// frames sent live, for measuring latency on the same host (`fieldhouse loadgen`).
     #[arg(long)]
@@ -71,7 +78,9 @@ pub struct ServeArgs {
     agones_sdk_port: u16,
     /// A TOML file of server settings (addr, max_matches, max_message_bytes,
     /// bot_messages_per_second, bot_burst, send_timeout_ms, header_timeout_ms,
-    /// max_concurrent_requests, ...; every setting is in the README); flags override it.
+    /// max_concurrent_requests, replay_retention_bytes, replay_retention_days,
+    /// replay_max_match_bytes, replay_segment_bytes, ...; every setting is in the
+    /// README); flags override it.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     #[command(flatten)]
@@ -128,6 +137,12 @@ fn settings(args: &ServeArgs) -> anyhow::Result<ServerConfig> {
     }
     if let Some(dir) = &args.replay_dir {
         config.replay_dir = Some(dir.clone());
+    }
+    if let Some(bytes) = args.replay_retention_bytes {
+        config.replay_retention_bytes = bytes;
+    }
+    if let Some(days) = args.replay_keep_days {
+        config.replay_retention_days = days;
     }
     config
         .allowed_origins

@@ -109,8 +109,9 @@ fn apply(world: &mut World, ids: &[String], entry: &Logged) -> Result<(), Mismat
     Ok(())
 }
 
-/// Re-simulates `replay` and compares every frame. Basketball needs the motion
-/// capabilities the match was played with.
+/// Re-simulates `replay` and compares every frame (from its first tick, for a later
+/// segment of a rotated recording). Basketball needs the motion capabilities the match
+/// was played with.
 pub fn verify(replay: &Replay, caps: Option<Arc<Capabilities>>) -> Result<Verified, Mismatch> {
     let s = &replay.scenario;
     let world = World::new(s, caps).map_err(|e| Mismatch::Unplayable(e.to_string()))?;
@@ -124,7 +125,14 @@ pub fn verify(replay: &Replay, caps: Option<Arc<Capabilities>>) -> Result<Verifi
         .unwrap_or(0);
     let mut log = replay.log.iter().peekable();
     let mut made = 0usize;
+    // A later segment of a rotated recording holds frames from its first tick on: the
+    // world is played from tick 0 as always, and compared from there.
+    let first_tick = replay.first_tick();
     let compare = |line: String, made: &mut usize| -> Result<(), Mismatch> {
+        let made_at = || serde_json::from_str::<Value>(&line).ok()?["tick"].as_u64();
+        if first_tick > 0 && made_at().is_some_and(|t| t < first_tick) {
+            return Ok(());
+        }
         let Some((tick, recorded)) = replay.frames.get(*made) else {
             *made += 1;
             return Ok(()); // counted below

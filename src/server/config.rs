@@ -6,6 +6,8 @@ use serde::{Deserialize, Deserializer};
 use std::net::{IpAddr, SocketAddr, ToSocketAddrs};
 use std::path::Path;
 
+const GIB: u64 = 1024 * 1024 * 1024;
+
 /// The port `serve` listens on when the address names none.
 pub const DEFAULT_PORT: u16 = 7878;
 
@@ -38,6 +40,17 @@ pub struct ServerConfig {
     pub max_body_bytes: usize,
     /// Where every match is recorded as a replay (none: matches are not recorded).
     pub replay_dir: Option<std::path::PathBuf>,
+    /// Retention: the replays in `replay_dir` may take this many bytes in all; past it
+    /// the oldest are deleted (never one being written).
+    pub replay_retention_bytes: u64,
+    /// Retention: replays older than this many days are deleted (0: no age limit).
+    pub replay_retention_days: u32,
+    /// The most one match's replay may write; past it the recording ends with the
+    /// footer reason `size_limit` (the match goes on). Matches that rotate are exempt.
+    pub replay_max_match_bytes: u64,
+    /// Real-time matches without bot slots (the demos, which never end) rotate their
+    /// replay into files of about this size.
+    pub replay_segment_bytes: u64,
     /// Put the wall-clock time each frame is published, `"sent_us"` (µs since the Unix
     /// epoch), into the frames sent live, so a client on the same host can measure
     /// frame latency (`fieldhouse loadgen` does). Replays keep the frames without it:
@@ -83,6 +96,10 @@ impl Default for ServerConfig {
             request_timeout_ms: 10_000,
             max_body_bytes: 64 * 1024,
             replay_dir: None,
+            replay_retention_bytes: 2 * GIB,
+            replay_retention_days: 7,
+            replay_max_match_bytes: GIB,
+            replay_segment_bytes: 64 * 1024 * 1024,
             stamp_frames: false,
             allowed_origins: Vec::new(),
             allowed_hosts: Vec::new(),
@@ -207,6 +224,13 @@ impl ServerConfig {
                 "allowed_hosts: \"{bad}\" is not a host; write a name or address with an optional port (play.example, play.example:8443, [::1]:7878)"
             ));
         }
+        // Smaller than a few dozen frames, a file would be mostly header and footer.
+        at_least(
+            "replay_max_match_bytes",
+            self.replay_max_match_bytes,
+            16 * 1024,
+        )?;
+        at_least("replay_segment_bytes", self.replay_segment_bytes, 16 * 1024)?;
         if let Some(bad) = self.allowed_origins.iter().find(|o| !valid_origin(o)) {
             return Err(format!(
                 "allowed_origins: \"{bad}\" is not an origin; write scheme://host[:port] (https://example.com) or *"
@@ -273,6 +297,7 @@ mod tests {
         };
         assert!(check(|c| c.max_connections_per_ip = 0).starts_with("max_connections_per_ip:"));
         assert!(check(|c| c.max_message_bytes = 10).starts_with("max_message_bytes:"));
+        assert!(check(|c| c.replay_segment_bytes = 1000).starts_with("replay_segment_bytes:"));
         assert!(check(|c| c.allowed_origins = vec!["example.com".into()])
             .starts_with("allowed_origins:"));
     }

@@ -1,14 +1,17 @@
 //! A match is a task that owns one [`World`] (in a [`Session`]) and ticks it: on the
 //! wall clock (`realtime`), as fast as possible (`fast`), or in lock-step with its bots
-//! (`lockstep`). Each frame is encoded once, published for the sockets, and appended to
-//! the match's replay file if the server keeps replays.
+//! (`lockstep`). Each frame is encoded once, published for the sockets, and handed to
+//! the match's replay (written on a thread of its own: see [`super::recording`]) if the
+//! server keeps replays.
 
 use super::auth::new_token;
+use super::config::ServerConfig;
 use super::metrics::Metrics;
+use super::recording::{InDir, Limit, Recording};
 use super::slot::Slot;
 use super::state::{AppState, Control, MatchEntry, Published, ToBot};
 use crate::protocol::{encode, End, ErrorMessage, MatchInfo, Perception};
-use crate::replay::Recorder;
+use crate::replay;
 use crate::session::Session;
 use crate::sim::{Mode, Scenario, ScenarioError, World};
 use futures_util::FutureExt;
@@ -67,30 +70,30 @@ pub fn spawn(
     // Agents play their built-in brains until a bot connects.
     let controlled = vec![false; agent_ids.len()];
     let mut session = Session::new(world, id.clone(), scenario.tick_hz, scenario.frame_hz);
-    let first = session.frame();
+    let first = Utf8Bytes::from(session.frame());
     let creation_error = Mutex::new(None);
-    let recorder = app.replay_dir.as_deref().and_then(|dir| {
-        let started = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.as_secs());
-        let path = dir.join(format!("{id}-{started}.jsonl"));
-        let made = Recorder::create(&path, &info, &scenario, app.caps.source.fingerprint())
-            .and_then(|mut r| r.frame(&first).map(|()| r));
+    let started = app.replay_dir.as_deref().and_then(|dir| {
+        let header = replay::header(&info, &scenario, app.caps.source.fingerprint());
+        let files = InDir {
+            app: app.clone(),
+            dir: dir.to_path_buf(),
+            stem: format!("{id}-{}", unix_seconds()),
+        };
+        let limit = recording_limit(&app.config, &scenario);
+        let made = Recording::start(files, header, limit, app.replays.queued.clone())
+            .map_err(|e| e.to_string())
+            .and_then(|(r, id)| r.frame(0, first.clone()).map(|()| (r, id)));
         made.map_err(|e| {
             app.metrics.replay_errors.fetch_add(1, Relaxed);
-            *creation_error.lock().expect("not poisoned") = Some(format!("cannot create {}: {e}", path.display()));
-            tracing::warn!(path = %path.display(), error = %e, "cannot record this match; it runs unrecorded");
+            tracing::warn!(error = %e, "cannot record this match; it runs unrecorded");
+            *creation_error.lock().expect("not poisoned") = Some(e);
         })
         .ok()
     });
-    let replay = recorder.as_ref().and_then(|r| {
-        r.path()
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-    });
+    let (recorder, replay) = started.unzip();
     let (publish, published) = watch::channel(Published {
         seq: 0,
-        frame: Utf8Bytes::from(first),
+        frame: first,
         end: None,
     });
     let (control_tx, control_rx) = mpsc::channel(1024);
@@ -128,11 +131,29 @@ pub fn spawn(
     Ok(entry)
 }
 
+/// How much a match's replay may write: real-time matches without bot slots (the demos)
+/// may never end, so they rotate into segments; any other match, fast ones above all,
+/// stops recording at `replay_max_match_bytes`.
+fn recording_limit(config: &ServerConfig, scenario: &Scenario) -> Limit {
+    let unattended = scenario.mode == Mode::Realtime && !scenario.agents.iter().any(|a| a.bot);
+    if unattended {
+        Limit::Segments(config.replay_segment_bytes)
+    } else {
+        Limit::Total(config.replay_max_match_bytes)
+    }
+}
+
+fn unix_seconds() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs())
+}
+
 struct Ticker {
     /// The match's place among `max_matches`, given back when the task is dropped.
     _slot: Slot,
     session: Session,
-    recorder: Option<Recorder>,
+    recorder: Option<Recording>,
     entry: Arc<MatchEntry>,
     publish: watch::Sender<Published>,
     control: mpsc::Receiver<Control>,
@@ -160,7 +181,7 @@ impl Ticker {
             );
             "error"
         });
-        self.end(reason);
+        self.end(reason).await;
     }
 
     /// Ticks until the match ends; returns why it ended.
@@ -269,30 +290,40 @@ impl Ticker {
     }
 
     fn publish_frame(&mut self, frame: String) {
-        self.record(|r| r.frame(&frame));
-        self.seq += 1;
-        let frame = if self.stamp_frames {
-            stamped(&frame)
+        let tick = self.session.world.tick();
+        let bytes = if self.stamp_frames {
+            let recorded = Utf8Bytes::from(frame);
+            let stamped = stamped(recorded.as_str());
+            self.record(|r| r.frame(tick, recorded));
+            Utf8Bytes::from(stamped)
         } else {
-            frame
+            let bytes = Utf8Bytes::from(frame);
+            self.record(|r| r.frame(tick, bytes.clone()));
+            bytes
         };
-        let (seq, bytes) = (self.seq, Utf8Bytes::from(frame));
+        self.seq += 1;
+        let seq = self.seq;
         self.publish.send_modify(|p| {
             p.seq = seq;
             p.frame = bytes;
         });
     }
 
-    /// Appends to the replay; a failure (a full or unwritable disk) stops the recording,
-    /// never the match, and is logged, counted and shown in the API.
-    fn record(&mut self, write: impl FnOnce(&mut Recorder) -> std::io::Result<()>) {
-        let Some(r) = &mut self.recorder else { return };
+    /// Hands a record to the replay's writer; a recording that stopped (a full or
+    /// unwritable disk, one that cannot keep up, the size limit) stops here, never the
+    /// match, and why is logged, counted and shown in the API.
+    fn record(&mut self, write: impl FnOnce(&Recording) -> Result<(), String>) {
+        let Some(r) = &self.recorder else { return };
         if let Err(e) = write(r) {
-            self.metrics.replay_errors.fetch_add(1, Relaxed);
-            tracing::warn!(id = %self.entry.info.id, error = %e, "replay recording stopped");
-            *self.entry.replay_error.lock().expect("not poisoned") = Some(e.to_string());
+            self.recording_stopped(e);
             self.recorder = None;
         }
+    }
+
+    fn recording_stopped(&self, why: String) {
+        self.metrics.replay_errors.fetch_add(1, Relaxed);
+        tracing::warn!(id = %self.entry.info.id, error = %why, "replay recording stopped");
+        *self.entry.replay_error.lock().expect("not poisoned") = Some(why);
     }
 
     fn perceive(&mut self) {
@@ -326,7 +357,7 @@ impl Ticker {
         self.session.world.set_controlled(agent, by_bot);
         let tick = self.session.world.tick();
         let id = self.agent_ids[agent].clone();
-        self.record(|r| r.control(tick, &id, by_bot));
+        self.record(|r| r.log(replay::control_record(tick, &id, by_bot)));
         self.entry.controlled.lock().expect("not poisoned")[agent] = by_bot;
     }
 
@@ -373,7 +404,7 @@ impl Ticker {
                 match self.session.world.command(agent, &action) {
                     Ok(()) => {
                         let id = self.agent_ids[agent].clone();
-                        self.record(|r| r.command(now, &id, &action));
+                        self.record(|r| r.log(replay::command_record(now, &id, &action)));
                     }
                     Err(reason) => self.tell(agent, "rejected", &reason),
                 }
@@ -384,7 +415,7 @@ impl Ticker {
         }
     }
 
-    fn end(mut self, reason: &str) {
+    async fn end(mut self, reason: &str) {
         // After a panic the world may be half-stepped: reading it may panic again, so
         // the last frame and the result are read under a guard, and left out if so.
         let last = std::panic::catch_unwind(AssertUnwindSafe(|| {
@@ -403,12 +434,12 @@ impl Ticker {
             reason,
             result: &result,
         }));
-        // The replay is complete on disk before anyone hears the match ended.
+        // The replay is complete on disk before anyone hears the match ended. Its
+        // writer thread syncs it; this task waits without holding the thread that
+        // ticks the other matches.
         if let Some(r) = self.recorder.take() {
-            if let Err(e) = r.finish(tick, reason, &result) {
-                self.metrics.replay_errors.fetch_add(1, Relaxed);
-                tracing::warn!(id = %self.entry.info.id, error = %e, "cannot finish the replay");
-                *self.entry.replay_error.lock().expect("not poisoned") = Some(e.to_string());
+            if let Err(e) = r.finish(tick, reason, &result).await {
+                self.recording_stopped(format!("cannot finish the replay: {e}"));
             }
         }
         self.entry.ended.store(true, Relaxed);
@@ -508,6 +539,8 @@ mod tests {
             shutdown,
             next_conn: Default::default(),
             replay_dir: None,
+            replays: Default::default(),
+            replay_written: tokio::sync::Notify::new(),
             connections: Arc::new(crate::server::listener::Connections::new(16, 64)),
         };
         (Arc::new(app), stop)

@@ -30,6 +30,7 @@ pub struct Metrics {
     pub closed_for_rate: AtomicU64,
     pub slow_clients_dropped: AtomicU64,
     pub replay_errors: AtomicU64,
+    pub replays_deleted: AtomicU64,
     pub refused_origin: AtomicU64,
     pub refused_per_ip: AtomicU64,
     pub refused_full: AtomicU64,
@@ -135,6 +136,12 @@ impl Metrics {
             "Replay files that could not be written (the matches went on).",
             "counter",
             self.replay_errors.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_replays_deleted_total",
+            "Replay files deleted by retention (replay_retention_bytes, replay_retention_days).",
+            "counter",
+            self.replays_deleted.load(Relaxed),
         );
         counter(
             "fieldhouse_slow_clients_dropped_total",

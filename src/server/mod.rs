@@ -10,6 +10,10 @@
 //! * [`sweep`]: ended matches leave the table after a while.
 //! * [`ws`]: spectator and bot WebSockets.
 //! * [`replays`]: recorded matches: listed, downloaded, played with controls.
+//! * [`replay_dir`]: which files in the replay directory are replays, opened safely.
+//! * [`range`]: HTTP byte ranges, for resuming a download.
+//! * [`recording`]: writing a match's replay on a thread of its own, bounded.
+//! * [`retention`]: deleting the oldest replays past the configured size and age.
 //! * [`api`]: the REST API, health, readiness and metrics.
 //! * [`auth`]: tokens, compared in constant time.
 //! * [`listener`]: the accept loop: every connection counted and capped (per address
@@ -33,7 +37,11 @@ pub mod demo;
 pub mod listener;
 pub mod match_task;
 pub mod metrics;
+pub mod range;
+pub mod recording;
+pub mod replay_dir;
 pub mod replays;
+pub mod retention;
 pub mod slot;
 pub mod state;
 pub mod sweep;
@@ -53,13 +61,16 @@ use std::collections::BTreeMap;
 use std::future::Future;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, RwLock};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 use tokio::net::TcpListener;
 use tokio::sync::watch;
 use tower::ServiceBuilder;
 use tower_http::limit::RequestBodyLimitLayer;
 use tower_http::timeout::TimeoutLayer;
 use tower_http::trace::TraceLayer;
+
+/// How long a stopping server waits for its replays to be written, synced and closed.
+const REPLAYS_FINISH_WITHIN: Duration = Duration::from_secs(10);
 
 /// Runs the server on `listener` until `shutdown` completes; then every match ends,
 /// every socket is closed with 1001, and it returns. Raises the process's descriptor
@@ -108,12 +119,15 @@ pub async fn serve(
         shutdown: stop_rx,
         next_conn: AtomicU64::new(0),
         replay_dir: config.replay_dir.clone(),
+        replays: replay_dir::Replays::default(),
+        replay_written: tokio::sync::Notify::new(),
         connections: connections.clone(),
     });
     if config.demo {
         demo::start_all(&app);
     }
     tokio::spawn(sweep::run(app.clone()));
+    tokio::spawn(retention::run(app.clone()));
     let agones = config.agones_sdk_port.map(agones::Sdk::on_port);
     if let Some(sdk) = &agones {
         tokio::spawn(sdk.clone().ready_then_healthy(app.shutdown.clone()));
@@ -142,7 +156,14 @@ pub async fn serve(
     };
     listener::serve(listener, router, settings, graceful).await;
     // The matches have ended by now: the graceful shutdown gave them 200 ms after the
-    // stop, and a match ends at the next tick.
+    // stop, and a match ends at the next tick. Their replays are finished on writer
+    // threads, which the process must not end under: wait for them (a while at most).
+    let writing = Instant::now();
+    while !app.replays.writing.lock().expect("not poisoned").is_empty()
+        && writing.elapsed() < REPLAYS_FINISH_WITHIN
+    {
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
     ticking.shutdown_background();
     if let Some(sdk) = &agones {
         sdk.shutdown().await;

@@ -1,59 +1,85 @@
 //! Replays the server recorded: listed and downloaded over REST, and played over a
 //! WebSocket with the live protocol (`hello`, `frame`s, `end`) plus the client's
 //! `control` messages: play, pause, speed (0.25× to 8×), seek to a tick.
+//!
+//! No request costs a file's size in memory: a download is streamed from the opened
+//! file with a small buffer; the viewers of a file share one [`Index`] and read frames
+//! from the file a batch at a time; a seek is a binary search over the index. Every
+//! send to a viewer is bounded by `send_timeout_ms`, like a spectator's.
 
 use super::admission::AdmittedSpectator;
 use super::api::ApiError;
 use super::budget::Verdict;
+use super::range::{self, Wanted};
+use super::replay_dir;
 use super::state::AppState;
 use super::upgrade::{Socket, Upgrade};
-use super::ws::{budget, classify, refusal, shut, Read, GOING_AWAY, POLICY};
+use super::ws::{budget, classify, refusal, shut, Read, Sender, Sent, GOING_AWAY, POLICY};
 use crate::protocol::{encode, End, ErrorMessage};
-use crate::replay::{self, Replay};
+use crate::replay::{self, Index};
+use axum::body::Body;
 use axum::extract::{Path, State};
-use axum::http::StatusCode;
+use axum::http::header::{
+    ACCEPT_RANGES, CONTENT_DISPOSITION, CONTENT_LENGTH, CONTENT_RANGE, CONTENT_TYPE, RANGE,
+};
+use axum::http::{HeaderMap, HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::Json;
-use futures_util::{SinkExt, StreamExt};
+use futures_util::stream::SplitStream;
+use futures_util::StreamExt;
 use serde::Deserialize;
 use serde_json::{json, Value};
-use std::path::PathBuf;
+use std::collections::VecDeque;
+use std::fs::{File, Metadata};
+use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
 use std::time::Duration;
+use tokio::io::{AsyncReadExt, AsyncSeekExt};
 use tokio::time::Instant;
-use tokio_tungstenite::tungstenite::{Message, Utf8Bytes};
+use tokio_util::io::ReaderStream;
 
-/// The file of replay `id`, if the id is one: letters, digits, `-` and `_` only, so no
-/// id reaches outside the replay directory.
-fn file_of(app: &AppState, id: &str) -> Result<PathBuf, ApiError> {
-    let dir = app.replay_dir.as_ref().ok_or_else(|| {
+/// The replay directory, or why there is none.
+fn dir_of(app: &AppState) -> Result<&std::path::Path, ApiError> {
+    app.replay_dir.as_deref().ok_or_else(|| {
         ApiError::new(
             StatusCode::NOT_FOUND,
             "no_replays",
             "this server does not record replays (serve --replay-dir DIR)",
         )
-    })?;
-    let valid = !id.is_empty()
-        && id.len() <= 128
-        && id
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
-    if !valid {
+    })
+}
+
+/// Opens replay `id` as [`replay_dir::open`] does: a link, a device, a FIFO or a
+/// missing file is the same 404, and no answer shows where the server keeps its files.
+async fn open(app: &AppState, id: &str) -> Result<(File, Metadata), ApiError> {
+    let dir = dir_of(app)?.to_path_buf();
+    if !replay_dir::valid_id(id) {
         return Err(ApiError::new(
             StatusCode::BAD_REQUEST,
             "bad_id",
             format!("\"{id}\" is not a replay id"),
         ));
     }
-    let path = dir.join(format!("{id}.jsonl"));
-    if !path.is_file() {
-        return Err(ApiError::new(
+    let owned = id.to_string();
+    let opened = tokio::task::spawn_blocking(move || replay_dir::open(&dir, &owned)).await;
+    match opened {
+        Ok(Ok(found)) => Ok(found),
+        Ok(Err(e)) if e.kind() == std::io::ErrorKind::NotFound => Err(ApiError::new(
             StatusCode::NOT_FOUND,
             "not_found",
             format!("no replay \"{id}\""),
-        ));
+        )),
+        Ok(Err(e)) => Err(ApiError::new(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            "unreadable",
+            format!("replay \"{id}\" cannot be read: {}", e.kind()),
+        )),
+        Err(e) => Err(ApiError::new(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            "internal",
+            e.to_string(),
+        )),
     }
-    Ok(path)
 }
 
 pub async fn list(State(app): State<Arc<AppState>>) -> Result<Json<Value>, ApiError> {
@@ -61,62 +87,105 @@ pub async fn list(State(app): State<Arc<AppState>>) -> Result<Json<Value>, ApiEr
         return Ok(Json(json!({"replays": []})));
     };
     let replays = tokio::task::spawn_blocking(move || {
-        let mut out = Vec::new();
-        for entry in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
-            let path = entry.path();
-            if path.extension().and_then(|e| e.to_str()) != Some("jsonl") {
-                continue;
-            }
-            let Some(id) = path.file_stem().map(|s| s.to_string_lossy().into_owned()) else {
-                continue;
-            };
-            let bytes = entry.metadata().map_or(0, |m| m.len());
-            match replay::peek(&path) {
-                Ok((header, footer)) => out.push(json!({
-                    "id": id,
-                    "bytes": bytes,
-                    "match": header["match"]["id"],
-                    "name": header["match"]["name"],
-                    "sport": header["match"]["sport"],
-                    "started_unix_ms": header["started_unix_ms"],
-                    "complete": footer.is_some(),
-                    "result": footer.as_ref().map(|f| f["result"].clone()),
-                })),
-                Err(e) => out.push(json!({"id": id, "bytes": bytes, "error": e})),
-            }
-        }
-        out.sort_by(|a, b| a["id"].as_str().cmp(&b["id"].as_str()));
-        out
+        let found = replay_dir::scan(&dir);
+        let listed = found
+            .iter()
+            .map(|found| {
+                // Whether it is being written changes without the file changing.
+                let mut entry = app.replays.listing(found, || describe(found));
+                entry["recording"] = app.replays.is_writing(&found.path).into();
+                entry
+            })
+            .collect::<Vec<_>>();
+        app.replays
+            .forget_all_but(&found.iter().map(|f| f.id.as_str()).collect());
+        listed
     })
     .await
     .unwrap_or_default();
     Ok(Json(json!({"replays": replays})))
 }
 
+/// A replay's entry in the listing, from its header and footer (read with bounds).
+fn describe(found: &replay_dir::Found) -> Value {
+    let (id, bytes) = (&found.id, found.meta.len());
+    match replay::peek(&found.file) {
+        Ok((header, footer)) => json!({
+            "id": id,
+            "bytes": bytes,
+            "match": header["match"]["id"],
+            "name": header["match"]["name"],
+            "sport": header["match"]["sport"],
+            "started_unix_ms": header["started_unix_ms"],
+            "segment": header["segment"].as_u64().unwrap_or(0),
+            "first_tick": replay::first_tick(&header),
+            "complete": footer.is_some(),
+            "reason": footer.as_ref().map(|f| f["reason"].clone()),
+            "result": footer.as_ref().map(|f| f["result"].clone()),
+        }),
+        Err(e) => json!({"id": id, "bytes": bytes, "error": e}),
+    }
+}
+
+/// Streams replay `id` from the handle opened, a buffer at a time, so a download costs
+/// the same small memory whatever the file's size; `Range: bytes=…` serves one part.
 pub async fn download(
     Path(id): Path<String>,
+    headers: HeaderMap,
     State(app): State<Arc<AppState>>,
 ) -> Result<Response, ApiError> {
-    let path = file_of(&app, &id)?;
-    let bytes = tokio::fs::read(&path).await.map_err(|e| {
-        ApiError::new(
-            StatusCode::INTERNAL_SERVER_ERROR,
-            "unreadable",
-            e.to_string(),
+    let (file, meta) = open(&app, &id).await?;
+    let len = meta.len();
+    let asked = headers.get(RANGE).and_then(|v| v.to_str().ok());
+    let (status, start, end) = match range::wanted(asked, len) {
+        Wanted::Whole => (StatusCode::OK, 0, len),
+        Wanted::Part { start, end } => (StatusCode::PARTIAL_CONTENT, start, end + 1),
+        Wanted::Unsatisfiable => {
+            let mut refused = ApiError::new(
+                StatusCode::RANGE_NOT_SATISFIABLE,
+                "bad_range",
+                format!("replay \"{id}\" has {len} bytes"),
+            )
+            .into_response();
+            let whole = HeaderValue::from_str(&format!("bytes */{len}")).expect("ASCII");
+            refused.headers_mut().insert(CONTENT_RANGE, whole);
+            return Ok(refused);
+        }
+    };
+    let mut file = tokio::fs::File::from_std(file);
+    file.seek(std::io::SeekFrom::Start(start))
+        .await
+        .map_err(|e| {
+            ApiError::new(
+                StatusCode::INTERNAL_SERVER_ERROR,
+                "unreadable",
+                e.to_string(),
+            )
+        })?;
+    let body = Body::from_stream(ReaderStream::with_capacity(
+        file.take(end - start),
+        DOWNLOAD_BUFFER_BYTES,
+    ));
+    let mut response = Response::builder()
+        .status(status)
+        .header(CONTENT_TYPE, "application/x-ndjson")
+        .header(
+            CONTENT_DISPOSITION,
+            format!("attachment; filename=\"{id}.jsonl\""),
         )
-    })?;
-    Ok((
-        [
-            ("content-type", "application/x-ndjson".to_string()),
-            (
-                "content-disposition",
-                format!("attachment; filename=\"{id}.jsonl\""),
-            ),
-        ],
-        bytes,
-    )
-        .into_response())
+        .header(ACCEPT_RANGES, "bytes")
+        .header(CONTENT_LENGTH, end - start);
+    if status == StatusCode::PARTIAL_CONTENT {
+        let part = format!("bytes {start}-{}/{len}", end - 1);
+        response = response.header(CONTENT_RANGE, part);
+    }
+    response
+        .body(body)
+        .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string()))
 }
+
+/// What one download reads from the file at a time.
+const DOWNLOAD_BUFFER_BYTES: usize = 64 * 1024;
 
 pub async fn watch(
     ws: Upgrade,
@@ -124,30 +193,49 @@ pub async fn watch(
     _: AdmittedSpectator,
     State(app): State<Arc<AppState>>,
 ) -> Response {
-    let path = match file_of(&app, &id) {
-        Ok(p) => p,
+    let (file, meta) = match open(&app, &id).await {
+        Ok(found) => found,
         Err(e) => return e.into_response(),
     };
-    let read = tokio::task::spawn_blocking(move || replay::read(&path)).await;
-    let replay = match read {
-        Ok(Ok(r)) => r,
-        Ok(Err(e)) => {
+    let index = match app.replays.index(&file, &meta).await {
+        Ok(index) => index,
+        Err(why) => {
             // Say what is wrong without showing where the server keeps its files.
-            let why = match e {
-                replay::ReplayError::NotAReplay { reason, .. } => reason,
-                replay::ReplayError::Io { source, .. } => source.to_string(),
-            };
             let message = format!("replay \"{id}\": {why}");
             return ApiError::new(StatusCode::UNPROCESSABLE_ENTITY, "bad_replay", message)
                 .into_response();
         }
-        Err(e) => {
-            return ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string())
-                .into_response()
-        }
+    };
+    let viewed = Viewed {
+        index,
+        file: Arc::new(file),
     };
     let config = app.config.clone();
-    ws.on_upgrade(&config, move |socket| play(socket, replay, id, app))
+    ws.on_upgrade(&config, move |socket| play(socket, viewed, id, app))
+}
+
+/// A viewer's replay: the shared index, and the viewer's own handle on the file.
+struct Viewed {
+    index: Arc<Index>,
+    file: Arc<File>,
+}
+
+/// Frames a viewer reads from the file at once, at most (and 64 KiB at most).
+const BATCH_FRAMES: usize = 64;
+const BATCH_BYTES: usize = 64 * 1024;
+
+impl Viewed {
+    /// Frames `from..`, a batch of them, read on a blocking thread.
+    async fn batch(&self, from: usize) -> Result<VecDeque<String>, String> {
+        let (index, file) = (self.index.clone(), self.file.clone());
+        let read =
+            tokio::task::spawn_blocking(move || index.read(&file, from, BATCH_FRAMES, BATCH_BYTES));
+        match read.await {
+            Ok(Ok(frames)) => Ok(frames.into()),
+            Ok(Err(e)) => Err(e.to_string()),
+            Err(e) => Err(e.to_string()),
+        }
+    }
 }
 
 /// What a replay viewer may ask.
@@ -179,99 +267,119 @@ fn control(text: &str) -> Result<Incoming, String> {
 const MIN_SPEED: f64 = 0.25;
 const MAX_SPEED: f64 = 8.0;
 
-async fn play(socket: Socket, replay: Replay, id: String, app: Arc<AppState>) {
+async fn play(socket: Socket, viewed: Viewed, id: String, app: Arc<AppState>) {
     let (mut sink, mut stream) = socket.split();
-    let tick_hz = replay.scenario.tick_hz;
+    let mut send = Sender {
+        sink: &mut sink,
+        timeout: Duration::from_millis(app.config.send_timeout_ms),
+        metrics: &app.metrics,
+    };
+    if let Err(Sent::TimedOut) = view(&mut send, &mut stream, &viewed, &id, &app).await {
+        tracing::info!(%id, "dropping a replay viewer that stopped reading");
+    }
+}
+
+/// Plays a replay to one viewer until it leaves, the server stops, or its socket stops
+/// taking messages.
+async fn view(
+    send: &mut Sender<'_>,
+    stream: &mut SplitStream<Socket>,
+    viewed: &Viewed,
+    id: &str,
+    app: &AppState,
+) -> Result<(), Sent> {
+    let index = &viewed.index;
+    let tick_hz = index.scenario.tick_hz;
+    let last_tick = index.len().checked_sub(1).and_then(|k| index.tick(k));
     let hello = json!({
         "type": "hello",
         "protocol": crate::protocol::PROTOCOL,
         "version": crate::protocol::VERSION,
         "role": "replay",
-        "match": replay.header["match"],
+        "match": index.header["match"],
         "replay": {
             "id": id,
-            "frames": replay.frames.len(),
-            "first_tick": replay.frames.first().map(|(t, _)| t),
-            "last_tick": replay.frames.last().map(|(t, _)| t),
-            "complete": replay.complete(),
+            "frames": index.len(),
+            "first_tick": index.tick(0),
+            "last_tick": last_tick,
+            "complete": index.complete(),
         },
         "limits": {"max_message_bytes": app.config.max_message_bytes, "messages_per_second": app.config.bot_messages_per_second},
     });
-    let footer = replay.footer.clone().unwrap_or(Value::Null);
+    let footer = index.footer.clone().unwrap_or(Value::Null);
     let end = encode(&End {
         kind: "end",
-        match_id: replay.match_id(),
-        tick: replay.frames.last().map_or(0, |(t, _)| *t),
+        match_id: index.header["match"]["id"].as_str().unwrap_or_default(),
+        tick: last_tick.unwrap_or(0),
         reason: footer["reason"].as_str().unwrap_or("incomplete"),
         result: &footer["result"],
     });
-    if sink
-        .send(Message::Text(hello.to_string().into()))
-        .await
-        .is_err()
-    {
-        return;
-    }
+    send.deliver(hello.to_string()).await?;
     // A replay without frames has only its end to show.
-    if replay.frames.is_empty() && sink.send(Message::Text(end.clone().into())).await.is_err() {
-        return;
+    if index.is_empty() {
+        send.deliver(end.clone()).await?;
     }
     let mut stopping = app.shutdown.clone();
-    let mut budget = budget(&app);
+    let mut inbound = budget(app);
     let (mut next, mut playing, mut speed) = (0usize, true, 1.0f64);
+    // Frames `next..` read ahead from the file: a batch at a time, never the whole file.
+    let mut ahead: VecDeque<String> = VecDeque::new();
     let mut due = Instant::now();
     loop {
-        let waiting = playing && next < replay.frames.len();
+        let waiting = playing && next < index.len();
         tokio::select! {
             _ = tokio::time::sleep_until(due), if waiting => {
-                let (tick, line) = &replay.frames[next];
-                if sink.send(Message::Text(Utf8Bytes::from(line.clone()))).await.is_err() {
-                    break;
+                if ahead.is_empty() {
+                    ahead = viewed.batch(next).await.map_err(|e| {
+                        tracing::warn!(%id, error = %e, "a replay stopped reading back");
+                        Sent::Failed
+                    })?;
                 }
+                let Some(line) = ahead.pop_front() else { return Err(Sent::Failed) };
+                send.deliver(line).await?;
+                let tick = index.tick(next).unwrap_or(0);
                 next += 1;
-                match replay.frames.get(next) {
-                    Some((following, _)) => {
-                        let gap = following.saturating_sub(*tick) as f64 / tick_hz / speed;
+                match index.tick(next) {
+                    Some(following) => {
+                        let gap = following.saturating_sub(tick) as f64 / tick_hz / speed;
                         due += Duration::from_secs_f64(gap);
                         // A viewer that fell far behind does not get a burst to catch up.
                         due = due.max(Instant::now() - Duration::from_millis(200));
                     }
                     None => {
                         playing = false;
-                        if sink.send(Message::Text(end.clone().into())).await.is_err() {
-                            break;
-                        }
+                        send.deliver(end.clone()).await?;
                     }
                 }
             }
             _ = stopping.changed() => {
-                shut(&mut sink, &mut stream, GOING_AWAY, "server shutting down").await;
-                break;
+                shut(send.sink, stream, GOING_AWAY, "server shutting down").await;
+                return Ok(());
             }
             incoming = stream.next() => {
                 let read = classify(incoming);
                 if let Some((code, reason)) = refusal(&read, &app.metrics) {
-                    shut(&mut sink, &mut stream, code, reason).await;
-                    break;
+                    shut(send.sink, stream, code, reason).await;
+                    return Ok(());
                 }
                 let text = match read {
                     Read::Text(t) => t,
-                    Read::Closed => break,
+                    Read::Closed => return Ok(()),
                     _ => continue,
                 };
-                match budget.charge() {
+                match inbound.charge() {
                     Verdict::Take => {}
                     Verdict::Refuse { warn } => {
-                        let error = encode(&ErrorMessage::new("rate_limited", "too many messages; slow down or be disconnected"));
-                        if warn && sink.send(Message::Text(error.into())).await.is_err() {
-                            break;
+                        if warn {
+                            let error = ErrorMessage::new("rate_limited", "too many messages; slow down or be disconnected");
+                            send.deliver(encode(&error)).await?;
                         }
                         continue;
                     }
                     Verdict::Flooding => {
-                        app.metrics.closed_for_rate.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        shut(&mut sink, &mut stream, POLICY, "too many messages").await;
-                        break;
+                        app.metrics.closed_for_rate.fetch_add(1, Relaxed);
+                        shut(send.sink, stream, POLICY, "too many messages").await;
+                        return Ok(());
                     }
                 }
                 let reply = match control(&text) {
@@ -292,13 +400,13 @@ async fn play(socket: Socket, replay: Replay, id: String, app: Arc<AppState>) {
                         Some(format!("speed {s} is outside {MIN_SPEED} to {MAX_SPEED}"))
                     }
                     Ok(Incoming::Control(Control::Seek { tick })) => {
-                        // The first frame at or after the tick, sent at once, paused or not.
-                        match replay.frames.iter().position(|(t, _)| *t >= tick) {
+                        // The first frame at or after the tick, sent at once, paused or
+                        // not: found by a binary search over the index, then read.
+                        match index.seek(tick) {
                             Some(k) => {
-                                let line = Utf8Bytes::from(replay.frames[k].1.clone());
-                                if sink.send(Message::Text(line)).await.is_err() {
-                                    break;
-                                }
+                                ahead = viewed.batch(k).await.map_err(|_| Sent::Failed)?;
+                                let Some(line) = ahead.pop_front() else { return Err(Sent::Failed) };
+                                send.deliver(line).await?;
                                 next = k + 1;
                                 due = Instant::now() + Duration::from_secs_f64(1.0 / tick_hz / speed);
                                 None
@@ -309,10 +417,7 @@ async fn play(socket: Socket, replay: Replay, id: String, app: Arc<AppState>) {
                     Err(e) => Some(e),
                 };
                 if let Some(message) = reply {
-                    let error = encode(&ErrorMessage::new("bad_control", &message));
-                    if sink.send(Message::Text(error.into())).await.is_err() {
-                        break;
-                    }
+                    send.deliver(encode(&ErrorMessage::new("bad_control", &message))).await?;
                 }
             }
         }

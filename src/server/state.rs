@@ -104,6 +104,10 @@ pub struct AppState {
     pub next_conn: AtomicU64,
     /// Where matches are recorded, if anywhere.
     pub replay_dir: Option<std::path::PathBuf>,
+    /// The replays being written and the indexes being watched.
+    pub replays: super::replay_dir::Replays,
+    /// Told when a recording finishes, so retention looks at the directory then too.
+    pub replay_written: tokio::sync::Notify,
     /// Open connections, per client address and in all.
     pub connections: Arc<super::listener::Connections>,
 }

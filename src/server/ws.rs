@@ -139,6 +139,14 @@ impl Sender<'_> {
             }
         }
     }
+
+    /// [`Sender::text`] for `?`: anything but [`Sent::Ok`] is the error.
+    pub async fn deliver(&mut self, text: impl Into<Utf8Bytes>) -> Result<(), Sent> {
+        match self.text(text.into()).await {
+            Sent::Ok => Ok(()),
+            failed => Err(failed),
+        }
+    }
 }
 
 /// Sends a close frame, then reads on until the client answers it (or a second passes),

@@ -1,0 +1,196 @@
+//! The replay directory as the server sees it: which of its entries are replays, how
+//! one is opened, which are being written, and the indexes their viewers share.
+//!
+//! Anyone who can write to the directory can put anything in it, so only a regular file
+//! named `ID.jsonl`, right in it, with no other name, is a replay. A symbolic link is
+//! never followed (it could name `/etc/passwd` or `/proc/self/environ`), a device or a
+//! FIFO is never read (`/dev/zero` has no end, a FIFO blocks for ever), and a file with
+//! a second name (a hard link) could be a file from elsewhere, so it is refused too. The
+//! checks are made on the opened handle (`O_NOFOLLOW`, then `fstat`), so nothing can be
+//! swapped in between a check and the open.
+
+use crate::replay::Index;
+use std::collections::{HashMap, HashSet};
+use std::fs::{File, Metadata};
+use std::io;
+use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, Weak};
+
+/// Whether `id` can name a replay: letters, digits, `-` and `_` only, so no id reaches
+/// outside the directory.
+pub fn valid_id(id: &str) -> bool {
+    !id.is_empty()
+        && id.len() <= 128
+        && id
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+}
+
+/// The file of replay `id` in `dir` (`id` must be [`valid_id`]).
+pub fn path_of(dir: &Path, id: &str) -> PathBuf {
+    dir.join(format!("{id}.jsonl"))
+}
+
+/// Opens replay `id` for reading, if it is one: a regular file with one name, not a
+/// link. Anything else is `NotFound`, as a missing file is: what else the name is, is
+/// nobody's business. The open never blocks (a FIFO would).
+pub fn open(dir: &Path, id: &str) -> io::Result<(File, Metadata)> {
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK | libc::O_NOCTTY)
+        .open(path_of(dir, id))
+        .map_err(|e| match e.raw_os_error() {
+            // What O_NOFOLLOW answers for a link.
+            Some(libc::ELOOP) => io::ErrorKind::NotFound.into(),
+            _ => e,
+        })?;
+    let meta = file.metadata()?;
+    if !meta.file_type().is_file() || meta.nlink() != 1 {
+        return Err(io::ErrorKind::NotFound.into());
+    }
+    Ok((file, meta))
+}
+
+/// A replay found in the directory, opened.
+pub struct Found {
+    pub id: String,
+    pub path: PathBuf,
+    pub file: File,
+    pub meta: Metadata,
+}
+
+/// Every replay in `dir`, opened as [`open`] opens one; other entries are passed over
+/// without being opened. Blocking: call it on a blocking thread.
+pub fn scan(dir: &Path) -> Vec<Found> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        // The type of the entry itself: a link is a link, not what it points to.
+        if !entry.file_type().is_ok_and(|t| t.is_file()) {
+            continue;
+        }
+        let name = entry.file_name();
+        let Some(id) = name.to_str().and_then(|n| n.strip_suffix(".jsonl")) else {
+            continue;
+        };
+        if !valid_id(id) {
+            continue;
+        }
+        if let Ok((file, meta)) = open(dir, id) {
+            found.push(Found {
+                id: id.to_string(),
+                path: path_of(dir, id),
+                file,
+                meta,
+            });
+        }
+    }
+    found.sort_by(|a, b| a.id.cmp(&b.id));
+    found
+}
+
+/// Which file an index is of: the same inode at the same size and time of change is
+/// the same content (a file being written grows, and gets a new index).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct Version {
+    dev: u64,
+    ino: u64,
+    len: u64,
+    mtime_ns: i128,
+}
+
+impl Version {
+    fn of(meta: &Metadata) -> Version {
+        Version {
+            dev: meta.dev(),
+            ino: meta.ino(),
+            len: meta.len(),
+            mtime_ns: i128::from(meta.mtime()) * 1_000_000_000 + i128::from(meta.mtime_nsec()),
+        }
+    }
+}
+
+/// What the server keeps about its replay directory besides the files.
+#[derive(Default)]
+pub struct Replays {
+    /// The files being written, which retention never deletes.
+    pub writing: Mutex<HashSet<PathBuf>>,
+    /// Bytes handed to every recording's writer and not yet written.
+    pub queued: Arc<std::sync::atomic::AtomicU64>,
+    /// Indexes with viewers: each file is scanned once however many watch it, and its
+    /// index goes when its last viewer does.
+    indexes: Mutex<HashMap<Version, Weak<Index>>>,
+    /// One scan at a time: a crowd of viewers arriving at once, at one file or many,
+    /// costs one core at most.
+    scanning: tokio::sync::Mutex<()>,
+    /// What the listing said of each file, by id, while the file stays as it was: the
+    /// lobby asks every 2 s, and a file unchanged since is not read again.
+    listed: Mutex<HashMap<String, (Version, serde_json::Value)>>,
+}
+
+impl Replays {
+    /// The index of an opened replay, shared with its other viewers; scanned (on a
+    /// blocking thread) if none has it.
+    pub async fn index(&self, file: &File, meta: &Metadata) -> Result<Arc<Index>, String> {
+        let version = Version::of(meta);
+        let cached =
+            |indexes: &HashMap<Version, Weak<Index>>| indexes.get(&version).and_then(Weak::upgrade);
+        if let Some(index) = cached(&self.indexes.lock().expect("not poisoned")) {
+            return Ok(index);
+        }
+        let _scanning = self.scanning.lock().await;
+        // Another viewer may have scanned it while this one waited.
+        if let Some(index) = cached(&self.indexes.lock().expect("not poisoned")) {
+            return Ok(index);
+        }
+        let file = file.try_clone().map_err(|e| e.to_string())?;
+        let index = tokio::task::spawn_blocking(move || Index::build(&file))
+            .await
+            .map_err(|e| e.to_string())??;
+        let index = Arc::new(index);
+        let mut indexes = self.indexes.lock().expect("not poisoned");
+        indexes.retain(|_, weak| weak.strong_count() > 0);
+        indexes.insert(version, Arc::downgrade(&index));
+        Ok(index)
+    }
+
+    /// The listing's entry for `found`: remembered while the file is unchanged, else
+    /// made by `describe` (which reads the file). Entries of files gone are forgotten
+    /// by [`Replays::forget_all_but`].
+    pub fn listing(
+        &self,
+        found: &Found,
+        describe: impl FnOnce() -> serde_json::Value,
+    ) -> serde_json::Value {
+        let version = Version::of(&found.meta);
+        let known = self
+            .listed
+            .lock()
+            .expect("not poisoned")
+            .get(&found.id)
+            .cloned();
+        match known {
+            Some((v, entry)) if v == version => entry,
+            _ => {
+                let entry = describe();
+                let remembered = (version, entry.clone());
+                self.listed
+                    .lock()
+                    .expect("not poisoned")
+                    .insert(found.id.clone(), remembered);
+                entry
+            }
+        }
+    }
+
+    /// Forgets the listing's entries of files not in `ids`.
+    pub fn forget_all_but(&self, ids: &HashSet<&str>) {
+        let mut listed = self.listed.lock().expect("not poisoned");
+        listed.retain(|id, _| ids.contains(id.as_str()));
+    }
+
+    /// Whether `path` is being written.
+    pub fn is_writing(&self, path: &Path) -> bool {
+        self.writing.lock().expect("not poisoned").contains(path)
+    }
+}

@@ -1,0 +1,627 @@
+//! The replay directory under attack and under load, against the real binary on
+//! loopback: what is in the directory besides replays (links, devices, FIFOs, endless
+//! lines), what large replays cost (downloads, viewers, seeks, slow readers), how the
+//! directory is kept bounded (retention, rotation), and that writing replays never
+//! holds up a tick.
+
+mod common;
+
+use common::server::*;
+use futures_util::{SinkExt, StreamExt};
+use serde_json::{json, Value};
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+use tokio_tungstenite::tungstenite::Message;
+
+fn metric(server: &Server, name: &str) -> f64 {
+    let text = ureq::get(&server.http("/metrics"))
+        .call()
+        .unwrap()
+        .into_string()
+        .unwrap();
+    text.lines()
+        .find_map(|l| l.strip_prefix(name)?.trim().parse().ok())
+        .unwrap_or_else(|| panic!("{name} in /metrics:\n{text}"))
+}
+
+/// A field of the server's `/proc/PID/status`, in kB (VmRSS, VmHWM).
+fn memory_kb(server: &Server, field: &str) -> u64 {
+    let status = std::fs::read_to_string(format!("/proc/{}/status", server.child.id())).unwrap();
+    status
+        .lines()
+        .find_map(|l| {
+            l.strip_prefix(field)?
+                .trim()
+                .strip_suffix("kB")?
+                .trim()
+                .parse()
+                .ok()
+        })
+        .unwrap()
+}
+
+/// Bytes the server has read, from files and sockets (`rchar` in `/proc/PID/io`).
+fn bytes_read(server: &Server) -> u64 {
+    let io = std::fs::read_to_string(format!("/proc/{}/io", server.child.id())).unwrap();
+    io.lines()
+        .find_map(|l| l.strip_prefix("rchar:")?.trim().parse().ok())
+        .unwrap()
+}
+
+/// CPU time the server has used, in clock ticks (user + system).
+fn cpu_ticks(server: &Server) -> u64 {
+    let stat = std::fs::read_to_string(format!("/proc/{}/stat", server.child.id())).unwrap();
+    let after_name = &stat[stat.rfind(')').unwrap() + 2..];
+    let fields: Vec<&str> = after_name.split_whitespace().collect();
+    fields[11].parse::<u64>().unwrap() + fields[12].parse::<u64>().unwrap()
+}
+
+/// Writes a replay of `frames` frames (ticks 0, 2, 4, ...), each padded to about
+/// `frame_bytes`, with a footer if `complete`. Quick: a hundred megabytes in a second.
+fn write_replay(path: &Path, frames: u64, frame_bytes: usize, complete: bool) {
+    let mut out = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    let header = json!({
+        "record": "header", "format": 1, "fieldhouse": "0.1.0",
+        "match": {"id": "made", "name": "made by a test", "sport": "baseball"},
+        "scenario": {"sport": "baseball", "mode": "fast", "duration_s": 10000.0},
+        "seed": 1, "motion": "none", "started_unix_ms": 0,
+    });
+    writeln!(out, "{header}").unwrap();
+    let pad = "x".repeat(frame_bytes.saturating_sub(60));
+    for k in 0..frames {
+        writeln!(
+            out,
+            r#"{{"type":"frame","match":"made","tick":{},"pad":"{pad}"}}"#,
+            2 * k
+        )
+        .unwrap();
+    }
+    if complete {
+        let footer = json!({"record": "footer", "tick": 2 * frames.saturating_sub(1), "frames": frames, "hash": "-", "reason": "finished", "result": {}});
+        writeln!(out, "{footer}").unwrap();
+    }
+    out.flush().unwrap();
+}
+
+fn status_of(server: &Server, path: &str) -> u16 {
+    match ureq::get(&server.http(path))
+        .timeout(Duration::from_secs(5))
+        .call()
+    {
+        Ok(r) => r.status(),
+        Err(ureq::Error::Status(code, _)) => code,
+        Err(e) => panic!("{path}: {e}"),
+    }
+}
+
+fn listed(server: &Server) -> Vec<Value> {
+    let started = Instant::now();
+    let list = ureq::get(&server.http("/api/replays"))
+        .timeout(Duration::from_secs(5))
+        .call()
+        .expect("the listing answers")
+        .into_json::<Value>()
+        .unwrap();
+    assert!(
+        started.elapsed() < Duration::from_secs(3),
+        "listing took {:?}",
+        started.elapsed()
+    );
+    list["replays"].as_array().unwrap().clone()
+}
+
+fn ids(replays: &[Value]) -> Vec<&str> {
+    replays.iter().map(|r| r["id"].as_str().unwrap()).collect()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn links_devices_and_fifos_in_the_replay_directory_are_neither_served_nor_listed() {
+    let dir = empty_dir("hostile-replay-dir");
+    std::fs::create_dir_all(&dir).unwrap();
+    let outside = empty_dir("hostile-replay-outside");
+    std::fs::create_dir_all(&outside).unwrap();
+    let secret = outside.join("secret.txt");
+    std::fs::write(&secret, "ADMIN_TOKEN=do-not-serve-me\n").unwrap();
+    write_replay(&dir.join("real.jsonl"), 10, 200, true);
+    let link =
+        |target: &Path, name: &str| std::os::unix::fs::symlink(target, dir.join(name)).unwrap();
+    link(&secret, "secret.jsonl");
+    link(Path::new("/etc/passwd"), "passwd.jsonl");
+    link(Path::new("/proc/self/environ"), "environ.jsonl");
+    link(Path::new("/dev/zero"), "zero.jsonl");
+    link(&dir.join("real.jsonl"), "alias.jsonl");
+    std::fs::hard_link(&secret, dir.join("hard.jsonl")).unwrap();
+    let made = Command::new("mkfifo")
+        .arg(dir.join("fifo.jsonl"))
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
+    // The lobby polls the listing: it answers at once, with the real replay only.
+    for _ in 0..3 {
+        assert_eq!(ids(&listed(&server)), ["real"]);
+    }
+    for name in [
+        "secret", "passwd", "environ", "zero", "alias", "hard", "fifo",
+    ] {
+        assert_eq!(
+            status_of(&server, &format!("/api/replays/{name}")),
+            404,
+            "{name}"
+        );
+        let refused =
+            tokio_tungstenite::connect_async(server.ws(&format!("/ws/replays/{name}"))).await;
+        match refused {
+            Err(tokio_tungstenite::tungstenite::Error::Http(r)) => {
+                assert_eq!(r.status(), 404, "{name}")
+            }
+            other => panic!("{name}: {:?}", other.map(|_| "opened")),
+        }
+    }
+    // Nothing was read through a link, and the server is still up.
+    let body = ureq::get(&server.http("/api/replays/secret"))
+        .call()
+        .map_or_else(
+            |e| match e {
+                ureq::Error::Status(_, r) => r.into_string().unwrap(),
+                e => panic!("{e}"),
+            },
+            |r| r.into_string().unwrap(),
+        );
+    assert!(
+        !body.contains("do-not-serve-me") && !body.contains(dir.to_str().unwrap()),
+        "{body}"
+    );
+    assert_eq!(status_of(&server, "/healthz"), 200);
+    assert_eq!(status_of(&server, "/api/replays/real"), 200);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_header_line_without_end_is_listed_as_unreadable_quickly_and_in_little_memory() {
+    let dir = empty_dir("endless-header");
+    std::fs::create_dir_all(&dir).unwrap();
+    // 50 MB and no newline.
+    let mut endless = std::fs::File::create(dir.join("endless.jsonl")).unwrap();
+    let block = vec![b'{'; 1 << 20];
+    for _ in 0..50 {
+        endless.write_all(&block).unwrap();
+    }
+    drop(endless);
+    let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
+    let before = memory_kb(&server, "VmHWM:");
+    let replays = listed(&server);
+    assert_eq!(ids(&replays), ["endless"]);
+    assert!(replays[0]["error"].is_string(), "{replays:?}");
+    // The lobby asks every 2 s: a file unchanged since is not read again.
+    let read_before = bytes_read(&server);
+    for _ in 0..5 {
+        assert_eq!(listed(&server), replays);
+    }
+    let read = bytes_read(&server) - read_before;
+    assert!(read < 100_000, "5 more listings read {read} bytes");
+    // Viewing it is refused before the upgrade, also without reading it all.
+    let refused = tokio_tungstenite::connect_async(server.ws("/ws/replays/endless")).await;
+    match refused {
+        Err(tokio_tungstenite::tungstenite::Error::Http(r)) => assert_eq!(r.status(), 422),
+        other => panic!("{:?}", other.map(|_| "opened")),
+    }
+    let grew = memory_kb(&server, "VmHWM:").saturating_sub(before);
+    assert!(
+        grew < 10_000,
+        "the peak memory grew {grew} kB reading a 50 MB line"
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn downloads_serve_exactly_the_range_asked() {
+    let dir = empty_dir("ranged-downloads");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("ranged.jsonl");
+    write_replay(&file, 2000, 500, true);
+    let bytes = std::fs::read(&file).unwrap();
+    let len = bytes.len();
+    let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
+    let get = |range: Option<&str>| {
+        let mut request = ureq::get(&server.http("/api/replays/ranged"));
+        if let Some(range) = range {
+            request = request.set("Range", range);
+        }
+        match request.call() {
+            Ok(r) | Err(ureq::Error::Status(_, r)) => r,
+            Err(e) => panic!("{e}"),
+        }
+    };
+    let whole = get(None);
+    assert_eq!(whole.status(), 200);
+    assert_eq!(whole.header("accept-ranges"), Some("bytes"));
+    assert_eq!(
+        whole.header("content-length"),
+        Some(len.to_string().as_str())
+    );
+    let mut body = Vec::new();
+    whole.into_reader().read_to_end(&mut body).unwrap();
+    assert!(body == bytes, "the whole file, byte for byte");
+    for (range, start, end) in [
+        ("bytes=0-99", 0, 99),
+        ("bytes=1000-", 1000, len - 1),
+        ("bytes=-500", len - 500, len - 1),
+        ("bytes=123456-123457", 123_456, 123_457),
+        (
+            &format!("bytes={}-{}", len - 10, len + 1000) as &str,
+            len - 10,
+            len - 1,
+        ),
+    ] {
+        let part = get(Some(range));
+        assert_eq!(part.status(), 206, "{range}");
+        assert_eq!(
+            part.header("content-range").map(str::to_string),
+            Some(format!("bytes {start}-{end}/{len}")),
+            "{range}"
+        );
+        let mut body = Vec::new();
+        part.into_reader().read_to_end(&mut body).unwrap();
+        assert!(body == bytes[start..=end], "{range}: the bytes asked");
+    }
+    let past = get(Some(&format!("bytes={len}-")));
+    assert_eq!(past.status(), 416);
+    assert_eq!(
+        past.header("content-range").map(str::to_string),
+        Some(format!("bytes */{len}"))
+    );
+}
+
+/// Starts a download and reads only its first bytes: a client on a slow link.
+fn slow_download(server: &Server, id: &str) -> std::net::TcpStream {
+    let mut socket = std::net::TcpStream::connect(&server.addr).unwrap();
+    write!(
+        socket,
+        "GET /api/replays/{id} HTTP/1.1\r\nHost: test\r\n\r\n"
+    )
+    .unwrap();
+    let mut first = [0; 4096];
+    socket.read_exact(&mut first).unwrap();
+    assert!(first.starts_with(b"HTTP/1.1 200"));
+    socket
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn viewers_and_slow_downloads_of_a_big_replay_cost_a_fraction_of_its_size() {
+    let dir = empty_dir("big-replay");
+    std::fs::create_dir_all(&dir).unwrap();
+    // About 80 MB.
+    write_replay(&dir.join("big.jsonl"), 80_000, 1000, true);
+    let size_kb = std::fs::metadata(dir.join("big.jsonl")).unwrap().len() / 1000;
+    let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
+    let before = memory_kb(&server, "VmRSS:");
+    let mut viewers = Vec::new();
+    for _ in 0..8 {
+        let mut viewer = connect(&server.ws("/ws/replays/big")).await;
+        let hello = next(&mut viewer).await;
+        assert_eq!(hello["replay"]["frames"], 80_000);
+        assert_eq!(next_of(&mut viewer, "frame").await["tick"], 0);
+        viewers.push(viewer);
+    }
+    let downloads: Vec<_> = (0..8).map(|_| slow_download(&server, "big")).collect();
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let grew = memory_kb(&server, "VmRSS:").saturating_sub(before);
+    eprintln!("8 viewers and 8 slow downloads of a {size_kb} kB replay: resident memory grew {grew} kB (from {before} kB)");
+    assert!(
+        grew < size_kb / 4,
+        "memory grew {grew} kB for a {size_kb} kB replay"
+    );
+    // A seek flood is answered from the index, not by scanning the frames.
+    let cpu = cpu_ticks(&server);
+    let (mut sink, mut stream) = viewers.swap_remove(0).split();
+    let seeks = 2000u64;
+    // Even ticks, which the replay has, in an order that jumps about.
+    let tick = |k: u64| 2 * ((k * 7919) % 80_000);
+    let answers = tokio::spawn(async move {
+        let mut answered = 0;
+        while answered < seeks {
+            let message = tokio::time::timeout(Duration::from_secs(10), stream.next())
+                .await
+                .expect("answers keep coming")
+                .expect("the socket is open")
+                .unwrap();
+            let Message::Text(text) = message else {
+                continue;
+            };
+            let f: Value = serde_json::from_str(&text).unwrap();
+            if f["tick"].as_u64() == Some(tick(answered)) {
+                answered += 1;
+            }
+        }
+    });
+    for k in 0..seeks {
+        let seek = json!({"type": "control", "action": "seek", "tick": tick(k)});
+        sink.send(Message::Text(seek.to_string().into()))
+            .await
+            .unwrap();
+    }
+    answers.await.unwrap();
+    let used = cpu_ticks(&server) - cpu;
+    eprintln!("{seeks} seeks in an 80,000-frame replay: {used} CPU ticks (1/100 s)");
+    assert!(used < 200, "{seeks} seeks took {used} CPU ticks");
+    drop(downloads);
+}
+
+/// A server whose settings file says `settings`.
+fn server_with(name: &str, settings: &str, flags: &[&str]) -> (Server, PathBuf) {
+    let dir = empty_dir(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    let config = dir.join("server.toml");
+    std::fs::write(&config, settings).unwrap();
+    let replays = dir.join("replays");
+    std::fs::create_dir_all(&replays).unwrap();
+    let mut args = vec![
+        "--config",
+        config.to_str().unwrap(),
+        "--replay-dir",
+        replays.to_str().unwrap(),
+    ];
+    args.extend(flags);
+    (Server::start(&args), replays)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_replay_viewer_that_stops_reading_is_closed_within_the_send_timeout() {
+    let (server, dir) = server_with("unread-viewer", "send_timeout_ms = 300\n", &["--no-demo"]);
+    // Big frames at 8×: the socket's buffers fill within a second.
+    write_replay(&dir.join("wide.jsonl"), 400, 64 * 1024, true);
+    let mut viewer = connect(&server.ws("/ws/replays/wide")).await;
+    next(&mut viewer).await;
+    let speed = json!({"type": "control", "action": "speed", "speed": 8.0});
+    viewer
+        .send(Message::Text(speed.to_string().into()))
+        .await
+        .unwrap();
+    // And now it reads no more.
+    let deadline = Instant::now() + Duration::from_secs(8);
+    while metric(&server, "fieldhouse_slow_clients_dropped_total") < 1.0 {
+        assert!(
+            Instant::now() < deadline,
+            "a viewer that stopped reading was kept"
+        );
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    let log = server.log.lock().unwrap().join("\n");
+    assert!(log.contains("replay viewer that stopped reading"), "{log}");
+}
+
+/// Sets a file's modification time to `days_ago` days ago.
+fn age(path: &Path, days_ago: u64) {
+    let then = std::time::SystemTime::now() - Duration::from_secs(days_ago * 86_400);
+    std::fs::File::options()
+        .write(true)
+        .open(path)
+        .unwrap()
+        .set_modified(then)
+        .unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn retention_deletes_the_oldest_replays_and_never_the_one_being_written() {
+    let dir = empty_dir("retention");
+    std::fs::create_dir_all(&dir).unwrap();
+    let outside = empty_dir("retention-outside");
+    std::fs::create_dir_all(&outside).unwrap();
+    for (k, days) in [(1, 30u64), (2, 3), (3, 2), (4, 1)] {
+        let path = dir.join(format!("old-{k}.jsonl"));
+        write_replay(&path, 100, 1000, true);
+        age(&path, days);
+    }
+    // A link to a file elsewhere, older than anything: neither it nor what it names goes.
+    let precious = outside.join("precious.jsonl");
+    write_replay(&precious, 10, 100, true);
+    age(&precious, 100);
+    std::os::unix::fs::symlink(&precious, dir.join("link.jsonl")).unwrap();
+    // 250 kB and 10 days: at start old-1 goes for its age, old-2 for the size.
+    let server = Server::start(&[
+        "--no-demo",
+        "--replay-dir",
+        dir.to_str().unwrap(),
+        "--replay-retention-bytes",
+        "250000",
+        "--replay-keep-days",
+        "10",
+    ]);
+    let present = || {
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    };
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while present().contains(&"old-2.jsonl".to_string()) {
+        assert!(Instant::now() < deadline, "{:?}", present());
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    assert_eq!(present(), ["link.jsonl", "old-3.jsonl", "old-4.jsonl"]);
+    // A real-time match records; a fast one finishes, which sweeps again: everything
+    // but the recording goes, since the recording alone is over the limit soon.
+    let (live, _) = server.create(json!({"sport": "baseball", "mode": "realtime"}));
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let (fast, _) = server.create(json!({"sport": "cricket", "mode": "fast", "duration_s": 60.0}));
+    let deadline = Instant::now() + Duration::from_secs(20);
+    loop {
+        let names = present();
+        let only_live = names.len() == 2 && names.iter().any(|n| n.starts_with(&live));
+        if only_live && !names.iter().any(|n| n.starts_with(&fast)) {
+            break;
+        }
+        assert!(Instant::now() < deadline, "{names:?}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    assert!(precious.exists(), "a link's target is never deleted");
+    assert!(metric(&server, "fieldhouse_replays_deleted_total") >= 5.0);
+    let log = server.log.lock().unwrap().join("\n");
+    assert!(log.contains("deleted an old replay"), "{log}");
+    // The recording goes on.
+    let recording = present()
+        .into_iter()
+        .find(|n| n.starts_with(&live))
+        .unwrap();
+    let size = |name: &str| std::fs::metadata(dir.join(name)).map_or(0, |m| m.len());
+    let before = size(&recording);
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    assert!(size(&recording) > before, "the live recording grows");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_never_ending_match_rotates_its_replay_into_segments_that_verify() {
+    let (server, dir) = server_with(
+        "rotation",
+        "replay_segment_bytes = 16384\nreplay_max_match_bytes = 16384\n",
+        &["--no-demo"],
+    );
+    // No bot slots, real time: it rotates (the total limit is for other matches).
+    let (id, _) = server.create(json!({"sport": "baseball", "mode": "realtime", "seed": 7}));
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let segments = loop {
+        let segments: Vec<Value> = listed(&server)
+            .into_iter()
+            .filter(|r| r["match"] == id.as_str())
+            .collect();
+        if segments.len() >= 3 {
+            break segments;
+        }
+        assert!(Instant::now() < deadline, "{segments:?}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    };
+    let first_ticks: Vec<u64> = segments
+        .iter()
+        .map(|s| s["first_tick"].as_u64().unwrap())
+        .collect();
+    assert_eq!(first_ticks[0], 0);
+    assert!(first_ticks[1] > 0, "{segments:?}");
+    assert_eq!(segments[1]["segment"], 1);
+    assert_eq!(segments[0]["reason"], "rotated");
+    for segment in &segments[..2] {
+        assert!(
+            segment["bytes"].as_u64().unwrap() < 16_384 + 8_192,
+            "{segment}"
+        );
+        let file = dir.join(format!("{}.jsonl", segment["id"].as_str().unwrap()));
+        let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+            .args(["replay", "verify"])
+            .arg(&file)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    // A later segment plays from its own first tick.
+    let second = segments[1]["id"].as_str().unwrap();
+    let mut viewer = connect(&server.ws(&format!("/ws/replays/{second}"))).await;
+    let hello = next(&mut viewer).await;
+    assert_eq!(hello["replay"]["first_tick"].as_u64(), Some(first_ticks[1]));
+    assert_eq!(hello["replay"]["complete"], true);
+    assert!(server.get(&format!("/api/matches/{id}"))["replay_error"].is_null());
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_fast_match_stops_recording_at_its_size_limit_and_its_replay_verifies() {
+    let (server, dir) = server_with(
+        "size-limit",
+        "replay_max_match_bytes = 200000\n",
+        &["--no-demo"],
+    );
+    let (id, _) = server.create(json!({"sport": "cricket", "mode": "fast", "duration_s": 600.0}));
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let replay = loop {
+        if let Some(r) = listed(&server)
+            .into_iter()
+            .find(|r| r["match"] == id.as_str() && r["complete"] == true)
+        {
+            break r;
+        }
+        assert!(Instant::now() < deadline);
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    };
+    assert_eq!(replay["reason"], "size_limit");
+    assert!(
+        replay["bytes"].as_u64().unwrap() <= 200_000 + 4096,
+        "{replay}"
+    );
+    // The match hears why at its next frame, and shows it.
+    let deadline = Instant::now() + Duration::from_secs(5);
+    loop {
+        let shown = server.get(&format!("/api/matches/{id}"));
+        let why = shown["replay_error"].as_str().unwrap_or_default();
+        if why.contains("replay_max_match_bytes") {
+            break;
+        }
+        assert!(Instant::now() < deadline, "{shown}");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    let file = dir.join(format!("{}.jsonl", replay["id"].as_str().unwrap()));
+    let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args(["replay", "verify"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn other_matches_keep_ticking_while_a_large_replay_closes() {
+    // A fast match writes about 60 MB a second here: under the default 1 GiB limit.
+    let dir = empty_dir("closing-big-replay");
+    let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
+    let (live, _) = server.create(json!({"sport": "baseball", "mode": "realtime"}));
+    let mut spectator = connect(&server.ws(&format!("/ws/matches/{live}"))).await;
+    next(&mut spectator).await;
+    let (fast, _) =
+        server.create(json!({"sport": "cricket", "mode": "fast", "duration_s": 100000.0}));
+    // Let it write for a while, then delete it: its replay is flushed, synced and
+    // closed while the real-time match must go on at 30 frames a second.
+    tokio::time::sleep(Duration::from_secs(6)).await;
+    let gaps = tokio::spawn(async move {
+        let (mut last, mut worst) = (Instant::now(), Duration::ZERO);
+        let until = Instant::now() + Duration::from_secs(3);
+        while Instant::now() < until {
+            next_of(&mut spectator, "frame").await;
+            worst = worst.max(last.elapsed());
+            last = Instant::now();
+        }
+        worst
+    });
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let deleting = Instant::now();
+    ureq::delete(&server.http(&format!("/api/matches/{fast}")))
+        .set("Authorization", &format!("Bearer {ADMIN}"))
+        .call()
+        .unwrap();
+    let worst = gaps.await.unwrap();
+    // Frames come every 33 ms, and the fast match takes turns on the same thread, so
+    // gaps of some 40 ms are normal; syncing the replay on that thread stopped them for
+    // 200–300 ms (2.9 s for a 2 GB replay).
+    let bytes: u64 = listed(&server)
+        .iter()
+        .filter(|r| r["match"] == fast.as_str())
+        .map(|r| r["bytes"].as_u64().unwrap())
+        .sum();
+    eprintln!(
+        "a {} MB replay closed {:?} after its delete; the worst gap between live frames was {worst:?}",
+        bytes / 1_000_000,
+        deleting.elapsed()
+    );
+    assert!(
+        worst < Duration::from_millis(150),
+        "live frames stopped for {worst:?}"
+    );
+    drop(server);
+    let _ = std::fs::remove_dir_all(&dir);
+}
