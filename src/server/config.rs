@@ -28,11 +28,14 @@ pub struct ServerConfig {
     pub max_matches: usize,
     /// Largest WebSocket message the server reads, bytes; larger closes with 1009.
     pub max_message_bytes: usize,
-    /// Messages per second a bot may send, sustained.
+    /// Messages per second a client may send on any socket (bot, spectator, replay
+    /// viewer), sustained; a bot's one answer to each perception is free.
     pub bot_messages_per_second: u32,
-    /// Messages a bot may send in a burst above the sustained rate.
+    /// Messages a client may send in a burst above the sustained rate; refused a burst
+    /// more, it is closed with 1008.
     pub bot_burst: u32,
-    /// A spectator whose socket takes longer than this to accept a frame is dropped, ms.
+    /// A client (spectator, bot, replay viewer) whose socket takes longer than this to
+    /// accept a message is dropped, ms.
     pub send_timeout_ms: u64,
     /// A REST request taking longer than this is answered 408, ms.
     pub request_timeout_ms: u64,
