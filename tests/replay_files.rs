@@ -472,6 +472,20 @@ async fn retention_deletes_the_oldest_replays_and_never_the_one_being_written() 
     let before = size(&recording);
     tokio::time::sleep(Duration::from_millis(500)).await;
     assert!(size(&recording) > before, "the live recording grows");
+    // Its viewers each see what was written when they came (the later one's index
+    // scanned on from the earlier one's).
+    let live_replay = recording.strip_suffix(".jsonl").unwrap();
+    let mut early = connect(&server.ws(&format!("/ws/replays/{live_replay}"))).await;
+    let seen_early = next(&mut early).await["replay"].clone();
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let mut late = connect(&server.ws(&format!("/ws/replays/{live_replay}"))).await;
+    let seen_late = next(&mut late).await["replay"].clone();
+    assert_eq!(seen_late["complete"], false);
+    assert!(
+        seen_late["frames"].as_u64() > seen_early["frames"].as_u64(),
+        "{seen_early} {seen_late}"
+    );
+    assert_eq!(seen_late["first_tick"], 0);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -27,7 +27,7 @@ struct FrameAt {
 }
 
 /// A replay file's header, footer and frame positions: everything but the frames.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct Index {
     pub header: Value,
     pub scenario: Scenario,
@@ -35,6 +35,13 @@ pub struct Index {
     pub footer: Option<Value>,
     /// Why the readable prefix ends early, as [`super::Replay::problem`].
     pub problem: Option<String>,
+    /// Where the scan stopped: after the last whole line read, and that line's number
+    /// plus one.
+    scanned: (u64, usize),
+    /// Whether the scan stopped at the file's end (maybe in a line being written) rather
+    /// than at a record that does not read: a file that has grown since can be scanned
+    /// on from `scanned` (see [`Index::grown`]).
+    at_end: bool,
 }
 
 /// What a line says it is; the rest of it is skipped, not kept.
@@ -91,10 +98,8 @@ impl Index {
     /// readable prefix, with the reason in `problem`. Memory: one line at a time.
     pub fn build(mut file: &File) -> Result<Index, String> {
         file.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
-        let mut reader = BufReader::with_capacity(64 * 1024, file);
         let mut first = Vec::new();
-        (&mut reader)
-            .take(MAX_HEADER_BYTES)
+        BufReader::new(file.take(MAX_HEADER_BYTES))
             .read_until(b'\n', &mut first)
             .map_err(|e| e.to_string())?;
         let (header, scenario) = parse_header(&first)?;
@@ -104,31 +109,65 @@ impl Index {
             frames: Vec::new(),
             footer: None,
             problem: None,
+            scanned: (first.len() as u64, 2),
+            at_end: false,
         };
-        let mut offset = first.len() as u64;
+        index.scan(file)?;
+        Ok(index)
+    }
+
+    /// The index of `file`, the file this index is of, grown since it was scanned (a
+    /// replay being written): the frames already found are kept and only the bytes
+    /// after them are read. None if there is nothing to read on from (the scan ended at
+    /// the footer or at a record that does not read).
+    pub fn grown(&self, file: &File) -> Option<Result<Index, String>> {
+        if !self.at_end || self.footer.is_some() {
+            return None;
+        }
+        let mut index = Index {
+            problem: None,
+            at_end: false,
+            ..self.clone()
+        };
+        Some(index.scan(file).map(|()| index))
+    }
+
+    /// Reads whole lines from `scanned` on, to the end or the first that does not read.
+    fn scan(&mut self, mut file: &File) -> Result<(), String> {
+        let (mut offset, first_number) = self.scanned;
+        file.seek(SeekFrom::Start(offset))
+            .map_err(|e| e.to_string())?;
+        let mut reader = BufReader::with_capacity(64 * 1024, file);
         let mut line = Vec::new();
-        for number in 2.. {
+        for number in first_number.. {
             let read = next_line(&mut reader, &mut line, MAX_LINE_BYTES)
                 .map_err(|e| format!("line {number} cannot be read: {e}"));
             let problem = match read {
-                Ok(Line::End) => break,
-                Ok(Line::Whole) => index.take(&line, offset, number).err(),
-                Ok(Line::Torn) => Some(format!(
-                    "line {number} is torn (the file was cut mid-record)"
-                )),
+                Ok(Line::End) => {
+                    self.at_end = true;
+                    None
+                }
+                Ok(Line::Whole) => self.take(&line, offset, number).err(),
+                Ok(Line::Torn) => {
+                    self.at_end = true;
+                    Some(format!(
+                        "line {number} is torn (the file was cut mid-record)"
+                    ))
+                }
                 Ok(Line::TooLong) => Some(format!(
                     "line {number} is longer than {} MiB: not a record",
                     MAX_LINE_BYTES >> 20
                 )),
                 Err(e) => Some(e),
             };
-            if problem.is_some() {
-                index.problem = problem;
-                break;
+            if problem.is_some() || self.at_end {
+                self.problem = problem;
+                self.scanned = (offset, number);
+                return Ok(());
             }
             offset += line.len() as u64 + 1;
         }
-        Ok(index)
+        unreachable!("the lines of a file are fewer than usize::MAX")
     }
 
     /// Files one whole line, found at `offset`.
@@ -294,6 +333,37 @@ mod tests {
         // A header with no end is not read for ever.
         let endless = file_of(&"x".repeat(2 * 1024 * 1024));
         assert!(Index::build(&endless).is_err());
+    }
+
+    #[test]
+    fn a_grown_file_is_scanned_on_from_where_its_index_stopped() {
+        let mut text = format!("{HEADER}\n");
+        for t in 0..100 {
+            text += &frame(t);
+            text += "\n";
+        }
+        // Cut in the middle of a frame being written.
+        let cut = text.len() - 10;
+        let mut file = file_of(&text[..cut]);
+        let before = Index::build(&file).unwrap();
+        assert_eq!(before.len(), 99);
+        assert!(before.problem.as_ref().unwrap().contains("torn"));
+        file.write_all(&text.as_bytes()[cut..]).unwrap();
+        file.write_all(format!("{}\n", frame(100)).as_bytes())
+            .unwrap();
+        let grown = before.grown(&file).unwrap().unwrap();
+        assert_eq!(grown.len(), 101);
+        assert_eq!(grown.problem, None);
+        assert_eq!(
+            grown.read(&file, 99, 2, 1 << 20).unwrap(),
+            vec![frame(99), frame(100)]
+        );
+        let whole = Index::build(&file).unwrap();
+        assert_eq!(grown.frames, whole.frames);
+        assert_eq!(grown.scanned, whole.scanned);
+        // A file that ended at a record that does not read is not scanned on.
+        let bad = file_of(&format!("{HEADER}\n{}\nnot json\n", frame(0)));
+        assert!(Index::build(&bad).unwrap().grown(&bad).is_none());
     }
 
     #[test]

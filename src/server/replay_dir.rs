@@ -130,7 +130,8 @@ pub struct Replays {
 
 impl Replays {
     /// The index of an opened replay, shared with its other viewers; scanned (on a
-    /// blocking thread) if none has it.
+    /// blocking thread) if none has it, from where an index of the same file at an
+    /// earlier size stopped if there is one.
     pub async fn index(&self, file: &File, meta: &Metadata) -> Result<Arc<Index>, String> {
         let version = Version::of(meta);
         let cached =
@@ -143,8 +144,24 @@ impl Replays {
         if let Some(index) = cached(&self.indexes.lock().expect("not poisoned")) {
             return Ok(index);
         }
+        // A file being written grows between viewers: scan on from an index of an
+        // earlier size of it, if one is still in use, rather than from the start.
+        let earlier = {
+            let indexes = self.indexes.lock().expect("not poisoned");
+            indexes
+                .iter()
+                .filter(|(v, _)| {
+                    (v.dev, v.ino) == (version.dev, version.ino) && v.len < version.len
+                })
+                .filter_map(|(_, weak)| weak.upgrade())
+                .max_by_key(|index| index.len())
+        };
         let file = file.try_clone().map_err(|e| e.to_string())?;
-        let index = tokio::task::spawn_blocking(move || Index::build(&file))
+        let scan = move || match earlier.as_ref().and_then(|e| e.grown(&file)) {
+            Some(grown) => grown,
+            None => Index::build(&file),
+        };
+        let index = tokio::task::spawn_blocking(scan)
             .await
             .map_err(|e| e.to_string())??;
         let index = Arc::new(index);
