@@ -456,3 +456,40 @@ fn requests_beyond_the_concurrency_limit_are_shed_not_queued() {
     );
     assert!(metric(&server, "fieldhouse_requests_shed_total") >= shed as f64);
 }
+
+#[test]
+fn a_download_whose_client_stops_reading_is_closed_at_the_send_timeout() {
+    let file = settings("stalled-download", "send_timeout_ms = 1000\n");
+    let dir = common::server::empty_dir("stalled-download-replays");
+    std::fs::create_dir_all(&dir).unwrap();
+    // The download streams bytes; whether they are a replay does not matter here.
+    let size = 32 << 20;
+    std::fs::write(dir.join("large.jsonl"), vec![b'x'; size]).unwrap();
+    let server = Server::start(&[
+        "--no-demo",
+        "--config",
+        file.to_str().unwrap(),
+        "--replay-dir",
+        dir.to_str().unwrap(),
+    ]);
+    let mut client = TcpStream::connect(&server.addr).unwrap();
+    write!(
+        client,
+        "GET /api/replays/large HTTP/1.1\r\nHost: {}\r\n\r\n",
+        server.addr
+    )
+    .unwrap();
+    // Read nothing for a while: the socket buffers fill and the server's writes stall.
+    std::thread::sleep(Duration::from_secs(4));
+    client
+        .set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
+    let mut received = Vec::new();
+    let ended = client.read_to_end(&mut received);
+    assert!(ended.is_ok(), "the server closed the connection: {ended:?}");
+    assert!(
+        received.len() < size,
+        "the whole file came through ({} bytes): the stalled download was kept",
+        received.len()
+    );
+}

@@ -12,7 +12,9 @@
 //!   (see [`Connections::spectators_welcome`]), so the last places go to requests.
 //! * **Slow and idle**: a request's headers must arrive within `header_timeout_ms` of
 //!   the connection opening or of the previous response, so a client that trickles
-//!   headers or opens a connection and says nothing is closed.
+//!   headers or opens a connection and says nothing is closed; a write that makes no
+//!   progress for `send_timeout_ms` fails, so one that stops reading (a download, say)
+//!   is closed too.
 //! * **Descriptors run out anyway** (another process, a low limit): accepting fails;
 //!   the loop closes the longest-idle connection, pauses briefly instead of spinning on
 //!   the error, and logs it once per ten seconds with a count.
@@ -194,10 +196,41 @@ impl Drop for Conn {
     }
 }
 
-/// A TCP stream that holds its connection's place for as long as it is open.
+/// A TCP stream that holds its connection's place for as long as it is open, and
+/// fails a write that makes no progress for `write_timeout`: a client that stops
+/// reading a download (or any response) gives its descriptor back instead of holding
+/// it for as long as it likes.
 struct Counted {
     stream: TcpStream,
     _place: Arc<Conn>,
+    write_timeout: Duration,
+    /// Set while a write waits for room in the socket.
+    stalled: Option<Pin<Box<tokio::time::Sleep>>>,
+}
+
+impl Counted {
+    /// `polled`, unless writes have waited longer than the timeout.
+    fn bounded<T>(
+        &mut self,
+        cx: &mut Context<'_>,
+        polled: Poll<io::Result<T>>,
+    ) -> Poll<io::Result<T>> {
+        if polled.is_ready() {
+            self.stalled = None;
+            return polled;
+        }
+        let timeout = self.write_timeout;
+        let stalled = self
+            .stalled
+            .get_or_insert_with(|| Box::pin(tokio::time::sleep(timeout)));
+        match stalled.as_mut().poll(cx) {
+            Poll::Ready(()) => Poll::Ready(Err(io::Error::new(
+                io::ErrorKind::TimedOut,
+                "the client took nothing for the write timeout",
+            ))),
+            Poll::Pending => Poll::Pending,
+        }
+    }
 }
 
 impl AsyncRead for Counted {
@@ -216,10 +249,12 @@ impl AsyncWrite for Counted {
         cx: &mut Context<'_>,
         buf: &[u8],
     ) -> Poll<io::Result<usize>> {
-        Pin::new(&mut self.stream).poll_write(cx, buf)
+        let polled = Pin::new(&mut self.stream).poll_write(cx, buf);
+        self.bounded(cx, polled)
     }
     fn poll_flush(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
-        Pin::new(&mut self.stream).poll_flush(cx)
+        let polled = Pin::new(&mut self.stream).poll_flush(cx);
+        self.bounded(cx, polled)
     }
     fn poll_shutdown(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
         Pin::new(&mut self.stream).poll_shutdown(cx)
@@ -229,7 +264,8 @@ impl AsyncWrite for Counted {
         cx: &mut Context<'_>,
         bufs: &[io::IoSlice<'_>],
     ) -> Poll<io::Result<usize>> {
-        Pin::new(&mut self.stream).poll_write_vectored(cx, bufs)
+        let polled = Pin::new(&mut self.stream).poll_write_vectored(cx, bufs);
+        self.bounded(cx, polled)
     }
     fn is_write_vectored(&self) -> bool {
         self.stream.is_write_vectored()
@@ -279,6 +315,8 @@ fn raise_descriptor_limit() -> u64 {
 pub struct Listening {
     pub connections: Arc<Connections>,
     pub header_timeout: Duration,
+    /// A write that makes no progress for this long fails (`send_timeout_ms`).
+    pub write_timeout: Duration,
     pub metrics: Arc<Metrics>,
 }
 
@@ -340,6 +378,8 @@ fn accept(
     let io = TokioIo::new(Counted {
         stream,
         _place: place.clone(),
+        write_timeout: settings.write_timeout,
+        stalled: None,
     });
     let router = router.clone();
     let service = hyper::service::service_fn(move |mut request: hyper::Request<_>| {

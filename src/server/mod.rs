@@ -152,6 +152,7 @@ pub async fn serve(
     let settings = listener::Listening {
         connections,
         header_timeout: Duration::from_millis(config.header_timeout_ms),
+        write_timeout: Duration::from_millis(config.send_timeout_ms),
         metrics: app.metrics.clone(),
     };
     listener::serve(listener, router, settings, graceful).await;
