@@ -25,17 +25,6 @@ fn settings(name: &str, toml: &str) -> PathBuf {
     path
 }
 
-fn metric(server: &Server, name: &str) -> f64 {
-    let text = ureq::get(&server.http("/metrics"))
-        .call()
-        .unwrap()
-        .into_string()
-        .unwrap();
-    text.lines()
-        .find_map(|l| l.strip_prefix(name)?.trim().parse().ok())
-        .unwrap_or_else(|| panic!("{name} in /metrics:\n{text}"))
-}
-
 /// Whether the server has closed `stream` (reads end), without waiting.
 fn closed_by_server(stream: &TcpStream) -> bool {
     stream.set_nonblocking(true).unwrap();
@@ -303,7 +292,7 @@ async fn control_and_fragment_frame_floods_are_closed_with_1008() {
             other => panic!("{other:?}"),
         }
     }
-    assert!(metric(&server, "fieldhouse_closed_flooding_total") >= 3.0);
+    assert!(server.metric("fieldhouse_closed_flooding_total") >= 3.0);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -360,7 +349,7 @@ async fn a_bot_that_stops_reading_is_closed_within_the_send_timeout() {
     let mut written = -1.0;
     loop {
         tokio::time::sleep(Duration::from_millis(500)).await;
-        let now = metric(&server, "fieldhouse_bytes_out_total");
+        let now = server.metric("fieldhouse_bytes_out_total");
         if now == written {
             break;
         }
@@ -375,14 +364,14 @@ async fn a_bot_that_stops_reading_is_closed_within_the_send_timeout() {
     let mut fresh = connect(&url).await;
     assert_eq!(next_of(&mut fresh, "hello").await["role"], "bot");
     let deadline = Instant::now() + Duration::from_secs(5);
-    while metric(&server, "fieldhouse_connections{role=\"bot\"}") > 1.0 {
+    while server.metric("fieldhouse_connections{role=\"bot\"}") > 1.0 {
         assert!(
             Instant::now() < deadline,
             "a bot that stopped reading is still connected after its token reconnected"
         );
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
-    assert!(metric(&server, "fieldhouse_slow_clients_dropped_total") >= 1.0);
+    assert!(server.metric("fieldhouse_slow_clients_dropped_total") >= 1.0);
     drop(stalled);
 }
 
@@ -408,12 +397,7 @@ async fn a_forged_host_cannot_pass_for_the_servers_own_origin() {
     assert_eq!(open(format!("evil.example:{port}")).await, 403);
     assert_eq!(open(format!("localhost:{port}")).await, 101);
     assert_eq!(open(format!("play.example:{port}")).await, 101);
-    assert!(
-        metric(
-            &server,
-            "fieldhouse_sockets_refused_total{reason=\"origin\"}"
-        ) >= 1.0
-    );
+    assert!(server.metric("fieldhouse_sockets_refused_total{reason=\"origin\"}") >= 1.0);
 }
 
 #[test]
@@ -454,7 +438,7 @@ fn requests_beyond_the_concurrency_limit_are_shed_not_queued() {
         statuses.iter().all(|&s| s == 200 || s == 503),
         "{statuses:?}"
     );
-    assert!(metric(&server, "fieldhouse_requests_shed_total") >= shed as f64);
+    assert!(server.metric("fieldhouse_requests_shed_total") >= shed as f64);
 }
 
 #[test]

@@ -44,19 +44,6 @@ fn stand(tick: u64) -> Value {
     json!({"type": "command", "tick": tick, "action": {"kind": "stand"}})
 }
 
-fn metric(server: &Server, name: &str) -> f64 {
-    let text = ureq::get(&server.http("/metrics"))
-        .call()
-        .unwrap()
-        .into_string()
-        .unwrap();
-    text.lines()
-        .find_map(|l| l.strip_prefix(&format!("{name} ")))
-        .unwrap_or_else(|| panic!("no {name} in /metrics"))
-        .parse()
-        .unwrap()
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn time_like_numbers_the_code_cannot_represent_are_refused_with_their_field() {
     let server = Server::start(&["--no-demo"]);
@@ -89,7 +76,7 @@ async fn time_like_numbers_the_code_cannot_represent_are_refused_with_their_fiel
         assert!(message.starts_with(expected), "{body}: {message}");
     }
     assert_eq!(server.get("/api/matches")["matches"], json!([]));
-    assert_eq!(metric(&server, "fieldhouse_matches"), 0.0);
+    assert_eq!(server.metric("fieldhouse_matches"), 0.0);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -246,7 +233,7 @@ async fn racing_creations_start_exactly_max_matches() {
             .len(),
         max
     );
-    assert_eq!(metric(&server, "fieldhouse_matches"), max as f64);
+    assert_eq!(server.metric("fieldhouse_matches"), max as f64);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -282,7 +269,7 @@ async fn ended_matches_leave_the_list_after_their_time_to_live() {
         "{:?}",
         started.elapsed()
     );
-    assert_eq!(metric(&server, "fieldhouse_matches"), 0.0);
+    assert_eq!(server.metric("fieldhouse_matches"), 0.0);
 }
 
 /// A lock-step match at 1000 Hz with a 5 ms deadline, its bot limited to 20 messages a

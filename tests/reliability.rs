@@ -28,17 +28,6 @@ async fn open(url: &str, origin: Option<&str>) -> Result<Socket, u16> {
     }
 }
 
-fn metric(server: &Server, name: &str) -> f64 {
-    let text = ureq::get(&server.http("/metrics"))
-        .call()
-        .unwrap()
-        .into_string()
-        .unwrap();
-    text.lines()
-        .find_map(|l| l.strip_prefix(name)?.trim().parse().ok())
-        .unwrap_or_else(|| panic!("{name} in /metrics:\n{text}"))
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn pages_from_other_origins_are_refused_unless_allowed() {
     let server = Server::start(&["--allow-origin", "https://friend.example"]);
@@ -64,10 +53,7 @@ async fn pages_from_other_origins_are_refused_unless_allowed() {
     let other_port = format!("http://{}:1", server.addr.split(':').next().unwrap());
     assert_eq!(open(&url, Some(&other_port)).await.err(), Some(403));
     assert_eq!(
-        metric(
-            &server,
-            "fieldhouse_sockets_refused_total{reason=\"origin\"}"
-        ),
+        server.metric("fieldhouse_sockets_refused_total{reason=\"origin\"}"),
         4.0
     );
     // The matches went on.
@@ -123,12 +109,7 @@ async fn one_address_holds_at_most_its_share_of_sockets() {
         );
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
-    assert!(
-        metric(
-            &server,
-            "fieldhouse_sockets_refused_total{reason=\"per_ip\"}"
-        ) >= 3.0
-    );
+    assert!(server.metric("fieldhouse_sockets_refused_total{reason=\"per_ip\"}") >= 3.0);
 }
 
 #[test]
@@ -414,7 +395,7 @@ async fn a_full_replay_disk_stops_the_recording_not_the_match() {
         why.contains("No space left") || why.contains("os error 28"),
         "{why}"
     );
-    assert!(metric(&server, "fieldhouse_replay_errors_total") >= 1.0);
+    assert!(server.metric("fieldhouse_replay_errors_total") >= 1.0);
     let log = server.log.lock().unwrap().join("\n");
     assert!(
         log.contains("replay recording stopped") || log.contains("cannot record"),
@@ -447,7 +428,7 @@ async fn a_replay_directory_that_vanishes_leaves_new_matches_unrecorded_but_runn
         .expect("the API shows the error");
     assert!(why.starts_with("cannot create"), "{why}");
     assert!(shown["replay"].is_null());
-    assert_eq!(metric(&server, "fieldhouse_replay_errors_total"), 1.0);
+    assert_eq!(server.metric("fieldhouse_replay_errors_total"), 1.0);
     let before = server.tick(&id);
     tokio::time::sleep(Duration::from_millis(300)).await;
     assert!(server.tick(&id) > before);

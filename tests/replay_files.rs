@@ -15,17 +15,6 @@ use std::process::Command;
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;
 
-fn metric(server: &Server, name: &str) -> f64 {
-    let text = ureq::get(&server.http("/metrics"))
-        .call()
-        .unwrap()
-        .into_string()
-        .unwrap();
-    text.lines()
-        .find_map(|l| l.strip_prefix(name)?.trim().parse().ok())
-        .unwrap_or_else(|| panic!("{name} in /metrics:\n{text}"))
-}
-
 /// A field of the server's `/proc/PID/status`, in kB (VmRSS, VmHWM).
 fn memory_kb(server: &Server, field: &str) -> u64 {
     let status = std::fs::read_to_string(format!("/proc/{}/status", server.child.id())).unwrap();
@@ -93,6 +82,19 @@ fn status_of(server: &Server, path: &str) -> u16 {
         Ok(r) => r.status(),
         Err(ureq::Error::Status(code, _)) => code,
         Err(e) => panic!("{path}: {e}"),
+    }
+}
+
+/// The first thing `found` finds in the listing, asked every 100 ms for 30 s.
+async fn until_listed<T>(server: &Server, found: impl Fn(&[Value]) -> Option<T>) -> T {
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        let listing = listed(server);
+        if let Some(t) = found(&listing) {
+            return t;
+        }
+        assert!(Instant::now() < deadline, "not listed in 30 s: {listing:?}");
+        tokio::time::sleep(Duration::from_millis(100)).await;
     }
 }
 
@@ -382,7 +384,7 @@ async fn a_replay_viewer_that_stops_reading_is_closed_within_the_send_timeout() 
         .unwrap();
     // And now it reads no more.
     let deadline = Instant::now() + Duration::from_secs(8);
-    while metric(&server, "fieldhouse_slow_clients_dropped_total") < 1.0 {
+    while server.metric("fieldhouse_slow_clients_dropped_total") < 1.0 {
         assert!(
             Instant::now() < deadline,
             "a viewer that stopped reading was kept"
@@ -460,7 +462,7 @@ async fn retention_deletes_the_oldest_replays_and_never_the_one_being_written() 
         tokio::time::sleep(Duration::from_millis(200)).await;
     }
     assert!(precious.exists(), "a link's target is never deleted");
-    assert!(metric(&server, "fieldhouse_replays_deleted_total") >= 5.0);
+    assert!(server.metric("fieldhouse_replays_deleted_total") >= 5.0);
     let log = server.log.lock().unwrap().join("\n");
     assert!(log.contains("deleted an old replay"), "{log}");
     // The recording goes on.
@@ -497,18 +499,15 @@ async fn a_never_ending_match_rotates_its_replay_into_segments_that_verify() {
     );
     // No bot slots, real time: it rotates (the total limit is for other matches).
     let (id, _) = server.create(json!({"sport": "baseball", "mode": "realtime", "seed": 7}));
-    let deadline = Instant::now() + Duration::from_secs(30);
-    let segments = loop {
-        let segments: Vec<Value> = listed(&server)
-            .into_iter()
+    let segments = until_listed(&server, |listing| {
+        let segments: Vec<Value> = listing
+            .iter()
             .filter(|r| r["match"] == id.as_str())
+            .cloned()
             .collect();
-        if segments.len() >= 3 {
-            break segments;
-        }
-        assert!(Instant::now() < deadline, "{segments:?}");
-        tokio::time::sleep(Duration::from_millis(200)).await;
-    };
+        (segments.len() >= 3).then_some(segments)
+    })
+    .await;
     let first_ticks: Vec<u64> = segments
         .iter()
         .map(|s| s["first_tick"].as_u64().unwrap())
@@ -522,17 +521,7 @@ async fn a_never_ending_match_rotates_its_replay_into_segments_that_verify() {
             segment["bytes"].as_u64().unwrap() < 16_384 + 8_192,
             "{segment}"
         );
-        let file = dir.join(format!("{}.jsonl", segment["id"].as_str().unwrap()));
-        let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
-            .args(["replay", "verify"])
-            .arg(&file)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        common::assert_verifies(&dir.join(format!("{}.jsonl", segment["id"].as_str().unwrap())));
     }
     // A later segment plays from its own first tick.
     let second = segments[1]["id"].as_str().unwrap();
@@ -551,17 +540,13 @@ async fn a_fast_match_stops_recording_at_its_size_limit_and_its_replay_verifies(
         &["--no-demo"],
     );
     let (id, _) = server.create(json!({"sport": "cricket", "mode": "fast", "duration_s": 600.0}));
-    let deadline = Instant::now() + Duration::from_secs(30);
-    let replay = loop {
-        if let Some(r) = listed(&server)
-            .into_iter()
+    let replay = until_listed(&server, |listing| {
+        listing
+            .iter()
             .find(|r| r["match"] == id.as_str() && r["complete"] == true)
-        {
-            break r;
-        }
-        assert!(Instant::now() < deadline);
-        tokio::time::sleep(Duration::from_millis(100)).await;
-    };
+            .cloned()
+    })
+    .await;
     assert_eq!(replay["reason"], "size_limit");
     assert!(
         replay["bytes"].as_u64().unwrap() <= 200_000 + 4096,
@@ -578,17 +563,7 @@ async fn a_fast_match_stops_recording_at_its_size_limit_and_its_replay_verifies(
         assert!(Instant::now() < deadline, "{shown}");
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
-    let file = dir.join(format!("{}.jsonl", replay["id"].as_str().unwrap()));
-    let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
-        .args(["replay", "verify"])
-        .arg(&file)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_verifies(&dir.join(format!("{}.jsonl", replay["id"].as_str().unwrap())));
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

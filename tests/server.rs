@@ -637,20 +637,6 @@ async fn the_reference_bot_refuses_a_spectator_socket_and_shows_its_progress() {
     );
 }
 
-/// `fieldhouse replay verify FILE` must succeed.
-fn assert_verifies(file: &std::path::Path) {
-    let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
-        .args(["replay", "verify"])
-        .arg(file)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
 fn replays_of(server: &Server) -> Vec<Value> {
     server.get("/api/replays")["replays"]
         .as_array()
@@ -691,7 +677,7 @@ async fn recorded_matches_are_listed_downloaded_and_played_with_seek() {
         .unwrap();
     let file = dir.join("downloaded.jsonl.copy");
     std::fs::write(&file, &body).unwrap();
-    assert_verifies(&file);
+    common::assert_verifies(&file);
     // Ids cannot reach outside the replay directory.
     for (path, status) in [
         ("/api/replays/..%2F..%2Fetc%2Fpasswd", 400),
@@ -808,7 +794,7 @@ async fn a_recorded_bot_match_verifies_with_its_command_log() {
         text.contains("\"record\":\"control\""),
         "the bot's arrival and departure are logged"
     );
-    assert_verifies(&file);
+    common::assert_verifies(&file);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -836,7 +822,7 @@ async fn a_server_killed_mid_match_leaves_a_readable_replay() {
     .unwrap();
     assert_eq!(info["complete"], false);
     assert!(info["frames"].as_u64().unwrap() >= 30, "{info}");
-    assert_verifies(&file);
+    common::assert_verifies(&file);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

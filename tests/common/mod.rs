@@ -37,6 +37,20 @@ pub fn json(command_line: &str) -> Value {
     serde_json::from_str(&success(command_line).0).expect("stdout is exactly one JSON document")
 }
 
+/// `fieldhouse replay verify FILE` must succeed.
+pub fn assert_verifies(file: &Path) {
+    let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args(["replay", "verify"])
+        .arg(file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// Runs a command that must fail without printing to stdout; returns its stderr.
 pub fn failure(command_line: &str) -> String {
     let out = fieldhouse(command_line);

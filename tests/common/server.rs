@@ -111,6 +111,19 @@ impl Server {
         (id, token, bot)
     }
 
+    /// A sample from `/metrics`: `name` with its labels, as written there
+    /// (`fieldhouse_connections{role="bot"}`).
+    pub fn metric(&self, name: &str) -> f64 {
+        let text = ureq::get(&self.http("/metrics"))
+            .call()
+            .unwrap()
+            .into_string()
+            .unwrap();
+        text.lines()
+            .find_map(|l| l.strip_prefix(name)?.trim().parse().ok())
+            .unwrap_or_else(|| panic!("{name} in /metrics:\n{text}"))
+    }
+
     pub fn tick(&self, id: &str) -> u64 {
         self.get(&format!("/api/matches/{id}"))["tick"]
             .as_u64()
