@@ -322,7 +322,7 @@ pub struct Listening {
 
 /// Serves `router` on `listener` until `shutdown` completes; then takes no new
 /// connections, asks open HTTP connections to finish, and waits for them (at most
-/// [`DRAIN`]). WebSockets end with their matches, on the server's own shutdown signal.
+/// 2 s). WebSockets end with their matches, on the server's own shutdown signal.
 pub async fn serve(
     listener: TcpListener,
     router: Router,
