@@ -130,13 +130,19 @@ pub(super) struct Sender<'a> {
 impl Sender<'_> {
     pub async fn text(&mut self, text: Utf8Bytes) -> Sent {
         self.metrics.bytes_out.fetch_add(text.len() as u64, Relaxed);
-        match tokio::time::timeout(self.timeout, self.sink.send(Message::Text(text))).await {
+        // The connection's own write timeout (see `listener`) is the same length and
+        // may fire first: either way the client stopped reading.
+        let sent = tokio::time::timeout(self.timeout, self.sink.send(Message::Text(text))).await;
+        match sent {
             Ok(Ok(())) => Sent::Ok,
-            Ok(Err(_)) => Sent::Failed,
-            Err(_) => {
+            Ok(Err(tungstenite::Error::Io(e))) if e.kind() != std::io::ErrorKind::TimedOut => {
+                Sent::Failed
+            }
+            Ok(Err(tungstenite::Error::Io(_))) | Err(_) => {
                 self.metrics.slow_clients_dropped.fetch_add(1, Relaxed);
                 Sent::TimedOut
             }
+            Ok(Err(_)) => Sent::Failed,
         }
     }
 
