@@ -345,11 +345,16 @@ impl Ticker {
     }
 
     fn tell(&self, agent: usize, code: &str, message: &str) {
+        self.tell_with(agent, code, message, ToBot::message);
+    }
+
+    /// Sends a bot an `error`, made into what its socket is told by `to_bot`.
+    fn tell_with(&self, agent: usize, code: &str, message: &str, to_bot: fn(String) -> ToBot) {
         if let Some(bot) = &self.bots[agent] {
             self.metrics.client_errors.fetch_add(1, Relaxed);
             let _ = bot
                 .out
-                .try_send(ToBot::message(encode(&ErrorMessage::new(code, message))));
+                .try_send(to_bot(encode(&ErrorMessage::new(code, message))));
         }
     }
 
@@ -366,7 +371,8 @@ impl Ticker {
             Control::BotJoin { agent, conn, out } => {
                 if self.bots[agent].is_some() {
                     // The old connection closes once it has passed this on.
-                    self.tell(agent, "replaced", "another connection took over this agent");
+                    let why = "another connection took over this agent";
+                    self.tell_with(agent, "replaced", why, ToBot::replaced);
                 }
                 self.bots[agent] = Some(Bot {
                     conn,

@@ -24,11 +24,13 @@ pub struct Published {
 }
 
 /// What a match task sends a bot's socket. A perception carries its tick: the bot owes
-/// one answer to it, and that answer is never charged to its rate limit.
+/// one answer to it, and that answer is never charged to its rate limit. The last
+/// message of a connection another one took over says so, and the socket closes after it.
 #[derive(Debug)]
 pub struct ToBot {
     pub text: Utf8Bytes,
     pub perception: Option<u64>,
+    pub replaced: bool,
 }
 
 impl ToBot {
@@ -36,12 +38,19 @@ impl ToBot {
         ToBot {
             text: Utf8Bytes::from(text),
             perception: None,
+            replaced: false,
         }
     }
     pub fn perception(tick: u64, text: String) -> ToBot {
         ToBot {
-            text: Utf8Bytes::from(text),
             perception: Some(tick),
+            ..ToBot::message(text)
+        }
+    }
+    pub fn replaced(text: String) -> ToBot {
+        ToBot {
+            replaced: true,
+            ..ToBot::message(text)
         }
     }
 }

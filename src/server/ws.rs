@@ -421,8 +421,7 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
         loop {
             tokio::select! {
                 outgoing = out_rx.recv() => {
-                    let Some(ToBot { text, perception }) = outgoing else { break None };
-                    let replaced = text.as_str().contains("\"code\":\"replaced\"");
+                    let Some(ToBot { text, perception, replaced }) = outgoing else { break None };
                     if send.text(text).await != Sent::Ok {
                         break None;
                     }
