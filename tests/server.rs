@@ -84,6 +84,27 @@ fn agent<'a>(frame: &'a Value, id: &str) -> &'a Value {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_second_connection_with_a_bots_token_takes_over_and_the_first_is_told_and_closed() {
+    let server = Server::start(&["--no-demo"]);
+    let (id, token, mut first) = server.play_cf("realtime", 1000).await;
+    next_of(&mut first, "perception").await;
+    let mut second = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    assert_eq!(next_of(&mut second, "hello").await["role"], "bot");
+    let told = next_of(&mut first, "error").await;
+    assert_eq!(told["code"], "replaced", "{told}");
+    let closed = loop {
+        match tokio::time::timeout(Duration::from_secs(5), first.next()).await {
+            Ok(Some(Ok(Message::Close(Some(frame))))) => break frame.code,
+            Ok(Some(Ok(_))) => {}
+            other => panic!("the replaced connection: {other:?}"),
+        }
+    };
+    assert_eq!(closed, CloseCode::Policy);
+    // The new connection has the agent.
+    next_of(&mut second, "perception").await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_bots_commands_move_its_agent_and_a_disconnect_hands_it_back() {
     let server = Server::start(&["--no-demo"]);
     let (id, token, mut bot) = server.play_cf("realtime", 1000).await;
