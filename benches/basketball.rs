@@ -6,8 +6,8 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use fieldhouse::basketball::{
-    Brain, Capabilities, Court, DecisionParams, Game, GameParams, Keep, Motion, ShotModel,
-    Situation,
+    Brain, Capabilities, Court, DecisionParams, Game, GameParams, Keep, Motion, Opponent,
+    ShotModel, Situation,
 };
 use fieldhouse::costmap::AgentPose;
 use fieldhouse::motion::{MotionLibrary, FPS};
@@ -46,7 +46,7 @@ fn decision(c: &mut Criterion) {
         position: DVec2::new(4.0, 0.0),
         heading: 0.0,
     };
-    let defenders = [caps.run.reach(&defender, Motion::Still)];
+    let defenders = [Opponent::Map(caps.run.reach(&defender, Motion::Still))];
     let shooter = AgentPose {
         position: DVec2::new(9.0, 2.0),
         heading: std::f64::consts::PI,

@@ -4,11 +4,12 @@
 //! "simply tries to move toward the ball".
 
 use super::agent::{Action, Movement, Team};
+use super::capability::Capabilities;
 use super::capability::{Motion, Mover, Reach};
-use super::decision::{Chosen, Keep, Situation};
+use super::decision::{Chosen, Keep, Opponent, Situation};
 use super::event::Event;
 use super::game::{Game, Order};
-use super::params::Brain;
+use super::params::{Brain, DefenderModel};
 use super::safe::SafeSquares;
 use crate::costmap::root_speed;
 use glam::DVec2;
@@ -308,15 +309,8 @@ impl Game {
         let shooter = caps
             .dribble
             .reach(&self.agents[k].pose, self.motion_of(k, &caps.dribble));
-        // Without prior knowledge of the defender, the shooter models it with its own
-        // non-dribbling maps (the paper), at the state the defender is moving in.
-        let defenders: Vec<Reach> = self
-            .defenders()
-            .map(|d| {
-                caps.run
-                    .reach(&self.agents[d].pose, self.motion_of(d, &caps.run))
-            })
-            .collect();
+        let shot_model = self.params.shot_model;
+        let defenders = self.opponents(&caps, shot_model);
         let mut candidates = std::mem::take(&mut self.candidates);
         let chosen = Situation {
             court: &self.params.court,
@@ -329,8 +323,12 @@ impl Game {
         self.candidates = candidates;
         let why = |c: &Chosen| {
             format!(
-                "defender needs {:.1} s > {:.1} s dribble + {:.1} s shot + {:.1} s margin",
-                c.c_o, c.c_d, c.t_s, c.epsilon
+                "defender needs {:.1} s ({} model) > {:.1} s dribble + {:.1} s shot + {:.1} s margin",
+                c.c_o,
+                shot_model.name(),
+                c.c_d,
+                c.t_s,
+                c.epsilon
             )
         };
         if let Some(c) = chosen.filter(|c| c.here) {
@@ -344,18 +342,11 @@ impl Game {
                 chosen,
             };
         }
-        // Pressed: the defender is within its passing radius, read off the modelled
-        // defender's map (as far as it gets in the pressure time) rather than fixed.
-        let radius = self.pass_radius_m;
-        let nearest = self.openness(k);
-        if nearest <= radius {
+        if let Some(pressed) = self.pressed(k, &caps) {
             if let Some(to) = self.open_teammate(k, now) {
                 return Play::Pass {
                     to,
-                    reason: format!(
-                        "pressed: the defender is {nearest:.1} m away, within the {radius:.1} m it covers in {:.1} s",
-                        self.params.pass_pressure_s
-                    ),
+                    reason: format!("pressed: {pressed}"),
                 };
             }
         }
@@ -377,6 +368,74 @@ impl Game {
             goal: self.params.court.basket,
             reason: "no safe square: cheapest way toward the basket".to_string(),
             chosen: None,
+        }
+    }
+
+    /// The defenders as `model` has the shooter believe them.
+    fn opponents<'c>(&self, caps: &'c Capabilities, model: DefenderModel) -> Vec<Opponent<'c>> {
+        self.defenders()
+            .map(|d| {
+                let pose = &self.agents[d].pose;
+                match model {
+                    DefenderModel::Own => {
+                        let own = caps.defender(self.params.defender.motion);
+                        Opponent::Map(own.reach(pose, self.motion_of(d, own)))
+                    }
+                    DefenderModel::Paper => {
+                        Opponent::Map(caps.run.reach(pose, self.motion_of(d, &caps.run)))
+                    }
+                    DefenderModel::Isotropic {
+                        reaction_s,
+                        speed_m_s,
+                    } => Opponent::Isotropic {
+                        at: pose.position,
+                        reaction_s,
+                        speed_m_s,
+                    },
+                    DefenderModel::None => Opponent::Ignored,
+                }
+            })
+            .collect()
+    }
+
+    /// Whether the ball handler `k` is pressed, by the pass model, and why in words.
+    ///
+    /// * `paper` (as shipped): a defender within the radius the `run` maps cover in
+    ///   `pass_pressure_s`, the same in every direction.
+    /// * `own` and `isotropic`: a defender whose modelled time to the handler's square is
+    ///   within `pass_pressure_s` (a defender facing away needs longer).
+    /// * `none`: the `simple` offense's fixed radius.
+    fn pressed(&self, k: usize, caps: &Capabilities) -> Option<String> {
+        let p = &self.params;
+        let nearest = self.openness(k);
+        match p.pass_model {
+            DefenderModel::Paper => (nearest <= self.pass_radius_m).then(|| {
+                format!(
+                    "the defender is {nearest:.1} m away, within the {:.1} m it covers in {:.1} s (paper model)",
+                    self.pass_radius_m, p.pass_pressure_s
+                )
+            }),
+            DefenderModel::None => (nearest <= p.simple.pass_radius_m).then(|| {
+                format!(
+                    "the defender is {nearest:.1} m away, inside the fixed {:.1} m radius (no model)",
+                    p.simple.pass_radius_m
+                )
+            }),
+            model => {
+                let at = self.agents[k].pose.position;
+                let arrives = self
+                    .opponents(caps, model)
+                    .iter()
+                    .map(|o| o.seconds(at))
+                    .fold(f64::INFINITY, f64::min);
+                (arrives <= p.pass_pressure_s).then(|| {
+                    format!(
+                        "the defender reaches the ball in {arrives:.1} s ({} model), within {:.1} s",
+                        model.name(),
+                        p.pass_pressure_s
+                    )
+                })
+            }
         }
     }
 

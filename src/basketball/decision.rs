@@ -81,8 +81,39 @@ pub struct Situation<'a> {
     pub params: &'a DecisionParams,
     /// What the shooter reaches dribbling, from where it is and how it moves.
     pub shooter: Reach<'a>,
-    /// What each defender reaches, by the maps the shooter models it with.
-    pub defenders: &'a [Reach<'a>],
+    /// What the shooter believes each defender needs to reach a square.
+    pub defenders: &'a [Opponent<'a>],
+}
+
+/// What the shooter believes a defender needs to reach a square, s: C_o.
+pub enum Opponent<'a> {
+    /// A cost map embedded at the defender's pose and state (its own maps, or the
+    /// shooter's `run` maps); beyond the map, the map's horizon (it needs at least that).
+    Map(Reach<'a>),
+    /// `reaction_s` + distance / `speed_m_s` from where the defender stands, the same in
+    /// every direction.
+    Isotropic {
+        at: DVec2,
+        reaction_s: f64,
+        speed_m_s: f64,
+    },
+    /// No model: never in time.
+    Ignored,
+}
+
+impl Opponent<'_> {
+    #[inline]
+    pub fn seconds(&self, world: DVec2) -> f64 {
+        match self {
+            Opponent::Map(reach) => reach.seconds(world).unwrap_or_else(|| reach.horizon_s()),
+            Opponent::Isotropic {
+                at,
+                reaction_s,
+                speed_m_s,
+            } => reaction_s + at.distance(world) / speed_m_s,
+            Opponent::Ignored => f64::INFINITY,
+        }
+    }
 }
 
 /// Which candidates a decision lists.
@@ -127,7 +158,7 @@ impl Situation<'_> {
                 let c_o = self
                     .defenders
                     .iter()
-                    .map(|d| d.seconds(centre).unwrap_or_else(|| d.horizon_s()))
+                    .map(|d| d.seconds(centre))
                     .fold(f64::INFINITY, f64::min);
                 let qualifies = c_o > c_d + self.params.shot_time_s + self.params.epsilon_s;
                 if !qualifies && keep == Keep::Qualifying {

@@ -29,11 +29,11 @@ pub use agent::{Action, Agent, Team};
 pub use brain::RUN_OFF_M;
 pub use capability::{Capabilities, DefenderMotion, Motion, Mover, Reach, StateMap, Stride};
 pub use court::Court;
-pub use decision::{Candidate, Chosen, Decision, DecisionParams, Keep, Situation};
+pub use decision::{Candidate, Chosen, Decision, DecisionParams, Keep, Opponent, Situation};
 pub use eval::{compare, evaluate, Comparison, EvalReport};
 pub use event::{Event, Outcome, Snapshot};
 pub use game::{Game, Order};
-pub use params::{Brain, DefenderParams, GameParams, SimpleParams};
+pub use params::{Brain, DefenderModel, DefenderParams, GameParams, SimpleParams};
 pub use shot::ShotModel;
 #[cfg(test)]
 mod tests;

@@ -42,6 +42,56 @@ impl FromStr for Brain {
     }
 }
 
+/// How the shooter models a defender's time to reach a square (C_o), for the shot and
+/// for the pass: the ablations of the paper's claim that modelling the opponent with
+/// *human* capability pays.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum DefenderModel {
+    /// The defender's own maps (the behaviour it moves with), from the state it is in:
+    /// the truth, as far as the maps know it.
+    Own,
+    /// The paper's: the shooter's own non-dribbling (`run`) maps, embedded at the
+    /// defender's pose and state ("without prior knowledge of the defender").
+    Paper,
+    /// No motion model: `reaction_s` + distance / `speed_m_s`, the same in every
+    /// direction (a defender that turns for free).
+    Isotropic { reaction_s: f64, speed_m_s: f64 },
+    /// No model at all: every square in range is safe (shoot from the best one), and
+    /// the pass falls back to the `simple` offense's fixed radius.
+    None,
+}
+
+impl DefenderModel {
+    pub fn name(self) -> &'static str {
+        match self {
+            DefenderModel::Own => "own",
+            DefenderModel::Paper => "paper",
+            DefenderModel::Isotropic { .. } => "isotropic",
+            DefenderModel::None => "none",
+        }
+    }
+
+    /// Reads `own`, `paper`, `none` or `isotropic` (with the reaction time and speed
+    /// given apart).
+    pub fn parse(name: &str, reaction_s: f64, speed_m_s: f64) -> Result<Self, UnknownName> {
+        lookup(
+            "defender model",
+            name,
+            &["own", "paper", "isotropic", "none"],
+            &[
+                DefenderModel::Own,
+                DefenderModel::Paper,
+                DefenderModel::Isotropic {
+                    reaction_s,
+                    speed_m_s,
+                },
+                DefenderModel::None,
+            ],
+        )
+    }
+}
+
 /// The defender's reach and how often it wins the ball.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DefenderParams {
@@ -100,6 +150,10 @@ pub struct GameParams {
     /// The `costmap` offense passes when a defender can reach it within this, s (its
     /// passing radius, measured in the defender's time rather than metres).
     pub pass_pressure_s: f64,
+    /// How the `costmap` offense models the defender when it picks a square to shoot
+    /// from, and when it decides whether it is pressed.
+    pub shot_model: DefenderModel,
+    pub pass_model: DefenderModel,
     pub shot_clock_s: f64,
     /// How often agents decide, s.
     pub replan_s: f64,
@@ -123,6 +177,8 @@ impl Default for GameParams {
             defender: DefenderParams::default(),
             simple: SimpleParams::default(),
             pass_pressure_s: 1.0,
+            shot_model: DefenderModel::Own,
+            pass_model: DefenderModel::Own,
             shot_clock_s: 24.0,
             replan_s: 0.25,
             pass_speed_m_s: 8.0,

@@ -36,7 +36,7 @@ fn pose(x: f64, z: f64, heading_deg: f64) -> AgentPose {
 }
 
 fn decide(mover: &Mover, shooter: AgentPose, defender: AgentPose) -> Decision {
-    let defenders = [mover.reach(&defender, Motion::Still)];
+    let defenders = [Opponent::Map(mover.reach(&defender, Motion::Still))];
     Situation {
         court: &Court::default(),
         shot: &ShotModel::default(),

@@ -9,8 +9,8 @@ use super::motion::MotionSourceArgs;
 use anyhow::Context;
 use clap::Args;
 use fieldhouse::basketball::{
-    compare, evaluate, Brain, Capabilities, Court, Decision, DecisionParams, DefenderMotion,
-    GameParams, Motion, Reach, ShotModel, Situation,
+    compare, evaluate, Brain, Capabilities, Court, Decision, DecisionParams, DefenderModel,
+    DefenderMotion, GameParams, Motion, Opponent, ShotModel, Situation,
 };
 use fieldhouse::costmap::AgentPose;
 use fieldhouse::words::{figure, plural};
@@ -128,10 +128,10 @@ pub fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<()> {
     };
     let model = caps.defender(args.defender_model);
     // Poses given on the command line stand still: their maps are the standing ones.
-    let defenders: Vec<Reach> = args
+    let defenders: Vec<Opponent> = args
         .defender
         .iter()
-        .map(|d| model.reach(d, Motion::Still))
+        .map(|d| Opponent::Map(model.reach(d, Motion::Still)))
         .collect();
     let shot = ShotModel::default();
     let decision = Situation {
@@ -315,6 +315,26 @@ pub struct EvalArgs {
     /// The defender's reach, m.
     #[arg(long, value_name = "M", default_value_t = GameParams::default().defender.reach_m, value_parser = positive)]
     reach: f64,
+    /// How the cost-map offense models the defender when it picks where to shoot: own
+    /// (the defender's own maps at its own state), paper (the shooter's run maps at the
+    /// defender's state, as the paper), isotropic (--reaction-s + distance /
+    /// --isotropic-speed, every direction alike), none (every square in range is safe).
+    #[arg(long, default_value = "own")]
+    shot_model: String,
+    /// The same for deciding whether it is pressed and passes: own and isotropic pass
+    /// when the modelled defender reaches the ball within 1 s; paper when it is within
+    /// the radius the run maps cover in 1 s; none by the simple offense's fixed radius.
+    #[arg(long, default_value = "own")]
+    pass_model: String,
+    /// The isotropic model's reaction time, s.
+    #[arg(long, value_name = "S", default_value_t = 0.3, value_parser = non_negative)]
+    reaction_s: f64,
+    /// The isotropic model's speed, m/s.
+    #[arg(long, value_name = "M/S", default_value_t = 7.0, value_parser = positive)]
+    isotropic_speed: f64,
+    /// The simple offense shoots from this close to the basket, m.
+    #[arg(long, value_name = "M", default_value_t = GameParams::default().simple.shoot_range_m, value_parser = positive)]
+    simple_range: f64,
     /// Print one JSON document.
     #[arg(long)]
     json: bool,
@@ -327,6 +347,11 @@ pub fn eval(args: EvalArgs, out: &mut impl Write) -> anyhow::Result<()> {
         "both" => vec![Brain::Simple, Brain::Costmap],
         one => vec![parse_str::<Brain>(one).map_err(|e| anyhow::anyhow!("{e}; or both"))?],
     };
+    let model = |name: &str| {
+        DefenderModel::parse(name, args.reaction_s, args.isotropic_speed)
+            .map_err(anyhow::Error::msg)
+    };
+    let (shot_model, pass_model) = (model(&args.shot_model)?, model(&args.pass_model)?);
     let caps = args.capability.load()?;
     let started = Instant::now();
     let reports: Vec<_> = std::thread::scope(|scope| {
@@ -341,6 +366,9 @@ pub fn eval(args: EvalArgs, out: &mut impl Write) -> anyhow::Result<()> {
                 };
                 params.defender.motion = args.defense;
                 params.defender.reach_m = args.reach;
+                params.shot_model = shot_model;
+                params.pass_model = pass_model;
+                params.simple.shoot_range_m = args.simple_range;
                 scope.spawn(move || evaluate(caps, params, args.possessions))
             })
             .collect();
