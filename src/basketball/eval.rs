@@ -31,6 +31,18 @@ pub struct EvalReport {
     /// Mean time from a possession's start to its outcome, s.
     pub mean_possession_s: f64,
     pub ticks: u64,
+    /// Every possession's outcome, in order: possession k of two reports began from the
+    /// same positions with the same random draws, so they pair.
+    pub by_possession: Vec<Possession>,
+}
+
+/// How one possession ended.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Possession {
+    pub points: u32,
+    pub outcome: Outcome,
+    /// Distance to the basket of its shot, m, if it ended in one.
+    pub shot_m: Option<f64>,
 }
 
 /// Plays `possessions` possessions with `params` (possession k starts from the same
@@ -56,8 +68,10 @@ pub fn evaluate(caps: Arc<Capabilities>, params: GameParams, possessions: u64) -
         mean_shot_distance_m: 0.0,
         mean_possession_s: 0.0,
         ticks: 0,
+        by_possession: Vec::with_capacity(usize::try_from(possessions).unwrap_or(0)),
     };
     let mut shot_distance = 0.0;
+    let mut last_shot_m = None;
     while game.possessions() < possessions {
         events.clear();
         game.step(&mut events);
@@ -69,6 +83,7 @@ pub fn evaluate(caps: Arc<Capabilities>, params: GameParams, possessions: u64) -
                 } => {
                     r.shots += 1;
                     shot_distance += distance_m;
+                    last_shot_m = Some(*distance_m);
                     r.three_pointers += u64::from(*points == 3);
                 }
                 Event::PossessionEnded {
@@ -84,6 +99,11 @@ pub fn evaluate(caps: Arc<Capabilities>, params: GameParams, possessions: u64) -
                     time += duration_s;
                     r.points += u64::from(*points);
                     r.passes += u64::from(*passes);
+                    r.by_possession.push(Possession {
+                        points: *points,
+                        outcome: *outcome,
+                        shot_m: last_shot_m.take(),
+                    });
                     match outcome {
                         Outcome::Made => r.made += 1,
                         Outcome::Blocked => r.blocked += 1,
@@ -117,25 +137,60 @@ pub fn evaluate(caps: Arc<Capabilities>, params: GameParams, possessions: u64) -
     r
 }
 
-/// Welch's test that offense `a` scores more per possession than `b`: the statistic
-/// and its one-sided p-value (normal approximation, sound at thousands of possessions).
+/// Offense `a` against offense `b` on the same possessions: the paired difference in
+/// points per possession (possession k of each began from the same positions with the
+/// same random draws), its standard error, a 95 % confidence interval and the paired
+/// z test (normal approximation, sound at thousands of possessions).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Comparison {
     pub difference: f64,
+    pub standard_error: f64,
+    pub ci95: [f64; 2],
     pub z: f64,
-    pub p_one_sided: f64,
+    pub p_two_sided: f64,
+    pub possessions: usize,
 }
 
+/// Pairs `a`'s and `b`'s possessions in order (as many as both have).
 pub fn compare(a: &EvalReport, b: &EvalReport) -> Comparison {
-    let difference = a.points_per_possession - b.points_per_possession;
-    let se = a.standard_error.hypot(b.standard_error);
-    let z = if se > 0.0 { difference / se } else { 0.0 };
+    let differences: Vec<f64> = a
+        .by_possession
+        .iter()
+        .zip(&b.by_possession)
+        .map(|(x, y)| f64::from(x.points) - f64::from(y.points))
+        .collect();
+    let n = differences.len() as f64;
+    let difference = differences.iter().sum::<f64>() / n.max(1.0);
+    let variance = if n > 1.0 {
+        differences
+            .iter()
+            .map(|d| (d - difference).powi(2))
+            .sum::<f64>()
+            / (n - 1.0)
+    } else {
+        0.0
+    };
+    let standard_error = (variance / n.max(1.0)).sqrt();
+    let z = if standard_error > 0.0 {
+        difference / standard_error
+    } else {
+        0.0
+    };
     Comparison {
         difference,
+        standard_error,
+        ci95: [
+            difference - Z_95 * standard_error,
+            difference + Z_95 * standard_error,
+        ],
         z,
-        p_one_sided: 0.5 * erfc(z / std::f64::consts::SQRT_2),
+        p_two_sided: erfc(z.abs() / std::f64::consts::SQRT_2),
+        possessions: differences.len(),
     }
 }
+
+/// The two-sided 95 % point of the standard normal.
+const Z_95: f64 = 1.959_963_985;
 
 /// The complementary error function (Numerical Recipes' Chebyshev fit, relative error
 /// below 1.2e-7 everywhere).

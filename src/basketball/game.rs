@@ -26,6 +26,9 @@ use std::sync::Arc;
 /// How far a defender starts from the player it marks, toward the basket, m: outside
 /// the `simple` offense's passing radius, so the defender has to come and press.
 const DEFENDER_START_M: f64 = 3.0;
+/// The first random stream of possessions' play; streams below it are the starts'
+/// (`2 + possession`), so the two never share one.
+const OUTCOME_STREAMS: u64 = 1 << 48;
 /// Height of the ring above the floor, m.
 const RING_HEIGHT_M: f64 = 3.05;
 
@@ -477,6 +480,11 @@ impl Game {
         let mut rng = ChaCha8Rng::seed_from_u64(p.seed);
         // Starts depend only on the seed and the possession's number.
         rng.set_stream(2 + self.possession);
+        // So do the draws the possession's play makes (shots, steals, blocks): two
+        // offenses compared on the same possessions face the same luck, draw for draw,
+        // as far as they make the same draws (common random numbers).
+        self.rng = ChaCha8Rng::seed_from_u64(p.seed);
+        self.rng.set_stream(OUTCOME_STREAMS + self.possession);
         let now = self.time_s();
         let basket = p.court.basket;
         let facing = |from: DVec2, to: DVec2| (to - from).y.atan2((to - from).x);

@@ -302,7 +302,8 @@ fn picture(
         Example: fieldhouse basketball-eval --offense both --possessions 2000 --seed 1"
 )]
 pub struct EvalArgs {
-    /// simple, costmap, or both (the same possessions for each, compared by Welch's test).
+    /// simple, costmap, or both (the same possessions for each, with the same random
+    /// draws, compared possession by possession).
     #[arg(long, default_value = "both")]
     offense: String,
     /// How the defender moves: defense (footwork) or run.
@@ -377,12 +378,17 @@ pub fn eval(args: EvalArgs, out: &mut impl Write) -> anyhow::Result<()> {
             .collect()
     });
     let elapsed_s = started.elapsed().as_secs_f64();
+    // Per possession, and the models used, in the JSON: anyone can redo the statistics.
     let comparison = (reports.len() == 2).then(|| compare(&reports[1], &reports[0]));
     if args.json {
         let doc = match (&reports[..], comparison) {
             ([one], _) => {
                 let mut v = serde_json::to_value(one)?;
                 v["elapsed_s"] = json!(elapsed_s);
+                v["shot_model"] = json!(shot_model);
+                v["pass_model"] = json!(pass_model);
+                v["simple_range_m"] = json!(args.simple_range);
+                v["defense"] = json!(args.defense.name());
                 v["seed"] = json!(args.seed);
                 v["motion_source"] = json!(caps.source.to_string());
                 v
@@ -390,6 +396,10 @@ pub fn eval(args: EvalArgs, out: &mut impl Write) -> anyhow::Result<()> {
             (all, c) => json!({
                 "reports": all,
                 "comparison": c,
+                "shot_model": shot_model,
+                "pass_model": pass_model,
+                "simple_range_m": args.simple_range,
+                "defense": args.defense.name(),
                 "seed": args.seed,
                 "elapsed_s": elapsed_s,
                 "motion_source": caps.source.to_string(),
@@ -405,6 +415,13 @@ pub fn eval(args: EvalArgs, out: &mut impl Write) -> anyhow::Result<()> {
         args.seed,
         args.defense.name(),
         caps.source
+    )?;
+    writeln!(
+        out,
+        "the cost-map offense models the defender with the {} model to shoot and the {} model to pass; the simple offense shoots from {:.1} m",
+        shot_model.name(),
+        pass_model.name(),
+        args.simple_range
     )?;
     writeln!(
         out,
@@ -442,8 +459,8 @@ pub fn eval(args: EvalArgs, out: &mut impl Write) -> anyhow::Result<()> {
     if let Some(c) = comparison {
         writeln!(
             out,
-            "costmap − simple: {:+.3} points per possession, Welch z = {:.2}, one-sided p = {:.2e}",
-            c.difference, c.z, c.p_one_sided
+            "costmap − simple, paired over the same {} possessions: {:+.3} ± {:.3} points per possession (95 % CI {:+.3} to {:+.3}), z = {:.2}, two-sided p = {:.2e}",
+            c.possessions, c.difference, c.standard_error, c.ci95[0], c.ci95[1], c.z, c.p_two_sided
         )?;
     }
     writeln!(out, "({elapsed_s:.2} s)")?;
