@@ -124,12 +124,55 @@ fn both_offenses_are_compared_on_the_same_possessions() {
     let diff =
         num(&reports[1]["points_per_possession"]) - num(&reports[0]["points_per_possession"]);
     assert!((num(&doc["comparison"]["difference"]) - diff).abs() < 1e-12);
+    // The paired statistics, computed again from the per-possession outcomes the JSON
+    // lists: differences, their sample variance by the textbook sum of squares, and
+    // the normal 95 % interval.
+    let points = |r: &serde_json::Value| -> Vec<f64> {
+        r["by_possession"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| num(&p["points"]))
+            .collect()
+    };
+    let (a, b) = (points(&reports[1]), points(&reports[0]));
+    assert_eq!((a.len(), b.len()), (30, 30));
+    let d: Vec<f64> = a.iter().zip(&b).map(|(x, y)| x - y).collect();
+    let n = d.len() as f64;
+    let sum: f64 = d.iter().sum();
+    let sum_sq: f64 = d.iter().map(|x| x * x).sum();
+    let se = ((sum_sq - sum * sum / n) / (n - 1.0) / n).sqrt();
+    let c = &doc["comparison"];
+    assert!((num(&c["difference"]) - sum / n).abs() < 1e-12);
+    assert!((num(&c["standard_error"]) - se).abs() < 1e-9);
+    assert!((num(&c["ci95"][0]) - (sum / n - 1.96 * se)).abs() < 1e-3);
+    assert!((num(&c["z"]) - sum / n / se).abs() < 1e-6);
     let (text, _) = success(&format!(
         "basketball-eval --possessions 30 --seed 2 {}",
         source()
     ));
-    assert!(text.contains("Welch"), "{text}");
+    assert!(
+        text.contains("paired over the same 30 possessions"),
+        "{text}"
+    );
     assert_reads_well(&text);
+}
+
+#[test]
+fn the_defender_model_is_named_and_bad_ones_are_refused() {
+    let doc = eval("--possessions 20 --seed 2 --shot-model isotropic --pass-model none --reaction-s 0.5 --isotropic-speed 6");
+    assert_eq!(doc["shot_model"]["kind"], "isotropic");
+    assert_eq!(num(&doc["shot_model"]["reaction_s"]), 0.5);
+    assert_eq!(num(&doc["shot_model"]["speed_m_s"]), 6.0);
+    assert_eq!(doc["pass_model"]["kind"], "none");
+    let err = common::failure(&format!(
+        "basketball-eval --possessions 20 --shot-model psychic {}",
+        source()
+    ));
+    assert!(
+        err.contains("psychic") && err.contains("isotropic"),
+        "{err}"
+    );
 }
 
 #[test]

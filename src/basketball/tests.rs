@@ -137,6 +137,52 @@ fn a_shooter_with_no_defender_takes_the_best_shot_it_can_reach() {
     assert_eq!(chosen.c_d, nearest_capped);
 }
 
+#[test]
+fn an_isotropic_model_gives_every_square_the_formulas_time_and_no_model_the_best_shot() {
+    let mover = isotropic();
+    let court = Court::default();
+    let shooter = mover.reach(&pose(9.0, 0.0, 180.0), Motion::Still);
+    let at = DVec2::new(4.0, 1.0);
+    let (reaction_s, speed_m_s) = (0.3, 7.0);
+    let defenders = [Opponent::Isotropic {
+        at,
+        reaction_s,
+        speed_m_s,
+    }];
+    let modelled = Situation {
+        court: &court,
+        shot: &ShotModel::default(),
+        params: &DecisionParams::default(),
+        shooter: mover.reach(&pose(9.0, 0.0, 180.0), Motion::Still),
+        defenders: &defenders,
+    }
+    .decide();
+    for c in &modelled.candidates {
+        let formula = reaction_s + DVec2::from_array(c.cell).distance(at) / speed_m_s;
+        assert!((c.c_o - formula).abs() < 1e-9, "{c:?}");
+    }
+    // No model: every square the shooter reaches is safe, and the chosen one has the best
+    // shot of them all.
+    let unmodelled = Situation {
+        court: &court,
+        shot: &ShotModel::default(),
+        params: &DecisionParams::default(),
+        shooter,
+        defenders: &[Opponent::Ignored],
+    }
+    .decide();
+    let best = unmodelled
+        .candidates
+        .iter()
+        .map(|c| c.success)
+        .fold(0.0, f64::max);
+    assert_eq!(unmodelled.chosen.unwrap().success, best);
+    assert!(unmodelled
+        .candidates
+        .iter()
+        .all(|c| c.qualifies(&DecisionParams::default())));
+}
+
 fn play(params: GameParams, possessions: u64) -> (Vec<Event>, Vec<Snapshot>) {
     let mut game = Game::new(fixtures::cmu_capabilities(), params);
     let (mut events, mut snapshots) = (Vec::new(), Vec::new());
