@@ -66,6 +66,48 @@ fn a_defender_on_the_chosen_square_sends_the_shooter_elsewhere_or_to_the_plan() 
 }
 
 #[test]
+fn decide_shows_the_defenders_own_times_beside_the_models() {
+    let doc = |model: &str| {
+        json(&format!(
+            "basketball-decide --shooter 10,3,200 --defender 5,-1,20 --defender-model {model} --defense defense --json {}",
+            source()
+        ))
+    };
+    // Modelled with its own map, the model is the truth: the same times, no square in
+    // dispute.
+    let same = doc("defense");
+    let candidates = same["candidates"].as_array().unwrap();
+    let own = same["c_o_own_s"].as_array().unwrap();
+    assert_eq!(own.len(), candidates.len());
+    for (c, o) in candidates.iter().zip(own) {
+        assert_eq!(num(&c["c_o"]), num(o));
+    }
+    assert_eq!(same["model_safe_but_reached"], 0);
+    assert_eq!(same["model_unsafe_but_safe"], 0);
+    // Modelled with the shooter's run map (the paper), they differ somewhere, and the
+    // counts are what the two lists of times say.
+    let paper = doc("run");
+    let rule = |c: &Value, c_o: f64| c_o > num(&c["c_d"]) + 0.4 + 0.2;
+    let (mut safe_but_reached, mut unsafe_but_safe) = (0, 0);
+    for (c, o) in paper["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(paper["c_o_own_s"].as_array().unwrap())
+    {
+        let (model, truth) = (rule(c, num(&c["c_o"])), rule(c, num(o)));
+        safe_but_reached += u64::from(model && !truth);
+        unsafe_but_safe += u64::from(!model && truth);
+    }
+    assert_eq!(paper["model_safe_but_reached"], safe_but_reached);
+    assert_eq!(paper["model_unsafe_but_safe"], unsafe_but_safe);
+    assert!(
+        safe_but_reached + unsafe_but_safe > 0,
+        "the run map is not the footwork's"
+    );
+}
+
+#[test]
 fn bad_decisions_are_refused_with_the_reason() {
     let err = failure("basketball-decide --shooter 9,2 --defender 4,0,0");
     assert!(err.contains("X,Z,HEADING_DEG"), "{err}");

@@ -91,6 +91,10 @@ pub struct DecideArgs {
     /// paper's choice without prior knowledge) or defense (the defender's footwork).
     #[arg(long, default_value = "run", value_parser = parse_str::<DefenderMotion>)]
     defender_model: DefenderMotion,
+    /// How the defender really moves (its own map): defense (footwork) or run. Its C_o
+    /// is printed beside the model's, so the gap between the model and the truth shows.
+    #[arg(long, default_value = "defense", value_parser = parse_str::<DefenderMotion>)]
+    defense: DefenderMotion,
     /// Draw the decision: the shooter's dribbling times, the defender's times, and the
     /// squares that satisfy the rule with the chosen one outlined.
     #[arg(long, value_name = "FILE")]
@@ -145,6 +149,40 @@ pub fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<()> {
     if let Some(file) = &args.png {
         picture(&court, &decision, &params, &args, file)?;
     }
+    // C_o of every candidate by the defender's own map: the truth the model stands for.
+    let own = caps.defender(args.defense);
+    let truth: Vec<Opponent> = args
+        .defender
+        .iter()
+        .map(|d| Opponent::Map(own.reach(d, Motion::Still)))
+        .collect();
+    let c_o_own: Vec<f64> = decision
+        .candidates
+        .iter()
+        .map(|c| {
+            let at = glam::DVec2::from_array(c.cell);
+            truth
+                .iter()
+                .map(|d| d.seconds(at))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    let safe_by = |c_o: f64, c: &fieldhouse::basketball::Candidate| {
+        c_o > c.c_d + params.shot_time_s + params.epsilon_s
+    };
+    // Squares the model calls safe that the defender reaches in time, and the reverse.
+    let (falsely_safe, falsely_unsafe) =
+        decision
+            .candidates
+            .iter()
+            .zip(&c_o_own)
+            .fold((0u64, 0u64), |(fs, fu), (c, &truth)| {
+                let (model, real) = (c.qualifies(&params), safe_by(truth, c));
+                (
+                    fs + u64::from(model && !real),
+                    fu + u64::from(!model && real),
+                )
+            });
     if args.json {
         let doc = json!({
             "chosen": decision.chosen,
@@ -152,6 +190,10 @@ pub fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<()> {
             "qualifying": decision.candidates.iter().filter(|c| c.qualifies(&params)).count(),
             "horizon_s": model.horizon_s(),
             "defender_model": args.defender_model.name(),
+            "defense": args.defense.name(),
+            "c_o_own_s": c_o_own,
+            "model_safe_but_reached": falsely_safe,
+            "model_unsafe_but_safe": falsely_unsafe,
             "motion_source": caps.source.to_string(),
             "court": court,
             "shot": shot,
@@ -193,6 +235,21 @@ pub fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<()> {
         )?,
         None => writeln!(out, "no square qualifies: fall back to the plan (maneuver, pass when pressed)")?,
     }
+    let chosen_own = decision.chosen.and_then(|chosen| {
+        let k = decision
+            .candidates
+            .iter()
+            .position(|c| c.cell == chosen.cell)?;
+        Some(c_o_own[k])
+    });
+    writeln!(
+        out,
+        "the defender's own map ({}){}: the model calls {} safe that the defender reaches in time, and {} unsafe that it does not",
+        args.defense.name(),
+        chosen_own.map_or(String::new(), |s| format!(" gives the chosen square C_o {s:.2} s")),
+        plural(falsely_safe, "square"),
+        plural(falsely_unsafe, "square"),
+    )?;
     Ok(())
 }
 
