@@ -10,7 +10,7 @@ use anyhow::Context;
 use clap::Args;
 use fieldhouse::basketball::{
     compare, evaluate, Brain, Capabilities, Court, Decision, DecisionParams, DefenderModel,
-    DefenderMotion, GameParams, Motion, Opponent, ShotModel, Situation,
+    DefenderMotion, GameParams, Motion, Mover, Opponent, ShotModel, Situation,
 };
 use fieldhouse::costmap::AgentPose;
 use fieldhouse::words::{figure, plural};
@@ -119,6 +119,15 @@ fn on_court(court: &Court, who: &str, pose: &AgentPose) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Defenders at `poses` as `mover`'s maps see them. Poses given on the command line
+/// stand still: their maps are the standing ones.
+fn standing<'a>(mover: &'a Mover, poses: &[AgentPose]) -> Vec<Opponent<'a>> {
+    poses
+        .iter()
+        .map(|d| Opponent::Map(mover.reach(d, Motion::Still)))
+        .collect()
+}
+
 pub fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let court = Court::default();
     on_court(&court, "shooter", &args.shooter)?;
@@ -131,12 +140,7 @@ pub fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<()> {
         epsilon_s: args.epsilon,
     };
     let model = caps.defender(args.defender_model);
-    // Poses given on the command line stand still: their maps are the standing ones.
-    let defenders: Vec<Opponent> = args
-        .defender
-        .iter()
-        .map(|d| Opponent::Map(model.reach(d, Motion::Still)))
-        .collect();
+    let defenders = standing(model, &args.defender);
     let shot = ShotModel::default();
     let decision = Situation {
         court: &court,
@@ -150,12 +154,7 @@ pub fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<()> {
         picture(&court, &decision, &params, &args, file)?;
     }
     // C_o of every candidate by the defender's own map: the truth the model stands for.
-    let own = caps.defender(args.defense);
-    let truth: Vec<Opponent> = args
-        .defender
-        .iter()
-        .map(|d| Opponent::Map(own.reach(d, Motion::Still)))
-        .collect();
+    let truth = standing(caps.defender(args.defense), &args.defender);
     let c_o_own: Vec<f64> = decision
         .candidates
         .iter()
