@@ -29,6 +29,13 @@ const DEFENDER_START_M: f64 = 3.0;
 /// The first random stream of possessions' play; streams below it are the starts'
 /// (`2 + possession`), so the two never share one.
 const OUTCOME_STREAMS: u64 = 1 << 48;
+/// The random draws of possession `possession`'s play (shots, steals, blocks).
+fn play_draws(seed: u64, possession: u64) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(OUTCOME_STREAMS + possession);
+    rng
+}
+
 /// Height of the ring above the floor, m.
 const RING_HEIGHT_M: f64 = 3.05;
 
@@ -114,8 +121,6 @@ impl Game {
     pub fn named(caps: Arc<Capabilities>, params: GameParams, names: Vec<String>) -> Game {
         let agents = params.offense_players + params.defenders;
         assert_eq!(names.len(), agents, "one name per agent");
-        let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
-        rng.set_stream(1);
         let pass_radius_m = caps.run.radius_within(params.pass_pressure_s);
         let mut game = Game {
             pass_radius_m,
@@ -130,7 +135,8 @@ impl Game {
             score: 0,
             passes: 0,
             blocks_tried: 0,
-            rng,
+            // Replaced at every possession's start (see `start_possession`).
+            rng: play_draws(params.seed, 0),
             candidates: Vec::new(),
             last_decision: Vec::new(),
             names,
@@ -254,13 +260,13 @@ impl Game {
         }
     }
 
-    /// Defenders' agent indices: agents are offense first, then defense.
     /// Whether agent `k` has the ball or a pass on its way to it: it must not leave the
     /// court.
     pub(super) fn has_or_awaits_ball(&self, k: usize) -> bool {
         self.holder() == Some(k) || matches!(self.ball, Ball::Pass { to, .. } if to == k)
     }
 
+    /// Defenders' agent indices: agents are offense first, then defense.
     pub(super) fn defenders(&self) -> std::ops::Range<usize> {
         self.params.offense_players..self.agents.len()
     }
@@ -483,8 +489,7 @@ impl Game {
         // So do the draws the possession's play makes (shots, steals, blocks): two
         // offenses compared on the same possessions face the same luck, draw for draw,
         // as far as they make the same draws (common random numbers).
-        self.rng = ChaCha8Rng::seed_from_u64(p.seed);
-        self.rng.set_stream(OUTCOME_STREAMS + self.possession);
+        self.rng = play_draws(p.seed, self.possession);
         let now = self.time_s();
         let basket = p.court.basket;
         let facing = |from: DVec2, to: DVec2| (to - from).y.atan2((to - from).x);
