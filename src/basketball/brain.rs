@@ -42,6 +42,10 @@ pub const RUN_OFF_M: f64 = 1.0;
 /// How far a goal may move before an agent gives up the move it is playing for a new
 /// one, m.
 const RETARGET_M: f64 = 1.0;
+/// How near a bot's `move_to` target an agent must get for the order to be done, m:
+/// a stored path ends at its map cell's centre (cells are 0.5 m), so anywhere within the
+/// cell's diagonal of the target is as near as a move can aim.
+const ARRIVED_M: f64 = 0.75;
 /// How far ahead the `simple` offense aims on its straight line to the goal, m.
 const SIMPLE_STEP_M: f64 = 3.0;
 /// Where an offensive player without the ball waits for a pass: this far from the
@@ -79,11 +83,27 @@ impl Game {
         }
     }
 
-    /// A bot-controlled agent carries out its latest order (and keeps moving toward a
-    /// target it was given).
+    /// A bot-controlled agent carries out its latest order, and keeps heading for the
+    /// target of a `move_to` until it gets there or nothing gets it nearer.
     fn obey(&mut self, k: usize, events: &mut Vec<Event>) {
-        let Some(order) = self.orders[k].take() else {
-            return;
+        let order = match self.orders[k].take() {
+            Some(order) => {
+                self.targets[k] = match order {
+                    Order::MoveTo(goal) => Some(goal),
+                    _ => None,
+                };
+                order
+            }
+            None => match self.targets[k] {
+                Some(goal) if self.agents[k].movement.is_none() => {
+                    if self.agents[k].pose.position.distance(goal) <= ARRIVED_M {
+                        self.targets[k] = None;
+                        return;
+                    }
+                    Order::MoveTo(goal)
+                }
+                _ => return,
+            },
         };
         let reason = "bot order".to_string();
         let holds = self.holder() == Some(k);
@@ -104,6 +124,7 @@ impl Game {
                     Team::Defense => self.defender_head_for(k, goal),
                     Team::Offense => self.head_for(k, &[&self.caps.clone().run], goal),
                 }
+                self.give_up_if_stuck(k);
                 return;
             }
             Order::Stand => {
@@ -115,6 +136,19 @@ impl Game {
         };
         self.candidates.clear();
         self.carry_out(k, play, events);
+        self.give_up_if_stuck(k);
+    }
+
+    /// A `move_to` that found no move (none gets the agent nearer on the court) is no
+    /// longer in force: trying again every tick would find the same nothing.
+    fn give_up_if_stuck(&mut self, k: usize) {
+        if self.agents[k]
+            .movement
+            .as_ref()
+            .is_none_or(|m| m.finished())
+        {
+            self.targets[k] = None;
+        }
     }
 
     fn carry_out(&mut self, k: usize, play: Play, events: &mut Vec<Event>) {

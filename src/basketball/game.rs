@@ -87,6 +87,10 @@ pub struct Game {
     /// Agents a bot controls: they follow `orders` instead of a brain.
     pub(super) controlled: Vec<bool>,
     pub(super) orders: Vec<Option<Order>>,
+    /// The target of each bot-controlled agent's `move_to` while it is in force: a move
+    /// can end short of it (the map's way there left the court, or the target lay beyond
+    /// the map), and the agent heads on from where it got to.
+    pub(super) targets: Vec<Option<DVec2>>,
     /// Fixed starting positions, where a scenario gives them (else drawn each possession).
     starts: Vec<Option<DVec2>>,
 }
@@ -142,6 +146,7 @@ impl Game {
             names,
             controlled: vec![false; agents],
             orders: vec![None; agents],
+            targets: vec![None; agents],
             starts: vec![None; agents],
         };
         game.start_possession();
@@ -186,6 +191,7 @@ impl Game {
     pub fn set_controlled(&mut self, k: usize, by_bot: bool) {
         self.controlled[k] = by_bot;
         self.orders[k] = None;
+        self.targets[k] = None;
     }
 
     pub fn is_controlled(&self, k: usize) -> bool {
@@ -537,6 +543,7 @@ impl Game {
         }
         self.last_decision = vec![None; agents.len()];
         self.orders = vec![None; agents.len()];
+        self.targets = vec![None; agents.len()];
         self.agents = agents;
         self.ball = Ball::Held { by: 0 };
         self.possession_start_s = now;

@@ -471,3 +471,100 @@ fn standing_is_never_worse_than_moving_for_a_cell_behind_when_dribbling() {
         }
     }
 }
+
+/// A defender ordered to a point 3 m behind itself gets there within the time its own
+/// map gives for that point (from the node it is playing), plus a tick: the game plays
+/// the map's stored path, so the map's time is the game's. This is the time the shooter's
+/// `own` model of the defender counts on.
+#[test]
+fn a_defender_reaches_a_point_behind_it_within_the_time_its_own_map_says() {
+    let caps = fixtures::cmu_capabilities();
+    for motion in [DefenderMotion::Defense, DefenderMotion::Run] {
+        let mut params = GameParams {
+            seed: 5,
+            ..GameParams::default()
+        };
+        params.defender.motion = motion;
+        // The defender mid-court, facing the offense far from it: its first steps
+        // forward and the turn stay on the court.
+        let mut game = Game::new(caps.clone(), params).with_starts(vec![
+            Some(DVec2::new(12.0, 4.0)),
+            Some(DVec2::new(12.0, -4.0)),
+            Some(DVec2::new(6.0, 0.0)),
+        ]);
+        let mut events = Vec::new();
+        game.step(&mut events);
+        for k in 0..3 {
+            game.set_controlled(k, true);
+            game.order(k, Order::Stand).unwrap();
+        }
+        game.step(&mut events);
+        let start = game.agents()[2].pose;
+        let goal = start.position - 3.0 * DVec2::from_angle(start.heading);
+        let mover = caps.defender(motion);
+        let reach = mover.reach(&start, game.motion_of(2, mover));
+        let promised = reach.seconds(goal).expect("3 m behind is within the map");
+        let cell = reach.cell(goal).expect("3 m behind is within the map");
+        assert!(
+            reach.on_court(cell, &params.court, 0.0),
+            "{motion:?}: the way there stays on the court"
+        );
+        game.order(2, Order::MoveTo(goal)).unwrap();
+        let t0 = game.time_s();
+        let tick = 1.0 / params.tick_hz;
+        // Within half a cell's diagonal of the goal's cell centre: where the map aims.
+        let centre = mover.map().grid.cell_m * std::f64::consts::FRAC_1_SQRT_2;
+        while game.agents()[2].pose.position.distance(goal) > 2.0 * centre {
+            game.step(&mut events);
+            assert!(
+                game.time_s() - t0 <= promised + 2.0 * tick + 1e-9,
+                "{motion:?}: {:.2} m short {:.2} s after the order; the map says {promised:.2} s",
+                game.agents()[2].pose.position.distance(goal),
+                game.time_s() - t0
+            );
+        }
+    }
+}
+
+/// A bot's `move_to` stays in force until the agent gets there: when the map's way to
+/// the target leaves the court (a defender near the half-court line facing it must
+/// turn), the agent takes the best way nearer, then heads on from where it got to.
+#[test]
+fn a_move_to_keeps_going_until_the_agent_gets_there() {
+    let caps = fixtures::cmu_capabilities();
+    let params = GameParams {
+        seed: 5,
+        ..GameParams::default()
+    };
+    let mut game = Game::new(caps.clone(), params).with_starts(vec![
+        Some(DVec2::new(13.9, 0.95)),
+        Some(DVec2::new(2.0, -7.0)),
+        Some(DVec2::new(12.0, 0.0)),
+    ]);
+    let mut events = Vec::new();
+    game.step(&mut events);
+    for k in 0..3 {
+        game.set_controlled(k, true);
+        game.order(k, Order::Stand).unwrap();
+    }
+    game.step(&mut events);
+    let start = game.agents()[2].pose;
+    let goal = start.position - 3.0 * DVec2::from_angle(start.heading);
+    let mover = caps.defender(params.defender.motion);
+    let reach = mover.reach(&start, game.motion_of(2, mover));
+    let cell = reach.cell(goal).expect("3 m behind is within the map");
+    assert!(
+        !reach.on_court(cell, &params.court, 0.0),
+        "the map's way straight there must leave the court for this test to test anything"
+    );
+    game.order(2, Order::MoveTo(goal)).unwrap();
+    let t0 = game.time_s();
+    while game.agents()[2].pose.position.distance(goal) > 0.75 {
+        game.step(&mut events);
+        assert!(
+            game.time_s() - t0 < 10.0,
+            "still {:.2} m from the target after 10 s",
+            game.agents()[2].pose.position.distance(goal)
+        );
+    }
+}
