@@ -216,11 +216,14 @@ async function main() {
   }, 10_000, "court: the cost-map overlay covers the court (green or blue pixels)");
   check(overlay > 0.1, `court: the cost-map overlay covers the court (${(100 * overlay).toFixed(1)} % of pixels green or blue)`);
   // The holder changes with passes: read the text in the same look that finds it.
+  // A decision on a square names the model of the defender it counted on (issue 20).
   const decision = await (await page.waitForFunction(() => {
     const text = document.getElementById("decision").textContent;
-    return text.includes("safe square") && text;
+    return text.includes("safe square") && text.includes("model)") && text;
   }, null, { timeout: 30_000 })).jsonValue();
   check(/^o\d /.test(decision) && /safe square/.test(decision), `court: the ball holder's decision is explained: ${decision}`);
+  check(/\((own|paper|isotropic|none) model\)/.test(decision) && /Co [\d.]+ s/.test(decision),
+    `court: the decision names the defender model and gives C_o: ${decision}`);
   await shot("basketball");
 
   // A phone-sized window: everything fits the width.
