@@ -472,6 +472,30 @@ fn standing_is_never_worse_than_moving_for_a_cell_behind_when_dribbling() {
     }
 }
 
+/// A 2-on-1 game with its players at `starts` (offense first), after a first tick of
+/// their own play, handed to bots and told to stand: whatever comes next is the test's
+/// order.
+fn standing_still(
+    caps: &std::sync::Arc<Capabilities>,
+    params: GameParams,
+    starts: [(f64, f64); 3],
+) -> (Game, Vec<Event>) {
+    let mut game = Game::new(caps.clone(), params).with_starts(
+        starts
+            .iter()
+            .map(|&(x, z)| Some(DVec2::new(x, z)))
+            .collect(),
+    );
+    let mut events = Vec::new();
+    game.step(&mut events);
+    for k in 0..starts.len() {
+        game.set_controlled(k, true);
+        game.order(k, Order::Stand).unwrap();
+    }
+    game.step(&mut events);
+    (game, events)
+}
+
 /// A defender ordered to a point 3 m behind itself gets there within the time its own
 /// map gives for that point (from the node it is playing), plus a tick: the game plays
 /// the map's stored path, so the map's time is the game's. This is the time the shooter's
@@ -487,18 +511,8 @@ fn a_defender_reaches_a_point_behind_it_within_the_time_its_own_map_says() {
         params.defender.motion = motion;
         // The defender mid-court, facing the offense far from it: its first steps
         // forward and the turn stay on the court.
-        let mut game = Game::new(caps.clone(), params).with_starts(vec![
-            Some(DVec2::new(12.0, 4.0)),
-            Some(DVec2::new(12.0, -4.0)),
-            Some(DVec2::new(6.0, 0.0)),
-        ]);
-        let mut events = Vec::new();
-        game.step(&mut events);
-        for k in 0..3 {
-            game.set_controlled(k, true);
-            game.order(k, Order::Stand).unwrap();
-        }
-        game.step(&mut events);
+        let (mut game, mut events) =
+            standing_still(&caps, params, [(12.0, 4.0), (12.0, -4.0), (6.0, 0.0)]);
         let start = game.agents()[2].pose;
         let goal = start.position - 3.0 * DVec2::from_angle(start.heading);
         let mover = caps.defender(motion);
@@ -536,18 +550,8 @@ fn a_move_to_keeps_going_until_the_agent_gets_there() {
         seed: 5,
         ..GameParams::default()
     };
-    let mut game = Game::new(caps.clone(), params).with_starts(vec![
-        Some(DVec2::new(13.9, 0.95)),
-        Some(DVec2::new(2.0, -7.0)),
-        Some(DVec2::new(12.0, 0.0)),
-    ]);
-    let mut events = Vec::new();
-    game.step(&mut events);
-    for k in 0..3 {
-        game.set_controlled(k, true);
-        game.order(k, Order::Stand).unwrap();
-    }
-    game.step(&mut events);
+    let (mut game, mut events) =
+        standing_still(&caps, params, [(13.9, 0.95), (2.0, -7.0), (12.0, 0.0)]);
     let start = game.agents()[2].pose;
     let goal = start.position - 3.0 * DVec2::from_angle(start.heading);
     let mover = caps.defender(params.defender.motion);
