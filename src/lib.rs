@@ -2,64 +2,36 @@
 //!
 //! # Layout
 //!
-//! Everything but [`server`], [`loadgen`] and [`replay`]'s file handling is the deterministic
-//! simulation core: no clock, no threads of its own (a sweep may fan work out with
-//! rayon, but its results never depend on it), and no I/O except reading motion capture
-//! and the cost-map cache at start-up. The same inputs give the same bits on the same
-//! build, which keeps tests simple, results reproducible and replays verifiable.
-//! Modules, in the order data flows:
+//! The workspace's crates show the architecture; this package is the binary and puts
+//! them under one name for its command line, tests and benchmarks:
 //!
-//! * [`physics`]: ball flight. Gravity, Nathan's drag and Magnus lift, a fixed-step RK4
-//!   integrator, bounces and rolls; baseball and cricket presets.
-//! * [`perception`]: what a fielder can see from its eye: the elevation tan ψ and bearing
-//!   α of the ball and their rates by differences, with optional delay and noise.
-//! * [`fielding`]: fielders with human limits, the sub-tick catch test, the catching
-//!   strategies (Chapman/OAC with Tresilian's lateral term, Gillies & Dodgson's LOT,
-//!   McBeath's optical LOT, trajectory prediction), single trials and sweeps.
-//! * [`motion`]: human motion: BVH motion capture (the CMU clips embedded in the binary,
-//!   or a user's own directory) loaded into clips, and the motion graph of a behaviour
-//!   (Kovar et al. 2002): transitions between similar frames, pruned to the largest
-//!   strongly connected component.
-//! * [`costmap`]: Sukthankar et al.'s physical capability model: the frames a human needs
-//!   to reach each square around it from a start state (standing, or a way of moving),
-//!   by Monte Carlo walks, search, or grassfire.
-//! * [`basketball`]: the paper's basketball domain: a half court, agents that move with
-//!   motion capture along cost-map paths that go on from the node each body is playing
-//!   (one continuous walk on the graph), opponent modelling (`C_o > C_d + T_s + ε`),
-//!   the `simple` and `costmap` offenses, and the possession experiment.
-//! * [`sim`]: a whole match of any sport as one deterministic [`sim::World`]: scenarios
-//!   checked field by field, fly balls with fielders, basketball, bots' commands.
-//! * [`protocol`]: the WebSocket messages (version 2), as the server sends and reads them.
-//! * [`session`]: a world with its id and frame rate, stepping and encoding frames: what
-//!   the server, headless runs and replay verification all drive.
-//! * [`replay`]: replay files (JSON lines: header, frames, bot commands, footer with a
-//!   hash over the frames), written append-only, read back to a torn record, verified by
-//!   re-simulation.
-//! * [`server`]: the I/O shell (tokio, axum, tower): match tasks that tick worlds,
-//!   WebSockets for spectators, bots and replay viewers, the REST API, metrics. The only
-//!   module that reads a clock or opens a socket.
-//! * [`loadgen`]: a load generator for the server (and a peer, Colyseus) on loopback:
-//!   a client of the protocol, not part of the core.
-//! * [`strict_json`]: JSON as read from clients, refusing an object that names a key
-//!   twice.
-//! * [`names`]: the names users type for presets, and the error a wrong one gets.
-//! * [`words`]: how counts and figures read in text for people (`1 possession`, `2.82`).
+//! * `fieldhouse-core` (re-exported here module by module: [`physics`], [`perception`],
+//!   [`fielding`], [`motion`], [`costmap`], [`basketball`], [`sim`], [`protocol`],
+//!   [`session`], [`replay`], [`strict_json`], [`names`], [`words`]): the deterministic
+//!   simulation core. It cannot depend on tokio, axum or a network crate.
+//! * [`server`] (`fieldhouse-server`): the I/O shell. Match tasks drive the core's
+//!   worlds on tokio; WebSockets for spectators, bots and replay viewers; the REST API;
+//!   metrics. The only crate that reads a clock or opens a listening socket.
+//! * [`loadgen`] (`fieldhouse-loadgen`): the load generator and soak, clients of the
+//!   protocol that measure a server from outside.
+//! * The `fieldhouse` binary (`src/main.rs`, `src/cli/`): a thin shell that parses the
+//!   command line, runs the core or the server, prints text or JSON and draws pictures.
 //!
-//! The `fieldhouse` binary (`src/main.rs`, `src/cli/`) is a thin shell: it parses the
-//! command line, runs the core or the server, prints text or JSON and draws pictures.
+//! # Follow one tick
+//!
+//! A bot's command arrives on its socket in `server::ws` (the bot socket), is checked
+//! (size, strict JSON, budget) and decoded by [`protocol::decode`], and goes to its
+//! match task as a `Control::Command` over the match's channel. The task
+//! (`server::match_task`) forwards it to the match's sans-IO driver, which checks its
+//! tick window and hands it to [`sim::World::command`]. When the driver's timer is due
+//! the task calls it again; it steps the [`session::Session`], which calls
+//! [`sim::World::step`] and, on frame ticks, encodes the frame once. The task publishes
+//! those bytes on a watch channel that every spectator socket reads and sends unchanged,
+//! and hands the same bytes to the match's replay writer (`server::recording`).
 
-pub mod basketball;
-pub mod costmap;
-pub mod fielding;
-pub mod loadgen;
-pub mod motion;
-pub mod names;
-pub mod perception;
-pub mod physics;
-pub mod protocol;
-pub mod replay;
-pub mod server;
-pub mod session;
-pub mod sim;
-pub mod strict_json;
-pub mod words;
+pub use fieldhouse_core::{
+    basketball, costmap, fielding, motion, names, perception, physics, protocol, replay,
+    session, sim, strict_json, words,
+};
+pub use fieldhouse_loadgen as loadgen;
+pub use fieldhouse_server as server;

@@ -15,8 +15,8 @@ use super::replay_dir;
 use super::state::AppState;
 use super::upgrade::{Socket, Upgrade};
 use super::ws::{budget, classify, refusal, shut, Read, Sender, Sent, GOING_AWAY, POLICY};
-use crate::protocol::{encode, End, ErrorMessage};
-use crate::replay::{self, Index};
+use fieldhouse_core::protocol::{encode, End, ErrorMessage};
+use fieldhouse_core::replay::{self, Index};
 use axum::body::Body;
 use axum::extract::{Path, State};
 use axum::http::header::{
@@ -257,7 +257,7 @@ enum Control {
 /// Reads a viewer's message: only objects are messages (serde would also read one from
 /// an array).
 fn control(text: &str) -> Result<Incoming, String> {
-    let value = crate::strict_json::parse(text.as_bytes()).map_err(|e| e.to_string())?;
+    let value = fieldhouse_core::strict_json::parse(text.as_bytes()).map_err(|e| e.to_string())?;
     if !value.is_object() {
         return Err("a control is a JSON object".into());
     }
@@ -293,8 +293,8 @@ async fn view(
     let last_tick = index.len().checked_sub(1).and_then(|k| index.tick(k));
     let hello = json!({
         "type": "hello",
-        "protocol": crate::protocol::PROTOCOL,
-        "version": crate::protocol::VERSION,
+        "protocol": fieldhouse_core::protocol::PROTOCOL,
+        "version": fieldhouse_core::protocol::VERSION,
         "role": "replay",
         "match": index.header["match"],
         "replay": {

@@ -6,7 +6,7 @@ use super::match_task;
 use super::slot::Slot;
 use super::state::{AppState, Control, MatchEntry};
 use super::sweep;
-use crate::sim::Scenario;
+use fieldhouse_core::sim::Scenario;
 use axum::body::Bytes;
 use axum::extract::{Path, State};
 use axum::http::{HeaderMap, StatusCode};

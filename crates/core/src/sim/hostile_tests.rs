@@ -49,7 +49,7 @@ fn scenario(sport: Sport) -> Scenario {
 }
 
 fn frame_schema() -> jsonschema::Validator {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/proto/frame.schema.json");
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../proto/frame.schema.json");
     let text = std::fs::read_to_string(path).expect("the frame schema");
     jsonschema::validator_for(&serde_json::from_str(&text).unwrap()).expect("a valid schema")
 }

@@ -12,11 +12,11 @@
 //! `size_limit`; a recording that may never end (a real-time match without bot slots,
 //! like the demos) instead rotates into files of `replay_segment_bytes`, each ended with
 //! the reason `rotated` and the next one's header naming its segment, first tick and
-//! the file before it (see [`crate::replay`]).
+//! the file before it (see [`fieldhouse_core::replay`]).
 
 use super::replay_dir;
 use super::state::AppState;
-use crate::replay::{Durable, Recorder};
+use fieldhouse_core::replay::{Durable, Recorder};
 use serde_json::Value;
 use std::io;
 use std::path::PathBuf;
@@ -409,7 +409,7 @@ impl Files for InDir {
 #[cfg(test)]
 mod tests {
     use super::{Files, Limit, Recording, MAX_QUEUED_ALL_BYTES, MAX_QUEUED_BYTES};
-    use crate::replay::Durable;
+    use fieldhouse_core::replay::Durable;
     use serde_json::{json, Value};
     use std::io::{self, Write};
     use std::sync::{Arc, Mutex};

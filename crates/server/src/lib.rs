@@ -51,7 +51,7 @@ pub mod ws;
 
 pub use config::ServerConfig;
 
-use crate::basketball::Capabilities;
+use fieldhouse_core::basketball::Capabilities;
 use axum::error_handling::HandleErrorLayer;
 use axum::http::StatusCode;
 use axum::routing::get;

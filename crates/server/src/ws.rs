@@ -14,7 +14,7 @@ use super::auth;
 use super::budget::{MessageBudget, Verdict};
 use super::state::{AppState, Control, MatchEntry, ToBot};
 use super::upgrade::{FrameFlood, Socket, Upgrade};
-use crate::protocol::{decode, encode, ClientMessage, ErrorMessage, Hello, Limits};
+use fieldhouse_core::protocol::{decode, encode, ClientMessage, ErrorMessage, Hello, Limits};
 use axum::extract::{Path, Query, State};
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};

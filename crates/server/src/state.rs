@@ -3,9 +3,9 @@
 
 use super::config::ServerConfig;
 use super::metrics::Metrics;
-use crate::basketball::Capabilities;
-use crate::protocol::MatchInfo;
-use crate::sim::{Action, Mode, Scenario};
+use fieldhouse_core::basketball::Capabilities;
+use fieldhouse_core::protocol::MatchInfo;
+use fieldhouse_core::sim::{Action, Mode, Scenario};
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicU64};
 use std::sync::{Arc, Mutex, OnceLock, RwLock};

@@ -391,7 +391,7 @@ pub fn table(rounds: &[Round]) -> String {
                 let _ = writeln!(
                     out,
                     "at {}, fieldhouse ÷ {}: server CPU per message {:.2}, delivered share {:.3}, RSS {:.2}, bytes per message {:.2}",
-                    crate::words::plural(ours.spectators as u64, "spectator"),
+                    fieldhouse_core::words::plural(ours.spectators as u64, "spectator"),
                     peer.server,
                     ours.server_cpu_us_per_message / peer.server_cpu_us_per_message,
                     ours.delivered_share / peer.delivered_share,

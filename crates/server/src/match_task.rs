@@ -10,10 +10,10 @@ use super::metrics::Metrics;
 use super::recording::{InDir, Limit, Recording};
 use super::slot::Slot;
 use super::state::{AppState, Control, MatchEntry, Published, ToBot};
-use crate::protocol::{encode, End, ErrorMessage, MatchInfo, Perception};
-use crate::replay;
-use crate::session::Session;
-use crate::sim::{Mode, Scenario, ScenarioError, World};
+use fieldhouse_core::protocol::{encode, End, ErrorMessage, MatchInfo, Perception};
+use fieldhouse_core::replay;
+use fieldhouse_core::session::Session;
+use fieldhouse_core::sim::{Mode, Scenario, ScenarioError, World};
 use futures_util::FutureExt;
 use serde_json::Value;
 use std::panic::AssertUnwindSafe;
@@ -500,10 +500,10 @@ fn stamped(frame: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::{in_window, spawn, stamped};
-    use crate::server::slot::Slot;
-    use crate::server::state::{AppState, Control};
-    use crate::server::ServerConfig;
-    use crate::sim::Scenario;
+    use crate::slot::Slot;
+    use crate::state::{AppState, Control};
+    use crate::ServerConfig;
+    use fieldhouse_core::sim::Scenario;
     use std::sync::atomic::Ordering::Relaxed;
     use std::sync::Arc;
 
@@ -539,7 +539,7 @@ mod tests {
             ticking: tokio::runtime::Handle::current(),
             config: ServerConfig::default(),
             admin_token: "admin".into(),
-            caps: crate::motion::fixtures::cmu_capabilities(),
+            caps: fieldhouse_core::motion::fixtures::cmu_capabilities(),
             metrics: Arc::default(),
             matches: Default::default(),
             shutdown,
@@ -547,7 +547,7 @@ mod tests {
             replay_dir: None,
             replays: Default::default(),
             replay_written: tokio::sync::Notify::new(),
-            connections: Arc::new(crate::server::listener::Connections::new(16, 64)),
+            connections: Arc::new(crate::listener::Connections::new(16, 64)),
         };
         (Arc::new(app), stop)
     }

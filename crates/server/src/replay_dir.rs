@@ -9,7 +9,7 @@
 //! checks are made on the opened handle (`O_NOFOLLOW`, then `fstat`), so nothing can be
 //! swapped in between a check and the open.
 
-use crate::replay::Index;
+use fieldhouse_core::replay::Index;
 use std::collections::{HashMap, HashSet};
 use std::fs::{File, Metadata};
 use std::io;

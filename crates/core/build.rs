@@ -17,9 +17,11 @@ use std::path::{Path, PathBuf};
 const LEVEL: i32 = 19;
 
 fn main() {
+    // The capture sits at the repository's root (`data/mocap`), two levels above this
+    // crate, where users and scripts/sync-mocap find it.
     let root = PathBuf::from(std::env::var_os("CARGO_MANIFEST_DIR").expect("set by cargo"));
-    let data = root.join("data/mocap");
-    println!("cargo:rerun-if-changed=data/mocap");
+    let data = root.join("../../data/mocap");
+    println!("cargo:rerun-if-changed=../../data/mocap");
     let files = bvh_files(&data);
     if files.is_empty() {
         panic!(

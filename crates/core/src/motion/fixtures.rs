@@ -84,7 +84,7 @@ pub fn cmu_library() -> &'static MotionLibrary {
 /// The repository's copy of the motion capture, which the binary embeds: for tests of
 /// the directory loader.
 pub fn mocap_dir() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/mocap")
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/mocap")
 }
 
 /// The motion graph of a CMU behaviour, with the automatic threshold.
@@ -96,13 +96,14 @@ pub fn cmu_graph(behaviour: &str) -> MotionGraph {
 }
 
 /// The basketball behaviours of the CMU data, built once per test binary; their maps
-/// are cached under `target/test-cache`, keyed by their inputs like any cost-map cache,
+/// are cached under the workspace's `target/test-cache`, keyed by their inputs like any cost-map cache,
 /// so later runs read them back.
 pub fn cmu_capabilities() -> std::sync::Arc<crate::basketball::Capabilities> {
     static CAPS: std::sync::OnceLock<std::sync::Arc<crate::basketball::Capabilities>> =
         std::sync::OnceLock::new();
     CAPS.get_or_init(|| {
-        let cache = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-cache");
+        let cache =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/test-cache");
         std::sync::Arc::new(
             crate::basketball::Capabilities::build(cmu_library(), Some(&cache), &mut |_| {})
                 .expect("the CMU behaviours build"),

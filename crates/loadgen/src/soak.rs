@@ -9,7 +9,7 @@
 use super::client::Socket;
 use super::procfs;
 use super::servers::{metric, Running};
-use crate::words::{figure, plural};
+use fieldhouse_core::words::{figure, plural};
 use anyhow::Context;
 use futures_util::{SinkExt, StreamExt};
 use serde::Serialize;

@@ -20,7 +20,7 @@
 use super::client::number_after;
 use super::servers::Running;
 use super::{Audience, Percentiles, Round, Window};
-use crate::words::plural;
+use fieldhouse_core::words::plural;
 use futures_util::{SinkExt, StreamExt};
 use serde::Serialize;
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -4,7 +4,7 @@
 
 use super::api;
 use super::state::AppState;
-use crate::sim::{Mode, Options, Scenario, Sport};
+use fieldhouse_core::sim::{Mode, Options, Scenario, Sport};
 use std::sync::Arc;
 
 pub fn scenarios() -> Vec<(&'static str, Scenario)> {

@@ -1,0 +1,61 @@
+//! The deterministic simulation core of fieldhouse: no clock, no sockets, no threads of
+//! its own (a sweep may fan work out with rayon, but its results never depend on it).
+//! The same inputs give the same bits on the same build, which keeps tests simple,
+//! results reproducible and replays verifiable. This crate cannot depend on tokio, axum
+//! or a network crate (`scripts/check-architecture` fails if it does), so "the core does
+//! no I/O" is checked, not a convention.
+//!
+//! Its only I/O is reading files at its edge, before any tick: motion capture (a user's
+//! `--mocap DIR`; the CMU clips are embedded), the cost-map cache, scenario and replay
+//! files. These stay here because each reader is also what validates the format (a BVH
+//! parser, a replay reader that stops at a torn record), and the fuzz targets exercise
+//! exactly those, on this crate alone.
+//!
+//! # Layout
+//!
+//! Modules, in the order data flows:
+//!
+//! * [`physics`]: ball flight. Gravity, Nathan's drag and Magnus lift, a fixed-step RK4
+//!   integrator, bounces and rolls; baseball and cricket presets.
+//! * [`perception`]: what a fielder can see from its eye: the elevation tan ψ and bearing
+//!   α of the ball and their rates by differences, with optional delay and noise.
+//! * [`fielding`]: fielders with human limits, the sub-tick catch test, the catching
+//!   strategies (Chapman/OAC with Tresilian's lateral term, Gillies & Dodgson's LOT,
+//!   McBeath's optical LOT, trajectory prediction), single trials and sweeps.
+//! * [`motion`]: human motion: BVH motion capture (the CMU clips embedded in the binary,
+//!   or a user's own directory) loaded into clips, and the motion graph of a behaviour
+//!   (Kovar et al. 2002): transitions between similar frames, pruned to the largest
+//!   strongly connected component.
+//! * [`costmap`]: Sukthankar et al.'s physical capability model: the frames a human needs
+//!   to reach each square around it from a start state (standing, or a way of moving),
+//!   by Monte Carlo walks, search, or grassfire.
+//! * [`basketball`]: the paper's basketball domain: a half court, agents that move with
+//!   motion capture along cost-map paths that go on from the node each body is playing
+//!   (one continuous walk on the graph), opponent modelling (`C_o > C_d + T_s + ε`),
+//!   the `simple` and `costmap` offenses, and the possession experiment.
+//! * [`sim`]: a whole match of any sport as one deterministic [`sim::World`]: scenarios
+//!   checked field by field, fly balls with fielders, basketball, bots' commands.
+//! * [`protocol`]: the WebSocket messages (version 2), as the server sends and reads them.
+//! * [`session`]: a world with its id and frame rate, stepping and encoding frames: what
+//!   the server, headless runs and replay verification all drive.
+//! * [`replay`]: replay files (JSON lines: header, frames, bot commands, footer with a
+//!   hash over the frames), written append-only, read back to a torn record, verified by
+//!   re-simulation.
+//! * [`strict_json`]: JSON as read from clients, refusing an object that names a key
+//!   twice.
+//! * [`names`]: the names users type for presets, and the error a wrong one gets.
+//! * [`words`]: how counts and figures read in text for people (`1 possession`, `2.82`).
+
+pub mod basketball;
+pub mod costmap;
+pub mod fielding;
+pub mod motion;
+pub mod names;
+pub mod perception;
+pub mod physics;
+pub mod protocol;
+pub mod replay;
+pub mod session;
+pub mod sim;
+pub mod strict_json;
+pub mod words;
