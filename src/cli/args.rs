@@ -10,7 +10,7 @@ use glam::DVec2;
 
 /// The physical and perceptual setting of a catch.
 #[derive(Args, Debug, Clone)]
-pub struct Setting {
+pub(super) struct Setting {
     /// Air model: `nathan` (drag and Magnus lift) or `vacuum` (gravity only).
     #[arg(long, default_value = "nathan", value_parser = parse_str::<AirModel>)]
     pub air: AirModel,
@@ -44,11 +44,11 @@ pub struct Setting {
 }
 
 impl Setting {
-    pub fn dt(&self) -> f64 {
+    pub(super) fn dt(&self) -> f64 {
         1.0 / f64::from(self.tick_hz)
     }
 
-    pub fn trial_config(&self, seed: u64, record_trace: bool) -> TrialConfig {
+    pub(super) fn trial_config(&self, seed: u64, record_trace: bool) -> TrialConfig {
         TrialConfig {
             fielder: FielderConfig {
                 limits: self.limits,
@@ -69,7 +69,7 @@ impl Setting {
     }
 }
 
-pub fn parse_str<T: std::str::FromStr<Err = UnknownName>>(s: &str) -> Result<T, UnknownName> {
+pub(super) fn parse_str<T: std::str::FromStr<Err = UnknownName>>(s: &str) -> Result<T, UnknownName> {
     s.parse()
 }
 
@@ -85,11 +85,11 @@ fn finite(s: &str) -> Result<f64, String> {
     }
 }
 
-pub fn any_number(s: &str) -> Result<f64, String> {
+pub(super) fn any_number(s: &str) -> Result<f64, String> {
     finite(s)
 }
 
-pub fn positive(s: &str) -> Result<f64, String> {
+pub(super) fn positive(s: &str) -> Result<f64, String> {
     let x = finite(s)?;
     if x > 0.0 {
         Ok(x)
@@ -98,7 +98,7 @@ pub fn positive(s: &str) -> Result<f64, String> {
     }
 }
 
-pub fn non_negative(s: &str) -> Result<f64, String> {
+pub(super) fn non_negative(s: &str) -> Result<f64, String> {
     let x = finite(s)?;
     if x >= 0.0 {
         Ok(x)
@@ -108,7 +108,7 @@ pub fn non_negative(s: &str) -> Result<f64, String> {
 }
 
 /// A ground position written `X,Z` in metres; either may be negative (`-12.5,40`).
-pub fn ground_point(s: &str) -> Result<DVec2, String> {
+pub(super) fn ground_point(s: &str) -> Result<DVec2, String> {
     let parts: Vec<&str> = s.split(',').collect();
     match parts.as_slice() {
         [x, z] => Ok(DVec2::new(finite(x)?, finite(z)?)),
@@ -119,7 +119,7 @@ pub fn ground_point(s: &str) -> Result<DVec2, String> {
 }
 
 /// A pose on the ground written `X,Z,HEADING_DEG`: metres, and degrees from +x toward +z.
-pub fn ground_pose(s: &str) -> Result<AgentPose, String> {
+pub(super) fn ground_pose(s: &str) -> Result<AgentPose, String> {
     let parts: Vec<&str> = s.split(',').collect();
     match parts.as_slice() {
         [x, z, h] => Ok(AgentPose {

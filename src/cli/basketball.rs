@@ -23,7 +23,7 @@ use std::time::Instant;
 
 /// Where motion and cached maps come from.
 #[derive(Args, Debug, Clone)]
-pub struct CapabilityArgs {
+pub(super) struct CapabilityArgs {
     #[command(flatten)]
     source: MotionSourceArgs,
     #[command(flatten)]
@@ -31,18 +31,18 @@ pub struct CapabilityArgs {
 }
 
 impl CapabilityArgs {
-    pub fn load(&self) -> anyhow::Result<Arc<Capabilities>> {
+    pub(super) fn load(&self) -> anyhow::Result<Arc<Capabilities>> {
         let library = self.library()?;
         Ok(Arc::new(self.build(&library)?))
     }
 
     /// The motion library these capabilities are built from.
-    pub fn library(&self) -> anyhow::Result<fieldhouse::motion::MotionLibrary> {
+    pub(super) fn library(&self) -> anyhow::Result<fieldhouse::motion::MotionLibrary> {
         self.source.load()
     }
 
     /// The capabilities of `library`, built or read from the cache, logging each stage.
-    pub fn build(
+    pub(super) fn build(
         &self,
         library: &fieldhouse::motion::MotionLibrary,
     ) -> anyhow::Result<Capabilities> {
@@ -74,7 +74,7 @@ impl CapabilityArgs {
         (180 faces the basket from midcourt).\n\
         Example: fieldhouse basketball-decide --shooter 9,2,180 --defender 4,0,0 --json"
 )]
-pub struct DecideArgs {
+pub(super) struct DecideArgs {
     /// The shooter's pose, X,Z,HEADING_DEG.
     #[arg(long, value_name = "X,Z,HEADING_DEG", value_parser = ground_pose, allow_hyphen_values = true)]
     shooter: AgentPose,
@@ -128,7 +128,7 @@ fn standing<'a>(mover: &'a Mover, poses: &[AgentPose]) -> Vec<Opponent<'a>> {
         .collect()
 }
 
-pub fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<()> {
+pub(super) fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let court = Court::default();
     on_court(&court, "shooter", &args.shooter)?;
     for d in &args.defender {
@@ -357,7 +357,7 @@ fn picture(
         from the ball handler toward the basket.\n\
         Example: fieldhouse basketball-eval --offense both --possessions 2000 --seed 1"
 )]
-pub struct EvalArgs {
+pub(super) struct EvalArgs {
     /// simple, costmap, or both (the same possessions for each, with the same random
     /// draws, compared possession by possession).
     #[arg(long, default_value = "both")]
@@ -399,7 +399,7 @@ pub struct EvalArgs {
     capability: CapabilityArgs,
 }
 
-pub fn eval(args: EvalArgs, out: &mut impl Write) -> anyhow::Result<()> {
+pub(super) fn eval(args: EvalArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let brains: Vec<Brain> = match args.offense.as_str() {
         "both" => vec![Brain::Simple, Brain::Costmap],
         one => vec![parse_str::<Brain>(one).map_err(|e| anyhow::anyhow!("{e}; or both"))?],

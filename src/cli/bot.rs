@@ -34,7 +34,7 @@ const HELLO_WITHIN: Duration = Duration::from_secs(10);
     progress (tick and score) goes to stderr every few seconds.\n\
     Example: fieldhouse bot --url ws://127.0.0.1:7878/ws/matches/ID/play --token T --strategy chapman"
 )]
-pub struct BotArgs {
+pub(super) struct BotArgs {
     /// The agent's play endpoint, ws://HOST:PORT/ws/matches/ID/play (the spectators'
     /// /ws/matches/ID cannot play). The token may ride in it as ?token=TOKEN instead.
     #[arg(long, value_name = "URL")]
@@ -147,7 +147,7 @@ fn hoops(p: &Value) -> Value {
     json!({"kind": "move_to", "target": spot.to_array()})
 }
 
-pub fn run(args: BotArgs, out: &mut impl Write) -> anyhow::Result<()> {
+pub(super) fn run(args: BotArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let kind: StrategyKind = args.strategy.parse()?;
     if kind == StrategyKind::Predictive {
         bail!("predictive needs the ball's future, which a bot does not perceive; choose chapman, lot-optical, lot or chapman-1d");

@@ -5,9 +5,9 @@ use anyhow::Context;
 use glam::DVec2;
 use std::path::Path;
 
-pub type Rgb = [u8; 3];
+pub(super) type Rgb = [u8; 3];
 
-pub struct Canvas {
+pub(super) struct Canvas {
     width: usize,
     height: usize,
     rgb: Vec<u8>,
@@ -15,7 +15,7 @@ pub struct Canvas {
 
 /// Dark for cheap, through red and yellow to white for the most expensive (a "hot"
 /// colour map), so a picture reads without a legend.
-pub fn hot(t: f64) -> Rgb {
+pub(super) fn hot(t: f64) -> Rgb {
     let t = t.clamp(0.0, 1.0);
     let channel = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
     [
@@ -26,7 +26,7 @@ pub fn hot(t: f64) -> Rgb {
 }
 
 impl Canvas {
-    pub fn new(width: usize, height: usize, background: Rgb) -> Canvas {
+    pub(super) fn new(width: usize, height: usize, background: Rgb) -> Canvas {
         Canvas {
             width,
             height,
@@ -34,7 +34,7 @@ impl Canvas {
         }
     }
 
-    pub fn put(&mut self, x: i64, y: i64, c: Rgb) {
+    pub(super) fn put(&mut self, x: i64, y: i64, c: Rgb) {
         if (0..self.width as i64).contains(&x) && (0..self.height as i64).contains(&y) {
             let k = (y as usize * self.width + x as usize) * 3;
             self.rgb[k..k + 3].copy_from_slice(&c);
@@ -42,7 +42,7 @@ impl Canvas {
     }
 
     /// Fills the pixels from `a` (inclusive) to `b` (exclusive).
-    pub fn fill(&mut self, a: DVec2, b: DVec2, c: Rgb) {
+    pub(super) fn fill(&mut self, a: DVec2, b: DVec2, c: Rgb) {
         for y in a.y.round() as i64..b.y.round() as i64 {
             for x in a.x.round() as i64..b.x.round() as i64 {
                 self.put(x, y, c);
@@ -51,7 +51,7 @@ impl Canvas {
     }
 
     /// A rectangle's outline, `width` pixels thick, inside the corners `a` and `b`.
-    pub fn outline(&mut self, a: DVec2, b: DVec2, width: i64, c: Rgb) {
+    pub(super) fn outline(&mut self, a: DVec2, b: DVec2, width: i64, c: Rgb) {
         let (x0, y0, x1, y1) = (
             a.x.round() as i64,
             a.y.round() as i64,
@@ -71,7 +71,7 @@ impl Canvas {
     }
 
     /// A disc of radius `r` pixels.
-    pub fn disc(&mut self, centre: DVec2, r: f64, c: Rgb) {
+    pub(super) fn disc(&mut self, centre: DVec2, r: f64, c: Rgb) {
         let ri = r.ceil() as i64;
         for dy in -ri..=ri {
             for dx in -ri..=ri {
@@ -88,7 +88,7 @@ impl Canvas {
 
     /// An arrow from `from`, `length` pixels long along the unit vector `dir`, with a
     /// head over its last 40 %.
-    pub fn arrow(&mut self, from: DVec2, dir: DVec2, length: f64, c: Rgb) {
+    pub(super) fn arrow(&mut self, from: DVec2, dir: DVec2, length: f64, c: Rgb) {
         let side = dir.perp();
         let steps = (2.0 * length) as usize;
         for k in 0..=steps {
@@ -108,7 +108,7 @@ impl Canvas {
         }
     }
 
-    pub fn save(&self, file: &Path) -> anyhow::Result<()> {
+    pub(super) fn save(&self, file: &Path) -> anyhow::Result<()> {
         let out = std::fs::File::create(file)
             .with_context(|| format!("cannot create {}", file.display()))?;
         let mut encoder = png::Encoder::new(

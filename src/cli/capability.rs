@@ -18,7 +18,7 @@ use std::io::Write;
         ahead is the cell from 1.0 to 1.5 m.\n\
         Example: fieldhouse capability --json"
 )]
-pub struct CapabilityCmdArgs {
+pub(super) struct CapabilityCmdArgs {
     #[command(flatten)]
     capability: CapabilityArgs,
     /// Print one JSON document.
@@ -129,7 +129,7 @@ fn behaviour_json(mover: &Mover, library: &MotionLibrary) -> Value {
     })
 }
 
-pub fn run(args: CapabilityCmdArgs, out: &mut impl Write) -> anyhow::Result<()> {
+pub(super) fn run(args: CapabilityCmdArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let library = args.capability.library()?;
     let caps = args.capability.build(&library)?;
     let movers = [&caps.dribble, &caps.run, &caps.defense];

@@ -19,7 +19,7 @@ const MAX_FLIGHT_S: f64 = 60.0;
     after_help = "The ball starts at (0, launch height, 0); azimuth is measured from +x toward +z, y is up.\n\
         Example: fieldhouse catch --strategy chapman --speed 40 --elevation 40 --azimuth 30 --fielder 70,55"
 )]
-pub struct CatchArgs {
+pub(super) struct CatchArgs {
     /// chapman, chapman-1d, lot, lot-optical or predictive.
     #[arg(long, value_parser = parse_str::<StrategyKind>)]
     strategy: StrategyKind,
@@ -76,7 +76,7 @@ struct CatchReport<'a> {
     trace: &'a [TraceEntry],
 }
 
-pub fn run(args: CatchArgs, out: &mut impl Write) -> anyhow::Result<()> {
+pub(super) fn run(args: CatchArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let s = &args.setting;
     let launch = Launch {
         speed_m_s: args.speed,

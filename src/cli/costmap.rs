@@ -25,7 +25,7 @@ use std::time::Instant;
     after_help = "The agent stands at (0, 0) facing +x; y is up, so +z is on its right.\n\
         Example: fieldhouse costmap --behaviour run --method search --png run.png"
 )]
-pub struct CostmapArgs {
+pub(super) struct CostmapArgs {
     /// mc (the paper's Monte Carlo), search (systematic minimum time) or grassfire
     /// (distance at top speed).
     #[arg(long, default_value = "search", value_parser = super::args::parse_str::<Method>)]
@@ -76,7 +76,7 @@ pub struct CostmapArgs {
 
 /// Where cost maps are cached.
 #[derive(Args, Debug, Clone)]
-pub struct CacheArgs {
+pub(super) struct CacheArgs {
     /// Where built maps are cached (default: $XDG_CACHE_HOME/fieldhouse or ~/.cache/fieldhouse).
     #[arg(long, value_name = "DIR", env = "FIELDHOUSE_CACHE_DIR")]
     cache_dir: Option<PathBuf>,
@@ -87,7 +87,7 @@ pub struct CacheArgs {
 
 impl CacheArgs {
     /// The cache directory to use, if any.
-    pub fn dir(&self) -> Option<PathBuf> {
+    pub(super) fn dir(&self) -> Option<PathBuf> {
         (!self.no_cache)
             .then(|| self.cache_dir.clone().or_else(cache::default_dir))
             .flatten()
@@ -145,7 +145,7 @@ fn start_node(graph: &MotionGraph, given: &str) -> anyhow::Result<u32> {
         .with_context(|| format!("start \"{given}\" was pruned from the graph (not in its largest strongly connected component)"))
 }
 
-pub fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
+pub(super) fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let (library, graph) = args.graph.build()?;
     let start = start_node(&graph, &args.start)?;
     let params = BuildParams {

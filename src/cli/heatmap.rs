@@ -11,11 +11,11 @@ use std::path::Path;
 
 /// Pixels per cell side.
 const SCALE: usize = 12;
-pub const UNREACHABLE: Rgb = [205, 220, 235];
+pub(super) const UNREACHABLE: Rgb = [205, 220, 235];
 const OBSTACLE: Rgb = [220, 30, 30];
-pub const START: Rgb = [40, 200, 60];
+pub(super) const START: Rgb = [40, 200, 60];
 
-pub fn write(map: &CostMap, file: &Path) -> anyhow::Result<()> {
+pub(super) fn write(map: &CostMap, file: &Path) -> anyhow::Result<()> {
     let n = map.grid.n;
     let side = n * SCALE;
     let mut canvas = Canvas::new(side, side, UNREACHABLE);

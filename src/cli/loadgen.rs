@@ -17,7 +17,7 @@ use std::path::PathBuf;
     (`ulimit -n`).\n\
     Example: fieldhouse loadgen --spectators 1000,5000 --seconds 10 --peer colyseus"
 )]
-pub struct LoadgenArgs {
+pub(super) struct LoadgenArgs {
     /// Spectator counts, comma-separated: one round per count (at most 20,000 each;
     /// default 1000). With --bots, one count: spectators watching the bots' matches in
     /// the same window (default none).
@@ -76,7 +76,7 @@ fn seconds_within(text: &str, low: f64, high: f64) -> Result<f64, String> {
     }
 }
 
-pub fn run(args: LoadgenArgs, out: &mut impl Write) -> anyhow::Result<()> {
+pub(super) fn run(args: LoadgenArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let spectators = match (&args.spectators[..], args.bots) {
         ([], None) => vec![1000],
         ([_, _, ..], Some(_)) => anyhow::bail!(

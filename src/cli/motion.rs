@@ -10,7 +10,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 #[derive(Args, Debug, Clone)]
-pub struct MotionSourceArgs {
+pub(super) struct MotionSourceArgs {
     /// Your own BVH motion capture instead of the CMU capture built into fieldhouse: a
     /// directory with one folder per behaviour (DIR/run/*.bvh, DIR/dribble/*.bvh,
     /// DIR/defense/*.bvh). Default: the CMU capture embedded in the binary (data/mocap in
@@ -21,7 +21,7 @@ pub struct MotionSourceArgs {
 
 impl MotionSourceArgs {
     /// Loads the motion library, logging which source it is and every clip that failed.
-    pub fn load(&self) -> anyhow::Result<MotionLibrary> {
+    pub(super) fn load(&self) -> anyhow::Result<MotionLibrary> {
         let library = match &self.mocap {
             Some(dir) => MotionLibrary::load(dir, FPS).with_context(|| {
                 format!(
@@ -46,7 +46,7 @@ impl MotionSourceArgs {
 }
 
 #[derive(Args, Debug, Clone)]
-pub struct GraphArgs {
+pub(super) struct GraphArgs {
     /// Behaviour (a folder of the motion data): run, dribble, defense, ...
     #[arg(long)]
     pub behaviour: String,
@@ -64,7 +64,7 @@ pub struct GraphArgs {
 }
 
 impl GraphArgs {
-    pub fn build(&self) -> anyhow::Result<(MotionLibrary, MotionGraph)> {
+    pub(super) fn build(&self) -> anyhow::Result<(MotionLibrary, MotionGraph)> {
         let library = self.source.load()?;
         let owned = library.ground_clips(&self.behaviour);
         let clips: Vec<_> = owned.iter().collect();
@@ -102,7 +102,7 @@ impl GraphArgs {
     args_override_self = true,
     after_help = "Example: fieldhouse motion-graph --behaviour run --json"
 )]
-pub struct MotionGraphArgs {
+pub(super) struct MotionGraphArgs {
     #[command(flatten)]
     graph: GraphArgs,
     /// Print one JSON document, with the pruned graph's edges as [from, to] node ids and
@@ -111,7 +111,7 @@ pub struct MotionGraphArgs {
     json: bool,
 }
 
-pub fn run(args: MotionGraphArgs, out: &mut impl Write) -> anyhow::Result<()> {
+pub(super) fn run(args: MotionGraphArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let (library, graph) = args.graph.build()?;
     let s = &graph.stats;
     if args.json {

@@ -144,7 +144,7 @@ fn label(r: &TrialResult) -> String {
 
 /// Three plots of one launch: the fielders' paths seen from above, tan ψ against time,
 /// and the ball's image on a plane facing home plate.
-pub fn draw_launch(
+pub(super) fn draw_launch(
     dir: &Path,
     index: usize,
     case: &SweepCase,
@@ -257,7 +257,7 @@ pub fn draw_launch(
 }
 
 /// A bar chart of each strategy's catch rate on catchable balls.
-pub fn draw_rates(dir: &Path, report: &SweepReport) -> Result<()> {
+pub(super) fn draw_rates(dir: &Path, report: &SweepReport) -> Result<()> {
     let file = dir.join("catch-rates.svg");
     let root = SVGBackend::new(&file, SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(plot_err)?;

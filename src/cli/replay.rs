@@ -11,7 +11,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
-pub struct ReplayArgs {
+pub(super) struct ReplayArgs {
     #[command(subcommand)]
     command: ReplayCommand,
 }
@@ -60,7 +60,7 @@ enum ExportFormat {
     Jsonl,
 }
 
-pub fn run(args: ReplayArgs, out: &mut impl Write) -> anyhow::Result<()> {
+pub(super) fn run(args: ReplayArgs, out: &mut impl Write) -> anyhow::Result<()> {
     match args.command {
         ReplayCommand::Info { file, json } => info(&replay::read(&file)?, json, out),
         ReplayCommand::Verify { file, capability } => {

@@ -19,7 +19,7 @@ use std::time::Instant;
     after_help = "Example: fieldhouse run scenarios/baseball-papers.toml --out papers.jsonl\n\
     Then: fieldhouse replay info papers.jsonl; fieldhouse replay verify papers.jsonl"
 )]
-pub struct RunArgs {
+pub(super) struct RunArgs {
     /// A scenario file (TOML; the structure of the POST /api/matches body).
     scenario: PathBuf,
     /// The replay file to write (default: the scenario's name with .jsonl, here).
@@ -36,7 +36,7 @@ pub struct RunArgs {
 }
 
 /// Reads a scenario file, naming the file and the field at fault.
-pub fn load_scenario(path: &Path) -> anyhow::Result<Scenario> {
+pub(super) fn load_scenario(path: &Path) -> anyhow::Result<Scenario> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let value: toml::Value =
@@ -45,7 +45,7 @@ pub fn load_scenario(path: &Path) -> anyhow::Result<Scenario> {
     Scenario::from_value(json).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }
 
-pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
+pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let mut scenario = load_scenario(&args.scenario)?;
     match args.bots.as_deref() {
         None => {
@@ -200,7 +200,7 @@ pub fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
 
 /// A match's result (or score so far) in words: points per possession for basketball,
 /// catches for fly balls; what a replay's footer and a bot's progress say too.
-pub fn summary(result: &Value) -> String {
+pub(super) fn summary(result: &Value) -> String {
     let count = |key: &str| result[key].as_u64().unwrap_or(0);
     if result.get("points").is_some() {
         let (points, possessions) = (count("points"), count("possession"));

@@ -15,7 +15,7 @@ use std::path::PathBuf;
     set FIELDHOUSE_ADMIN_TOKEN, or use the one printed at start.\n\
     Example: fieldhouse serve"
 )]
-pub struct ServeArgs {
+pub(super) struct ServeArgs {
     /// Address to listen on: HOST:PORT, where HOST is an IP address or a host name
     /// (127.0.0.1:7878, localhost:8080, [::1]:7878; 0.0.0.0:7878 for every interface),
     /// or a HOST alone for port 7878. Default 127.0.0.1:7878: loopback only.
@@ -87,7 +87,7 @@ pub struct ServeArgs {
     capability: CapabilityArgs,
 }
 
-pub fn run(args: ServeArgs) -> anyhow::Result<()> {
+pub(super) fn run(args: ServeArgs) -> anyhow::Result<()> {
     // Everything a newcomer can get wrong (settings, the admin token, a busy port) is
     // checked before motion is loaded and cost maps are built, which takes seconds, and
     // before an admin token is printed that a failed start would make useless.

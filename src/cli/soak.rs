@@ -13,7 +13,7 @@ use std::io::Write;
     back, and the match is deleted after 15 s. Samples the server every 10 s; stops by itself.\n\
     Example: fieldhouse soak --minutes 10"
 )]
-pub struct SoakArgs {
+pub(super) struct SoakArgs {
     /// How long to churn, minutes (0.5 to 120).
     #[arg(long, default_value_t = 10.0, value_parser = minutes)]
     minutes: f64,
@@ -31,7 +31,7 @@ fn minutes(text: &str) -> Result<f64, String> {
     }
 }
 
-pub fn run(args: SoakArgs, out: &mut impl Write) -> anyhow::Result<()> {
+pub(super) fn run(args: SoakArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let report = soak::run(&std::env::current_exe()?, args.minutes)?;
     if args.json {
         writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;

@@ -23,7 +23,7 @@ const PLOTTED_LAUNCHES: usize = 6;
         A ball is catchable when the `predictive` fielder (told where it comes down) catches it.\n\
         Example: fieldhouse catch-sweep --n 2000 --seed 7 --svg plots/"
 )]
-pub struct SweepArgs {
+pub(super) struct SweepArgs {
     /// Comma-separated strategies to compare.
     #[arg(long, value_delimiter = ',', default_value = "chapman,lot-optical,predictive,lot,chapman-1d",
           value_parser = super::args::parse_str::<StrategyKind>)]
@@ -44,7 +44,7 @@ pub struct SweepArgs {
     setting: Setting,
 }
 
-pub fn run(args: SweepArgs, out: &mut impl Write) -> anyhow::Result<()> {
+pub(super) fn run(args: SweepArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let s = &args.setting;
     let sweep = Sweep {
         ball: s.ball,

@@ -3,7 +3,7 @@
 // Each test binary uses the part of this it needs.
 #![allow(dead_code)]
 
-pub mod server;
+pub(crate) mod server;
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -11,7 +11,7 @@ use std::process::{Command, Output};
 
 /// Runs the binary with a command line written as one string (no argument has spaces),
 /// without ambient motion, cache or log settings, so each test says what it uses.
-pub fn fieldhouse(command_line: &str) -> Output {
+pub(crate) fn fieldhouse(command_line: &str) -> Output {
     Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
         .args(command_line.split_whitespace())
         .env_remove("FIELDHOUSE_MOCAP_DIR")
@@ -22,7 +22,7 @@ pub fn fieldhouse(command_line: &str) -> Output {
 }
 
 /// Runs a command that must succeed; returns what it wrote to stdout and to stderr.
-pub fn success(command_line: &str) -> (String, String) {
+pub(crate) fn success(command_line: &str) -> (String, String) {
     let out = fieldhouse(command_line);
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(out.status.success(), "{command_line} failed: {stderr}");
@@ -33,12 +33,12 @@ pub fn success(command_line: &str) -> (String, String) {
 }
 
 /// Runs a command that must succeed and print exactly one JSON document.
-pub fn json(command_line: &str) -> Value {
+pub(crate) fn json(command_line: &str) -> Value {
     serde_json::from_str(&success(command_line).0).expect("stdout is exactly one JSON document")
 }
 
 /// `fieldhouse replay verify FILE` must succeed.
-pub fn assert_verifies(file: &Path) {
+pub(crate) fn assert_verifies(file: &Path) {
     let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
         .args(["replay", "verify"])
         .arg(file)
@@ -52,7 +52,7 @@ pub fn assert_verifies(file: &Path) {
 }
 
 /// Runs a command that must fail without printing to stdout; returns its stderr.
-pub fn failure(command_line: &str) -> String {
+pub(crate) fn failure(command_line: &str) -> String {
     let out = fieldhouse(command_line);
     assert!(!out.status.success(), "{command_line} succeeded");
     assert!(out.stdout.is_empty(), "{command_line} printed to stdout");
@@ -61,7 +61,7 @@ pub fn failure(command_line: &str) -> String {
 
 /// The repository's copy of the CMU motion capture (the files the binary embeds), for
 /// tests of `--mocap DIR`. Every other test runs on the embedded default, as users do.
-pub fn repository_mocap() -> PathBuf {
+pub(crate) fn repository_mocap() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("data/mocap")
 }
 
@@ -89,7 +89,7 @@ const COUNTED: [&str; 18] = [
 
 /// Asserts that text meant for people rounds its figures (at most four decimals) and
 /// counts in words ("1 possession", never "1 possessions").
-pub fn assert_reads_well(text: &str) {
+pub(crate) fn assert_reads_well(text: &str) {
     for token in text.split(|c: char| !(c.is_ascii_digit() || c == '.')) {
         if let Some((whole, decimals)) = token.split_once('.') {
             let number = !whole.is_empty() && decimals.chars().all(|c| c.is_ascii_digit());

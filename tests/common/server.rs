@@ -9,10 +9,10 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio_tungstenite::tungstenite::Message;
 
-pub const ADMIN: &str = "test-admin-token-0123456789";
+pub(crate) const ADMIN: &str = "test-admin-token-0123456789";
 
 /// A `fieldhouse serve` on a free loopback port, killed when dropped.
-pub struct Server {
+pub(crate) struct Server {
     pub child: Child,
     pub addr: String,
     /// Everything the server has written to stderr so far, a line each.
@@ -20,13 +20,13 @@ pub struct Server {
 }
 
 impl Server {
-    pub fn start(extra: &[&str]) -> Server {
+    pub(crate) fn start(extra: &[&str]) -> Server {
         Server::launch(&[], "info", extra)
     }
 
     /// A server started by `wrapper` (a command line that runs the one after it, like
     /// `unshare -m sh -c '...; exec "$0" "$@"'`), logging at `log` level.
-    pub fn launch(wrapper: &[&str], log: &str, extra: &[&str]) -> Server {
+    pub(crate) fn launch(wrapper: &[&str], log: &str, extra: &[&str]) -> Server {
         let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("server-cache");
         let binary = env!("CARGO_BIN_EXE_fieldhouse");
         let mut command = match wrapper.split_first() {
@@ -72,15 +72,15 @@ impl Server {
         Server { child, addr, log }
     }
 
-    pub fn http(&self, path: &str) -> String {
+    pub(crate) fn http(&self, path: &str) -> String {
         format!("http://{}{path}", self.addr)
     }
 
-    pub fn ws(&self, path: &str) -> String {
+    pub(crate) fn ws(&self, path: &str) -> String {
         format!("ws://{}{path}", self.addr)
     }
 
-    pub fn get(&self, path: &str) -> Value {
+    pub(crate) fn get(&self, path: &str) -> Value {
         ureq::get(&self.http(path))
             .call()
             .unwrap()
@@ -89,7 +89,7 @@ impl Server {
     }
 
     /// Creates a match; returns its id and bot tokens.
-    pub fn create(&self, scenario: Value) -> (String, Value) {
+    pub(crate) fn create(&self, scenario: Value) -> (String, Value) {
         let doc: Value = ureq::post(&self.http("/api/matches"))
             .set("Authorization", &format!("Bearer {ADMIN}"))
             .send_json(scenario)
@@ -104,7 +104,7 @@ impl Server {
 
     /// A match whose fielder "cf" is a bot slot, and a bot connected to it (its
     /// `hello` not yet read): the match id, the bot token and the socket.
-    pub async fn play_cf(&self, mode: &str, deadline_ms: u64) -> (String, String, Socket) {
+    pub(crate) async fn play_cf(&self, mode: &str, deadline_ms: u64) -> (String, String, Socket) {
         let (id, tokens) = self.create(fielder_with_bot(mode, deadline_ms));
         let token = tokens["cf"].as_str().unwrap().to_string();
         let bot = connect(&self.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
@@ -113,7 +113,7 @@ impl Server {
 
     /// A sample from `/metrics`: `name` with its labels, as written there
     /// (`fieldhouse_connections{role="bot"}`).
-    pub fn metric(&self, name: &str) -> f64 {
+    pub(crate) fn metric(&self, name: &str) -> f64 {
         let text = ureq::get(&self.http("/metrics"))
             .call()
             .unwrap()
@@ -124,7 +124,7 @@ impl Server {
             .unwrap_or_else(|| panic!("{name} in /metrics:\n{text}"))
     }
 
-    pub fn tick(&self, id: &str) -> u64 {
+    pub(crate) fn tick(&self, id: &str) -> u64 {
         self.get(&format!("/api/matches/{id}"))["tick"]
             .as_u64()
             .unwrap()
@@ -139,14 +139,14 @@ impl Drop for Server {
 }
 
 /// The schema of a message type, from proto/.
-pub fn schema(kind: &str) -> jsonschema::Validator {
+pub(crate) fn schema(kind: &str) -> jsonschema::Validator {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("proto/{kind}.schema.json"));
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     jsonschema::validator_for(&serde_json::from_str(&text).unwrap()).expect("a valid schema")
 }
 
-pub fn assert_valid(message: &Value) {
+pub(crate) fn assert_valid(message: &Value) {
     let kind = message["type"].as_str().expect("every message has a type");
     let validator = schema(kind);
     let errors: Vec<String> = validator
@@ -159,10 +159,10 @@ pub fn assert_valid(message: &Value) {
     );
 }
 
-pub type Socket =
+pub(crate) type Socket =
     tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
 
-pub async fn connect(url: &str) -> Socket {
+pub(crate) async fn connect(url: &str) -> Socket {
     tokio_tungstenite::connect_async(url)
         .await
         .expect("the socket opens")
@@ -170,7 +170,7 @@ pub async fn connect(url: &str) -> Socket {
 }
 
 /// The next text message as JSON (within 10 s).
-pub async fn next(socket: &mut Socket) -> Value {
+pub(crate) async fn next(socket: &mut Socket) -> Value {
     loop {
         let message = tokio::time::timeout(Duration::from_secs(10), socket.next())
             .await
@@ -184,7 +184,7 @@ pub async fn next(socket: &mut Socket) -> Value {
 }
 
 /// The next message of a type, skipping others.
-pub async fn next_of(socket: &mut Socket, kind: &str) -> Value {
+pub(crate) async fn next_of(socket: &mut Socket, kind: &str) -> Value {
     loop {
         let m = next(socket).await;
         if m["type"] == kind {
@@ -193,7 +193,7 @@ pub async fn next_of(socket: &mut Socket, kind: &str) -> Value {
     }
 }
 
-pub fn fielder_with_bot(mode: &str, deadline_ms: u64) -> Value {
+pub(crate) fn fielder_with_bot(mode: &str, deadline_ms: u64) -> Value {
     json!({
         "sport": "baseball",
         "mode": mode,
@@ -207,7 +207,7 @@ pub fn fielder_with_bot(mode: &str, deadline_ms: u64) -> Value {
 }
 
 /// A directory under the test target directory, gone before the test starts.
-pub fn empty_dir(name: &str) -> std::path::PathBuf {
+pub(crate) fn empty_dir(name: &str) -> std::path::PathBuf {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
     let _ = std::fs::remove_dir_all(&dir);
     dir

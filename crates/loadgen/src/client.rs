@@ -11,7 +11,7 @@ use tokio_tungstenite::tungstenite::Message;
 
 /// Where spectators connect.
 #[derive(Debug, Clone)]
-pub enum Target {
+pub(crate) enum Target {
     /// A fieldhouse match, `ws://…/ws/matches/ID`, the `index`th of the run.
     Fieldhouse { url: String, index: u64 },
     /// A Colyseus room: seats from `POST {http}/matchmake/joinOrCreate/match`, sockets
@@ -21,7 +21,7 @@ pub enum Target {
 
 /// A message seen in the window.
 #[derive(Debug, Clone, Copy)]
-pub struct Arrival {
+pub(crate) struct Arrival {
     /// The same for every spectator's copy of one message: the match's index and the
     /// frame's tick (fieldhouse), a hash of the patch's bytes (Colyseus, whose patches
     /// are the same bytes for everyone and differ from tick to tick).
@@ -32,14 +32,14 @@ pub struct Arrival {
 }
 
 #[derive(Debug, Default)]
-pub struct Log {
+pub(crate) struct Log {
     pub arrivals: Vec<Arrival>,
     pub bytes: u64,
 }
 
 /// What a round's spectators share.
 #[derive(Debug, Clone)]
-pub struct Shared {
+pub(crate) struct Shared {
     /// Handshakes allowed in flight.
     pub gate: Arc<tokio::sync::Semaphore>,
     /// Spectators done connecting, whether they made it or not.
@@ -55,7 +55,7 @@ fn now_us() -> u64 {
 }
 
 /// Runs one spectator until `stop`; `None` if it never connected.
-pub async fn spectate(target: Target, round: Shared) -> Option<Log> {
+pub(crate) async fn spectate(target: Target, round: Shared) -> Option<Log> {
     let connected = {
         let _permit = round.gate.acquire().await.ok()?;
         let socket = connect(&target).await;
@@ -151,7 +151,7 @@ fn fieldhouse_frame(text: &str) -> Option<(u64, Option<u64>)> {
 
 /// A message's key is its match's index shifted this far, then the message within the
 /// match (a fieldhouse frame's tick; a hash of a Colyseus patch, whose one room is 0).
-pub const MATCH_SHIFT: u32 = 40;
+pub(crate) const MATCH_SHIFT: u32 = 40;
 
 /// Colyseus protocol codes (`@colyseus/shared-types` Protocol): the low five bits of the
 /// first byte; the high bits are modifiers.

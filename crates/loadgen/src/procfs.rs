@@ -8,7 +8,7 @@ const CLOCK_TICKS_PER_S: f64 = 100.0;
 
 /// CPU time in user space and in the kernel, seconds.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Cpu {
+pub(crate) struct Cpu {
     pub user_s: f64,
     pub system_s: f64,
 }
@@ -24,13 +24,13 @@ impl std::ops::Sub for Cpu {
 }
 
 impl Cpu {
-    pub fn total_s(&self) -> f64 {
+    pub(crate) fn total_s(&self) -> f64 {
         self.user_s + self.system_s
     }
 }
 
 /// A process's CPU time so far (utime and stime).
-pub fn cpu(pid: u32) -> anyhow::Result<Cpu> {
+pub(crate) fn cpu(pid: u32) -> anyhow::Result<Cpu> {
     let stat = std::fs::read_to_string(format!("/proc/{pid}/stat"))
         .with_context(|| format!("reading /proc/{pid}/stat"))?;
     // The command name may hold spaces and parentheses: fields count from the last ')'.
@@ -51,13 +51,13 @@ pub fn cpu(pid: u32) -> anyhow::Result<Cpu> {
 }
 
 #[derive(Debug, Clone, Copy)]
-pub struct Memory {
+pub(crate) struct Memory {
     pub rss_mb: f64,
     pub peak_rss_mb: f64,
 }
 
 /// Resident memory now and at its peak (VmRSS, VmHWM).
-pub fn memory(pid: u32) -> anyhow::Result<Memory> {
+pub(crate) fn memory(pid: u32) -> anyhow::Result<Memory> {
     let status = std::fs::read_to_string(format!("/proc/{pid}/status"))
         .with_context(|| format!("reading /proc/{pid}/status"))?;
     let kb = |name: &str| -> f64 {

@@ -97,7 +97,7 @@ const ADMIN: &str = "loadgen-admin-token-0123456789";
 /// How long a server may take to say it listens.
 const START_WITHIN: Duration = Duration::from_secs(120);
 
-pub struct Running {
+pub(crate) struct Running {
     pub name: &'static str,
     /// Where spectators go: spectator i to `targets[i % len]`.
     pub targets: Vec<Target>,
@@ -110,7 +110,7 @@ impl Running {
     /// `fieldhouse serve` on a free port (no demos, frames stamped, room for `matches`
     /// and a few more) with `matches` baseball matches (the default three outfielders,
     /// 60 Hz ticks, 30 Hz frames).
-    pub fn fieldhouse(binary: &std::path::Path, matches: usize) -> anyhow::Result<Running> {
+    pub(crate) fn fieldhouse(binary: &std::path::Path, matches: usize) -> anyhow::Result<Running> {
         let mut server = Running::empty_fieldhouse(binary, matches + 16)?;
         let http = server.http().to_string();
         let ws = http.replacen("http://", "ws://", 1);
@@ -129,7 +129,7 @@ impl Running {
     }
 
     /// `fieldhouse serve` on a free port with no matches and room for `room`.
-    pub fn empty_fieldhouse(binary: &std::path::Path, room: usize) -> anyhow::Result<Running> {
+    pub(crate) fn empty_fieldhouse(binary: &std::path::Path, room: usize) -> anyhow::Result<Running> {
         let config =
             std::env::temp_dir().join(format!("fieldhouse-loadgen-{}.toml", std::process::id()));
         std::fs::write(
@@ -170,7 +170,7 @@ impl Running {
 
     /// The peer, started; [`Peer::check`] has said it can start (the plan checks it once,
     /// before any round).
-    pub fn peer(peer: &Peer) -> anyhow::Result<Running> {
+    pub(crate) fn peer(peer: &Peer) -> anyhow::Result<Running> {
         let Peer::Colyseus { dir } = peer;
         let node = dir.join("node_modules/.bin/node");
         let port = free_port()?;
@@ -196,7 +196,7 @@ impl Running {
     /// `fieldhouse serve` with `matches` lock-step baseball matches whose fielders are
     /// all bots, `bots` of them spread evenly: each bot's match and `/play` URL. The
     /// matches are also the server's spectator targets.
-    pub fn fieldhouse_bots(
+    pub(crate) fn fieldhouse_bots(
         binary: &std::path::Path,
         matches: usize,
         bots: usize,
@@ -228,7 +228,7 @@ impl Running {
     }
 
     /// Creates a match on the fieldhouse at `http`: its id and bot tokens.
-    pub fn create_at(
+    pub(crate) fn create_at(
         http: &str,
         body: &serde_json::Value,
     ) -> anyhow::Result<(String, serde_json::Value)> {
@@ -241,7 +241,7 @@ impl Running {
         Ok((id, created["bot_tokens"].clone()))
     }
 
-    pub fn delete_at(http: &str, id: &str) -> anyhow::Result<()> {
+    pub(crate) fn delete_at(http: &str, id: &str) -> anyhow::Result<()> {
         ureq::delete(&format!("{http}/api/matches/{id}"))
             .set("authorization", &format!("Bearer {ADMIN}"))
             .call()
@@ -249,17 +249,17 @@ impl Running {
         Ok(())
     }
 
-    pub fn pid(&self) -> u32 {
+    pub(crate) fn pid(&self) -> u32 {
         self.child.id()
     }
 
     /// fieldhouse's HTTP base (empty for the peer).
-    pub fn http(&self) -> &str {
+    pub(crate) fn http(&self) -> &str {
         self.http.as_deref().unwrap_or_default()
     }
 
     /// fieldhouse's /metrics text; None for the peer.
-    pub fn metrics(&self) -> Option<String> {
+    pub(crate) fn metrics(&self) -> Option<String> {
         ureq::get(&format!("{}/metrics", self.http.as_ref()?))
             .call()
             .ok()?
@@ -268,14 +268,14 @@ impl Running {
     }
 
     /// fieldhouse's `fieldhouse_tick_overruns_total`; None for the peer.
-    pub fn tick_overruns(&self) -> Option<u64> {
+    pub(crate) fn tick_overruns(&self) -> Option<u64> {
         metric(&self.metrics()?, "fieldhouse_tick_overruns_total")
     }
 }
 
 /// A sample's value in Prometheus text: `name` with its labels, as written
 /// (`fieldhouse_connections{role="bot"}`).
-pub fn metric(text: &str, name: &str) -> Option<u64> {
+pub(crate) fn metric(text: &str, name: &str) -> Option<u64> {
     text.lines()
         .find_map(|l| l.strip_prefix(name)?.strip_prefix(' '))
         .and_then(|v| v.trim().parse().ok())

@@ -128,7 +128,7 @@ pub(super) struct Sender<'a> {
 }
 
 impl Sender<'_> {
-    pub async fn text(&mut self, text: Utf8Bytes) -> Sent {
+    pub(crate) async fn text(&mut self, text: Utf8Bytes) -> Sent {
         self.metrics.bytes_out.fetch_add(text.len() as u64, Relaxed);
         // The connection's own write timeout (see `listener`) is the same length and
         // may fire first: either way the client stopped reading.
@@ -147,7 +147,7 @@ impl Sender<'_> {
     }
 
     /// [`Sender::text`] for `?`: anything but [`Sent::Ok`] is the error.
-    pub async fn deliver(&mut self, text: impl Into<Utf8Bytes>) -> Result<(), Sent> {
+    pub(crate) async fn deliver(&mut self, text: impl Into<Utf8Bytes>) -> Result<(), Sent> {
         match self.text(text.into()).await {
             Sent::Ok => Ok(()),
             failed => Err(failed),

@@ -11,7 +11,7 @@ use crate::costmap::LocalFrame;
 use glam::DVec2;
 
 #[derive(Debug, Clone, PartialEq)]
-pub struct Footprint {
+pub(super) struct Footprint {
     /// The farthest the move strays from where it starts, m: a start at least this far
     /// inside the court keeps the whole move on it, with no vertex to check.
     reach_m: f64,
@@ -22,7 +22,7 @@ pub struct Footprint {
 impl Footprint {
     /// The footprint of the move through `points` (in the agent's frame, starting at
     /// the origin).
-    pub fn of(points: impl IntoIterator<Item = DVec2>) -> Footprint {
+    pub(super) fn of(points: impl IntoIterator<Item = DVec2>) -> Footprint {
         let mut points: Vec<DVec2> = points.into_iter().collect();
         let reach_m = points.iter().map(|p| p.length()).fold(0.0, f64::max);
         Footprint {
@@ -33,7 +33,7 @@ impl Footprint {
 
     /// Whether the move, played from the agent whose frame is `frame`, stays on `court`
     /// or at most `margin_m` beyond its lines at every frame.
-    pub fn within(&self, frame: &LocalFrame, court: &Court, margin_m: f64) -> bool {
+    pub(super) fn within(&self, frame: &LocalFrame, court: &Court, margin_m: f64) -> bool {
         court.inside_by(frame.origin()) + margin_m >= self.reach_m
             || self
                 .hull

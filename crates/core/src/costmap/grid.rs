@@ -92,7 +92,7 @@ impl Obstacle {
 }
 
 /// Whether any obstacle holds `p`.
-pub fn blocked(obstacles: &[Obstacle], p: DVec2) -> bool {
+pub(super) fn blocked(obstacles: &[Obstacle], p: DVec2) -> bool {
     obstacles.iter().any(|o| o.contains(p))
 }
 

@@ -18,7 +18,7 @@ pub(crate) struct Prepared {
 }
 
 impl Prepared {
-    pub fn new(graph: &MotionGraph, enabled: &[bool]) -> Prepared {
+    pub(super) fn new(graph: &MotionGraph, enabled: &[bool]) -> Prepared {
         let mut edges = Vec::with_capacity(graph.edges.len());
         let mut start = Vec::with_capacity(graph.node_count() + 1);
         for node in 0..graph.node_count() as u32 {
@@ -40,7 +40,7 @@ impl Prepared {
 
     /// The enabled edges leaving `node`.
     #[inline]
-    pub fn out(&self, node: u32) -> &[PreparedEdge] {
+    pub(super) fn out(&self, node: u32) -> &[PreparedEdge] {
         &self.edges[self.start[node as usize]..self.start[node as usize + 1]]
     }
 
@@ -49,7 +49,7 @@ impl Prepared {
     /// out followed frame by frame to the next branch node. A walk's only decisions are
     /// at choices, so a search need only tell states apart there; a forward search that
     /// merges walks also wants the meetings, where walks from different places join.
-    pub fn segments(&self, nodes: usize, at_meetings: bool) -> Segments {
+    pub(super) fn segments(&self, nodes: usize, at_meetings: bool) -> Segments {
         let mut in_degree = vec![0u32; nodes];
         for e in &self.edges {
             in_degree[e.to as usize] += 1;
@@ -90,11 +90,11 @@ impl Prepared {
         }
     }
 
-    pub fn edge(&self, index: usize) -> &PreparedEdge {
+    pub(super) fn edge(&self, index: usize) -> &PreparedEdge {
         &self.edges[index]
     }
 
-    pub fn edge_count(&self) -> usize {
+    pub(super) fn edge_count(&self) -> usize {
         self.edges.len()
     }
 }
@@ -112,14 +112,14 @@ pub(crate) struct Segments {
 impl Segments {
     /// The segments leaving branch node `node`: where their frames start in
     /// [`Segments::step`] numbering, how many there are, and the branch node reached.
-    pub fn out(&self, node: u32) -> impl Iterator<Item = (usize, usize, u32)> + '_ {
+    pub(super) fn out(&self, node: u32) -> impl Iterator<Item = (usize, usize, u32)> + '_ {
         self.segments[self.start[node as usize]..self.start[node as usize + 1]]
             .iter()
             .map(|&(a, b, to)| (a, b - a, to))
     }
 
     /// The prepared-edge index of step `i`.
-    pub fn step(&self, i: usize) -> usize {
+    pub(super) fn step(&self, i: usize) -> usize {
         self.steps[i]
     }
 }

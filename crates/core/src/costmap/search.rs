@@ -192,7 +192,7 @@ pub(crate) fn build(
 
 impl SearchResult {
     /// The graph edge ids of the path that first reached `cell` (empty if none did).
-    pub fn path(&self, cell: usize) -> Vec<u32> {
+    pub(super) fn path(&self, cell: usize) -> Vec<u32> {
         let Some(last) = self.arrivals[cell] else {
             return Vec::new();
         };

@@ -13,13 +13,13 @@ use thiserror::Error;
 /// A BVH file that cannot be read, and the 1-based line where it goes wrong.
 #[derive(Debug, Clone, PartialEq, Error)]
 #[error("line {line}: {kind}")]
-pub struct ParseError {
+pub(super) struct ParseError {
     pub line: usize,
     pub kind: ParseErrorKind,
 }
 
 #[derive(Debug, Clone, PartialEq, Error)]
-pub enum ParseErrorKind {
+pub(super) enum ParseErrorKind {
     #[error("the file ends where {expected} was expected")]
     UnexpectedEnd { expected: &'static str },
     #[error("expected {expected}, found `{found}`")]
@@ -46,14 +46,14 @@ pub enum ParseErrorKind {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Axis {
+pub(super) enum Axis {
     X,
     Y,
     Z,
 }
 
 impl Axis {
-    pub fn unit(self) -> DVec3 {
+    pub(super) fn unit(self) -> DVec3 {
         match self {
             Axis::X => DVec3::X,
             Axis::Y => DVec3::Y,
@@ -64,7 +64,7 @@ impl Axis {
 
 /// One animated degree of freedom: a translation in file units or a rotation in degrees.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Channel {
+pub(super) enum Channel {
     Position(Axis),
     Rotation(Axis),
 }
@@ -91,7 +91,7 @@ impl Channel {
 /// A joint of the hierarchy. End Sites are not joints: they only mark where the last
 /// bone ends, and nothing downstream uses that.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Joint {
+pub(super) struct Joint {
     pub name: String,
     /// Always an earlier joint: joints are listed parent before child.
     pub parent: Option<usize>,
@@ -103,7 +103,7 @@ pub struct Joint {
 
 /// A parsed BVH file: the skeleton and the raw channel values of every frame.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Bvh {
+pub(super) struct Bvh {
     pub joints: Vec<Joint>,
     /// Seconds between frames, as written in the file.
     pub frame_time: f64,
@@ -113,14 +113,14 @@ pub struct Bvh {
 }
 
 impl Bvh {
-    pub fn frame_count(&self) -> usize {
+    pub(super) fn frame_count(&self) -> usize {
         self.values
             .len()
             .checked_div(self.channels_per_frame)
             .unwrap_or(0)
     }
 
-    pub fn frame(&self, f: usize) -> &[f64] {
+    pub(super) fn frame(&self, f: usize) -> &[f64] {
         let n = self.channels_per_frame;
         &self.values[f * n..(f + 1) * n]
     }
@@ -131,7 +131,7 @@ const MIN_FRAME_TIME_S: f64 = 1e-4;
 const MAX_FRAME_TIME_S: f64 = 1.0;
 
 /// Reads a whole BVH file.
-pub fn parse(text: &str) -> Result<Bvh, ParseError> {
+pub(super) fn parse(text: &str) -> Result<Bvh, ParseError> {
     let lines: Vec<(usize, Vec<&str>)> = text
         .lines()
         .enumerate()

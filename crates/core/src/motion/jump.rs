@@ -11,7 +11,7 @@ use serde::Serialize;
 /// from their crouch and peak 0.08 and 0.20 m above the clip's upright (median) height; the
 /// fastest rise anywhere else (0.81 m/s, the low freestyle dribble coming up from a
 /// crouch) rises 0.11 m and peaks below upright, and runners bounce at under 0.7 m/s.
-pub const TAKE_OFF_M_S: f64 = 0.8;
+pub(super) const TAKE_OFF_M_S: f64 = 0.8;
 const RISE_M: f64 = 0.15;
 const ABOVE_UPRIGHT_M: f64 = 0.05;
 

@@ -9,7 +9,7 @@ use std::ops::Range;
 /// ASF/AMC lengths to metres with (1.0/0.45)·2.54/100 (the skeleton is scaled by 0.45
 /// and measured in inches), and the BVH conversion keeps those numbers. The real-data
 /// tests check the factor gives adult hip heights and thigh lengths.
-pub const METRES_PER_UNIT: f64 = (1.0 / 0.45) * 2.54 / 100.0;
+pub(super) const METRES_PER_UNIT: f64 = (1.0 / 0.45) * 2.54 / 100.0;
 
 /// Global joint positions in metres for `frames`, frame-major, joints in file order.
 ///
@@ -17,7 +17,7 @@ pub const METRES_PER_UNIT: f64 = (1.0 / 0.45) * 2.54 / 100.0;
 /// rotation channels composed in the order the file lists them, as BVH defines it:
 /// `Zrotation Yrotation Xrotation` is Rz·Ry·Rx applied to column vectors, so X acts
 /// first on the child's bones. The global transform is the parent's times the local.
-pub fn global_positions(bvh: &Bvh, frames: Range<usize>) -> Vec<DVec3> {
+pub(super) fn global_positions(bvh: &Bvh, frames: Range<usize>) -> Vec<DVec3> {
     let joints = &bvh.joints;
     let mut positions = Vec::with_capacity(frames.len() * joints.len());
     let mut rotations = vec![DQuat::IDENTITY; joints.len()];

@@ -23,7 +23,7 @@ pub struct Transition {
 /// the ground alignment that best matches them. Clips should come from one subject (the
 /// caller compares a behaviour's clips only, and each behaviour is one CMU subject), so
 /// skeleton size never masquerades as a pose difference.
-pub fn find(clips: &[&Clip], window: usize, threshold_m: f64) -> Vec<Transition> {
+pub(super) fn find(clips: &[&Clip], window: usize, threshold_m: f64) -> Vec<Transition> {
     find_windows(clips, &[window], threshold_m)
         .pop()
         .unwrap_or_default()
@@ -33,7 +33,7 @@ pub fn find(clips: &[&Clip], window: usize, threshold_m: f64) -> Vec<Transition>
 /// per-frame cross sums (frames² × joints per pair of clips, most of the work) do not
 /// depend on the window, so they are computed once and summed along diagonals into
 /// windows of each length.
-pub fn find_windows(clips: &[&Clip], windows: &[usize], threshold_m: f64) -> Vec<Vec<Transition>> {
+pub(super) fn find_windows(clips: &[&Clip], windows: &[usize], threshold_m: f64) -> Vec<Vec<Transition>> {
     let mut found = vec![Vec::new(); windows.len()];
     for (ca, a) in clips.iter().enumerate() {
         for (cb, b) in clips.iter().enumerate() {
