@@ -30,8 +30,8 @@
 //! and hands the same bytes to the match's replay writer (`server::recording`).
 
 pub use fieldhouse_core::{
-    basketball, costmap, fielding, motion, names, perception, physics, protocol, replay,
-    session, sim, strict_json, words,
+    basketball, costmap, fielding, motion, names, perception, physics, protocol, replay, session,
+    sim, strict_json, words,
 };
 pub use fieldhouse_loadgen as loadgen;
 pub use fieldhouse_server as server;

@@ -69,7 +69,9 @@ impl Setting {
     }
 }
 
-pub(super) fn parse_str<T: std::str::FromStr<Err = UnknownName>>(s: &str) -> Result<T, UnknownName> {
+pub(super) fn parse_str<T: std::str::FromStr<Err = UnknownName>>(
+    s: &str,
+) -> Result<T, UnknownName> {
     s.parse()
 }
 

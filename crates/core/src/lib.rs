@@ -49,6 +49,12 @@
 pub mod basketball;
 pub mod costmap;
 pub mod fielding;
+/// Shared test inputs (synthetic clips and graphs; the CMU library, graphs and
+/// capabilities built once per test binary): this crate's tests and, with the `fixtures`
+/// feature, other crates' tests.
+#[cfg(any(test, feature = "fixtures"))]
+#[doc(hidden)]
+pub mod fixtures;
 pub mod motion;
 pub mod names;
 pub mod perception;

@@ -129,7 +129,10 @@ impl Running {
     }
 
     /// `fieldhouse serve` on a free port with no matches and room for `room`.
-    pub(crate) fn empty_fieldhouse(binary: &std::path::Path, room: usize) -> anyhow::Result<Running> {
+    pub(crate) fn empty_fieldhouse(
+        binary: &std::path::Path,
+        room: usize,
+    ) -> anyhow::Result<Running> {
         let config =
             std::env::temp_dir().join(format!("fieldhouse-loadgen-{}.toml", std::process::id()));
         std::fs::write(

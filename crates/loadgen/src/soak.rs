@@ -9,8 +9,8 @@
 use super::client::Socket;
 use super::procfs;
 use super::servers::{metric, Running};
-use fieldhouse_core::words::{figure, plural};
 use anyhow::Context;
+use fieldhouse_core::words::{figure, plural};
 use futures_util::{SinkExt, StreamExt};
 use serde::Serialize;
 use serde_json::{json, Value};

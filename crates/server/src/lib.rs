@@ -51,11 +51,11 @@ pub mod ws;
 
 pub use config::ServerConfig;
 
-use fieldhouse_core::basketball::Capabilities;
 use axum::error_handling::HandleErrorLayer;
 use axum::http::StatusCode;
 use axum::routing::get;
 use axum::Router;
+use fieldhouse_core::basketball::Capabilities;
 use state::AppState;
 use std::collections::BTreeMap;
 use std::future::Future;

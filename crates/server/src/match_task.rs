@@ -539,7 +539,7 @@ mod tests {
             ticking: tokio::runtime::Handle::current(),
             config: ServerConfig::default(),
             admin_token: "admin".into(),
-            caps: fieldhouse_core::motion::fixtures::cmu_capabilities(),
+            caps: fieldhouse_core::fixtures::cmu_capabilities(),
             metrics: Arc::default(),
             matches: Default::default(),
             shutdown,

@@ -15,8 +15,6 @@ use super::replay_dir;
 use super::state::AppState;
 use super::upgrade::{Socket, Upgrade};
 use super::ws::{budget, classify, refusal, shut, Read, Sender, Sent, GOING_AWAY, POLICY};
-use fieldhouse_core::protocol::{encode, End, ErrorMessage};
-use fieldhouse_core::replay::{self, Index};
 use axum::body::Body;
 use axum::extract::{Path, State};
 use axum::http::header::{
@@ -25,6 +23,8 @@ use axum::http::header::{
 use axum::http::{HeaderMap, HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::Json;
+use fieldhouse_core::protocol::{encode, End, ErrorMessage};
+use fieldhouse_core::replay::{self, Index};
 use futures_util::stream::SplitStream;
 use futures_util::StreamExt;
 use serde::Deserialize;

@@ -4,7 +4,7 @@
 
 use super::*;
 use crate::costmap::{AgentPose, BuildParams, CostMap, Grid, Method};
-use crate::motion::fixtures;
+use crate::fixtures;
 use glam::DVec2;
 
 /// A mover whose map is the grassfire distance at the graph's top speed: the time to a

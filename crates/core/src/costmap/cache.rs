@@ -138,7 +138,7 @@ pub fn store(path: &Path, maps: &[CostMap]) -> std::io::Result<()> {
 mod tests {
     use super::*;
     use crate::costmap::Method;
-    use crate::motion::fixtures;
+    use crate::fixtures;
 
     #[test]
     fn a_map_round_trips_and_the_key_follows_every_input() {

@@ -2,7 +2,7 @@
 //! physical speed bound, obstacles, replaying the stored paths, pose invariance.
 
 use super::*;
-use crate::motion::fixtures;
+use crate::fixtures;
 use crate::motion::MotionGraph;
 
 fn params(method: Method) -> BuildParams {

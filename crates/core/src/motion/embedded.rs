@@ -75,7 +75,7 @@ mod tests {
 
     #[test]
     fn embedded_library_is_the_repository_copy() {
-        let from_dir = MotionLibrary::load(&crate::motion::fixtures::mocap_dir(), FPS).unwrap();
+        let from_dir = MotionLibrary::load(&crate::fixtures::mocap_dir(), FPS).unwrap();
         let embedded = MotionLibrary::embedded(FPS);
         assert!(embedded.problems.is_empty(), "{:?}", embedded.problems);
         assert_eq!(embedded.source.fingerprint(), from_dir.source.fingerprint());

@@ -1,8 +1,8 @@
 //! Motion-graph properties on small clips made in the test: exact alignment, strong
 //! connectivity, constraints.
 
-use super::fixtures::{clip, straight};
 use super::*;
+use crate::fixtures::{clip, straight};
 use glam::DVec2;
 
 #[test]
@@ -29,7 +29,7 @@ fn a_moved_copy_of_a_clip_is_at_distance_zero() {
 }
 
 fn graph() -> MotionGraph {
-    super::fixtures::graph()
+    crate::fixtures::graph()
 }
 
 /// Every node reaches every other, both ways: walk forward and backward from node 0.
@@ -163,7 +163,7 @@ fn top_speed_comes_from_the_kept_frames() {
 #[test]
 fn every_cmu_clip_is_in_its_behaviours_graph() {
     for behaviour in ["run", "dribble", "defense"] {
-        let g = super::fixtures::cmu_graph(behaviour);
+        let g = crate::fixtures::cmu_graph(behaviour);
         for c in &g.coverage {
             assert!(2 * c.kept >= c.frames, "{behaviour}: {c:?}");
             assert!(c.transitions_in > 0 && c.transitions_out > 0, "{c:?}");

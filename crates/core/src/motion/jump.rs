@@ -68,7 +68,7 @@ impl Jump {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::fixtures::cmu_library;
+    use crate::fixtures::cmu_library;
 
     /// The CMU data README says which clips end in a jump shot: exactly those two.
     #[test]

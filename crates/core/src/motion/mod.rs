@@ -41,10 +41,5 @@ pub use walker::Walker;
 /// The frame rate everything downstream works at: the paper plays motion at 30 fps.
 pub const FPS: f64 = 30.0;
 
-/// Shared test inputs (the CMU library, graphs and capabilities built once per test
-/// binary): this crate's tests and, with the `fixtures` feature, other crates' tests.
-#[cfg(any(test, feature = "fixtures"))]
-#[doc(hidden)]
-pub mod fixtures;
 #[cfg(test)]
 mod graph_tests;

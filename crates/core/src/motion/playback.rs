@@ -102,7 +102,7 @@ impl MotionGraph {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::fixtures;
+    use crate::fixtures;
 
     /// The largest distance any joint moves between consecutive frames.
     fn largest_jump(frames: &[PlaybackFrame]) -> f64 {

@@ -10,7 +10,12 @@ use glam::DVec3;
 /// integer ratio of rates (120 → 30 takes every 4th frame) every sample lands on a
 /// source frame and the result is exact; in between, bones may shorten by a hair, which
 /// at 120 Hz is far below capture noise. Positions are what a clip stores anyway.
-pub(super) fn resample(positions: &[DVec3], joints: usize, source_rate: f64, fps: f64) -> Vec<DVec3> {
+pub(super) fn resample(
+    positions: &[DVec3],
+    joints: usize,
+    source_rate: f64,
+    fps: f64,
+) -> Vec<DVec3> {
     let frames = positions.len() / joints;
     if frames == 0 {
         return Vec::new();

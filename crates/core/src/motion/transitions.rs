@@ -33,7 +33,11 @@ pub(super) fn find(clips: &[&Clip], window: usize, threshold_m: f64) -> Vec<Tran
 /// per-frame cross sums (frames² × joints per pair of clips, most of the work) do not
 /// depend on the window, so they are computed once and summed along diagonals into
 /// windows of each length.
-pub(super) fn find_windows(clips: &[&Clip], windows: &[usize], threshold_m: f64) -> Vec<Vec<Transition>> {
+pub(super) fn find_windows(
+    clips: &[&Clip],
+    windows: &[usize],
+    threshold_m: f64,
+) -> Vec<Vec<Transition>> {
     let mut found = vec![Vec::new(); windows.len()];
     for (ca, a) in clips.iter().enumerate() {
         for (cb, b) in clips.iter().enumerate() {

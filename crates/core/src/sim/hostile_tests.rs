@@ -5,7 +5,7 @@
 //! infinity would serialise as `null` there and fail it.
 
 use super::{Action, Scenario, Sport, World};
-use crate::motion::fixtures::cmu_capabilities;
+use crate::fixtures::cmu_capabilities;
 use crate::protocol::{encode, Frame};
 use proptest::prelude::*;
 use serde_json::Value;

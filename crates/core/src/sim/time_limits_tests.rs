@@ -5,7 +5,7 @@
 //! and left a zombie match (issue 19, `tick_hz` 1e-300).
 
 use super::{Scenario, World};
-use crate::motion::fixtures::cmu_capabilities;
+use crate::fixtures::cmu_capabilities;
 use crate::session::Session;
 use proptest::prelude::*;
 use serde_json::{json, Value};

@@ -5,7 +5,7 @@ use crate::motion::FPS;
 use glam::DVec2;
 use std::f64::consts::{PI, TAU};
 
-use crate::motion::fixtures::{cmu_library as library, mocap_dir};
+use crate::fixtures::{cmu_library as library, mocap_dir};
 
 /// A scratch directory, removed when dropped.
 struct TempDir(PathBuf);

@@ -1,6 +1,6 @@
 //! Small synthetic clips for tests: a stick figure on a known root path.
 
-use super::*;
+use crate::motion::*;
 use glam::{DVec2, DVec3};
 use std::f64::consts::TAU;
 
@@ -92,7 +92,7 @@ pub fn cmu_graph(behaviour: &str) -> MotionGraph {
     let library = cmu_library();
     let owned = library.ground_clips(behaviour);
     let clips: Vec<&Clip> = owned.iter().collect();
-    MotionGraph::build_auto(behaviour, &clips, &super::AUTO_WINDOWS).unwrap()
+    MotionGraph::build_auto(behaviour, &clips, &AUTO_WINDOWS).unwrap()
 }
 
 /// The basketball behaviours of the CMU data, built once per test binary; their maps
