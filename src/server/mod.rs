@@ -34,6 +34,7 @@ pub mod auth;
 pub mod budget;
 pub mod config;
 pub mod demo;
+mod driver;
 pub mod listener;
 pub mod match_task;
 pub mod metrics;
