@@ -1,13 +1,14 @@
 //! The rules of a running match, without I/O: a [`MatchDriver`] owns the match's
 //! [`Session`] (and so its world) and its bot seats, and decides when to tick and what
 //! to tell whom. It never reads a clock, sleeps, or touches a socket or a channel: the
-//! shell (the match task, [`super::match_task`]) tells it the time, as a [`Duration`]
-//! since the match task started, and the events that arrived; it asks the driver when
-//! to wake it next ([`MatchDriver::poll_timeout`]), and carries out what the driver
-//! wants done ([`MatchDriver::poll_output`]). This is the shape of quinn-proto's
-//! `Connection`: every policy below is tested with made-up times, in microseconds of
-//! test time, instead of sleeps and wall-clock assertions; and the driver can move into
-//! the deterministic core with the world it drives.
+//! shell (the server's match task) tells it the time, as a [`Duration`] since the match
+//! task started, and the events that arrived; it asks the driver when to wake it next
+//! ([`MatchDriver::poll_timeout`]), and carries out what the driver wants done
+//! ([`MatchDriver::poll_output`]). This is the shape of quinn-proto's `Connection`:
+//! every policy below is tested with made-up times instead of sleeps and wall-clock
+//! assertions, and the driver can move into the deterministic core with the world it
+//! drives. (How long a tick takes to compute is the shell's to measure, around the call
+//! that ticked.)
 //!
 //! The policies:
 //!
