@@ -6,7 +6,7 @@
 //! them under one name for its command line, tests and benchmarks:
 //!
 //! * `fieldhouse-core` (re-exported here module by module: [`physics`], [`perception`],
-//!   [`fielding`], [`motion`], [`costmap`], [`basketball`], [`sim`], [`protocol`],
+//!   [`fielding`], [`motion`], [`costmap`], [`basketball`], [`sim`], [`driver`], [`protocol`],
 //!   [`session`], [`replay`], [`strict_json`], [`names`], [`words`]): the deterministic
 //!   simulation core. It cannot depend on tokio, axum or a network crate.
 //! * [`server`] (`fieldhouse-server`): the I/O shell. Match tasks drive the core's
@@ -19,19 +19,24 @@
 //!
 //! # Follow one tick
 //!
-//! A bot's command arrives on its socket in `server::ws` (the bot socket), is checked
-//! (size, strict JSON, budget) and decoded by [`protocol::decode`], and goes to its
-//! match task as a `Control::Command` over the match's channel. The task
-//! (`server::match_task`) forwards it to the match's sans-IO driver, which checks its
-//! tick window and hands it to [`sim::World::command`]. When the driver's timer is due
-//! the task calls it again; it steps the [`session::Session`], which calls
-//! [`sim::World::step`] and, on frame ticks, encodes the frame once. The task publishes
-//! those bytes on a watch channel that every spectator socket reads and sends unchanged,
-//! and hands the same bytes to the match's replay writer (`server::recording`).
+//! 1. A bot's command arrives on its socket (`server::ws`, the bot socket loop), is
+//!    checked (size, strict JSON, message budget), decoded by [`protocol::decode`], and
+//!    sent to its match's task as a `server::state::Control::Command`.
+//! 2. The match task (`server::match_task`, `Ticker::forward`) hands it to the match's
+//!    [`driver::MatchDriver::handle`] as a [`driver::Event::Command`] with `now`; the
+//!    driver checks its tick window and passes it to [`sim::World::command`].
+//! 3. The task sleeps until the time [`driver::MatchDriver::poll_timeout`] names, then
+//!    calls [`driver::MatchDriver::handle_timeout`], which steps the
+//!    [`session::Session`]: [`sim::World::step`], and on frame ticks the frame encoded
+//!    once ([`session::Session::step`]).
+//! 4. The task drains [`driver::MatchDriver::poll_output`] (`Ticker::carry_out`): an
+//!    [`driver::Output::Frame`] is published on the match's watch channel, whose bytes
+//!    every spectator socket sends unchanged, and handed to the replay's writer thread
+//!    (`server::recording`); an [`driver::Output::Perception`] goes to its bot's queue.
 
 pub use fieldhouse_core::{
-    basketball, costmap, fielding, motion, names, perception, physics, protocol, replay, session,
-    sim, strict_json, words,
+    basketball, costmap, driver, fielding, motion, names, perception, physics, protocol, replay,
+    session, sim, strict_json, words,
 };
 pub use fieldhouse_loadgen as loadgen;
 pub use fieldhouse_server as server;

@@ -89,7 +89,6 @@ impl Sidecar {
 fn ready_health_and_shutdown_reach_the_sidecar_and_the_server_exits_after_its_match() {
     let sidecar = Sidecar::start();
     let port = sidecar.port.to_string();
-    let started = Instant::now();
     let mut server = Server::start(&["--no-demo", "--agones", "--agones-sdk-port", &port]);
     sidecar.wait_for("POST /ready", Duration::from_secs(10));
     // The match an allocator would create: it plays 6 s and ends.
@@ -120,9 +119,20 @@ fn ready_health_and_shutdown_reach_the_sidecar_and_the_server_exits_after_its_ma
             pair[1] - pair[0]
         );
     }
+    // Not before its match ended: it played all its 6 s (360 ticks) and finished,
+    // as the server's log says (read to its end, the process having exited).
+    let deadline = Instant::now() + Duration::from_secs(5);
+    let ended = loop {
+        let log = server.log.lock().unwrap().clone();
+        if let Some(line) = log.iter().find(|l| l.contains("match ended")) {
+            break line.clone();
+        }
+        assert!(Instant::now() < deadline, "no end in the log: {log:?}");
+        std::thread::sleep(Duration::from_millis(20));
+    };
     assert!(
-        shutdown - started >= Duration::from_secs(6),
-        "shut down before its match ended"
+        ended.contains("finished") && ended.contains("tick=360"),
+        "shut down before its match ended: {ended}"
     );
     assert_eq!(
         calls.iter().filter(|(_, c)| c == "POST /shutdown").count(),

@@ -6,11 +6,25 @@
 mod common;
 
 use common::server::*;
+use futures_util::StreamExt;
 use serde_json::Value;
 use std::net::SocketAddr;
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::client::IntoClientRequest;
 use tokio_tungstenite::tungstenite::Error as WsError;
+
+/// Waits until match `id` is past tick `before`, asking every 20 ms for at most 5 s.
+/// (A wait on the condition, not a sleep that hopes it was long enough.)
+async fn ticks_past(server: &Server, id: &str, before: u64) {
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while server.tick(id) <= before {
+        assert!(
+            Instant::now() < deadline,
+            "{id} stopped ticking at {before}"
+        );
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+}
 
 /// Opens a WebSocket sending `origin`, if any: the socket, or the HTTP status of the
 /// refusal.
@@ -58,8 +72,7 @@ async fn pages_from_other_origins_are_refused_unless_allowed() {
     );
     // The matches went on.
     let before = server.tick("demo-baseball");
-    tokio::time::sleep(Duration::from_millis(300)).await;
-    assert!(server.tick("demo-baseball") > before);
+    ticks_past(&server, "demo-baseball", before).await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -340,8 +353,18 @@ async fn no_token_reaches_the_logs_even_at_trace_level() {
         .call()
         .unwrap();
     next_of(&mut bot, "end").await;
-    tokio::time::sleep(Duration::from_millis(300)).await;
-    let log = server.log.lock().unwrap().join("\n");
+    // The server closes the bot's socket after the end; then everything up to the
+    // match's end is logged once it says so.
+    while let Ok(Some(Ok(_))) = tokio::time::timeout(Duration::from_secs(5), bot.next()).await {}
+    let deadline = Instant::now() + Duration::from_secs(5);
+    let log = loop {
+        let log = server.log.lock().unwrap().join("\n");
+        if log.contains("match ended") {
+            break log;
+        }
+        assert!(Instant::now() < deadline, "the end is not logged:\n{log}");
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    };
     assert!(log.contains("/ws/matches/"), "requests are logged:\n{log}");
     for secret in [token.as_str(), ADMIN, "0123456789abcdef0123456789abcdef"] {
         assert!(!log.contains(secret), "a token reached the log");
@@ -407,8 +430,7 @@ async fn a_full_replay_disk_stops_the_recording_not_the_match() {
     let frame = next_of(&mut spectator, "frame").await;
     let later = next_of(&mut spectator, "frame").await;
     assert!(later["tick"].as_u64() > frame["tick"].as_u64());
-    tokio::time::sleep(Duration::from_millis(300)).await;
-    assert!(server.tick(id) > before, "{id} stopped ticking");
+    ticks_past(&server, id, before).await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -430,8 +452,7 @@ async fn a_replay_directory_that_vanishes_leaves_new_matches_unrecorded_but_runn
     assert!(shown["replay"].is_null());
     assert_eq!(server.metric("fieldhouse_replay_errors_total"), 1.0);
     let before = server.tick(&id);
-    tokio::time::sleep(Duration::from_millis(300)).await;
-    assert!(server.tick(&id) > before);
+    ticks_past(&server, &id, before).await;
 }
 
 #[test]

@@ -74,6 +74,27 @@ async fn demo_matches_are_listed_and_stream_schema_valid_frames() {
     assert!(metrics.contains("fieldhouse_tick_duration_seconds_bucket"));
 }
 
+/// Waits until `done` holds, asking every 20 ms for at most `within`; panics with
+/// `what` if it never does. (For state the server reaches in its own time: a wait on
+/// the condition, not a sleep that hopes it was long enough.)
+async fn until(within: Duration, what: &str, mut done: impl FnMut() -> bool) {
+    let deadline = Instant::now() + within;
+    while !done() {
+        assert!(Instant::now() < deadline, "{what} (waited {within:?})");
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+}
+
+/// Whether a bot controls agent `agent` of match `id`, as the API says.
+fn bot_controls(server: &Server, id: &str, agent: &str) -> bool {
+    let doc = server.get(&format!("/api/matches/{id}"));
+    doc["agents"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|a| a["id"] == agent && a["controller"] == "bot")
+}
+
 fn agent<'a>(frame: &'a Value, id: &str) -> &'a Value {
     frame["agents"]
         .as_array()
@@ -116,21 +137,32 @@ async fn a_bots_commands_move_its_agent_and_a_disconnect_hands_it_back() {
     assert_valid(&hello);
     let mut spectator = connect(&server.ws(&format!("/ws/matches/{id}"))).await;
     next_of(&mut spectator, "frame").await;
-    // Run 12 m toward the batter's side of the field, answering every perception.
+    // Run 12 m toward the batter's side of the field, answering every perception,
+    // until the agent is there: within 4 s of play (240 ticks).
     let target = [60.0, 48.0];
-    let start = Instant::now();
-    let mut last_tick = 0;
-    while start.elapsed() < Duration::from_secs(4) {
+    let mut first_tick = None;
+    let last_tick = loop {
         let p = next_of(&mut bot, "perception").await;
-        last_tick = p["tick"].as_u64().unwrap();
+        let last_tick = p["tick"].as_u64().unwrap();
+        let first = *first_tick.get_or_insert(last_tick);
         assert_valid(&p);
         assert_eq!(p["agent"], "cf");
+        let at = &p["perception"]["self"]["position"];
+        let (x, z) = (at[0].as_f64().unwrap(), at[1].as_f64().unwrap());
+        let gap = (x - target[0]).hypot(z - target[1]);
+        if gap < 2.0 {
+            break last_tick;
+        }
+        assert!(
+            last_tick - first <= 240,
+            "cf is {gap} m from its target after 4 s of play"
+        );
         let command = json!({"type": "command", "tick": p["tick"], "action": {"kind": "run_to", "target": target}});
         assert_valid(&command);
         bot.send(Message::Text(command.to_string().into()))
             .await
             .unwrap();
-    }
+    };
     // The spectator was not read meanwhile: skip to a frame of now.
     let frame = loop {
         let frame = next_of(&mut spectator, "frame").await;
@@ -145,46 +177,32 @@ async fn a_bots_commands_move_its_agent_and_a_disconnect_hands_it_back() {
         cf["position"][1].as_f64().unwrap(),
     ];
     let gap = (at[0] - target[0]).hypot(at[1] - target[1]);
-    assert!(gap < 2.0, "cf is {gap} m from its target after 4 s: {at:?}");
+    assert!(gap < 2.0, "cf is {gap} m from its target: {at:?}");
     // The token controls only cf: the other fielder is still the server's, which frames
     // leave unsaid.
     assert!(agent(&frame, "rf").get("controller").is_none(), "{frame}");
     drop(bot);
-    let deadline = Instant::now() + Duration::from_secs(5);
-    loop {
-        let doc = server.get(&format!("/api/matches/{id}"));
-        let cf = doc["agents"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|a| a["id"] == "cf")
-            .unwrap()
-            .clone();
-        if cf["controller"] == "builtin" {
-            break;
-        }
-        assert!(Instant::now() < deadline, "cf was not handed back: {doc}");
-        tokio::time::sleep(Duration::from_millis(50)).await;
-    }
+    until(Duration::from_secs(5), "cf was not handed back", || {
+        !bot_controls(&server, &id, "cf")
+    })
+    .await;
     // Reconnecting with the same token resumes control.
     let mut again = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
     assert_eq!(next(&mut again).await["agent"], "cf");
     next_of(&mut again, "perception").await;
-    let doc = server.get(&format!("/api/matches/{id}"));
-    assert!(doc["agents"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .any(|a| a["id"] == "cf" && a["controller"] == "bot"));
+    assert!(bot_controls(&server, &id, "cf"));
 }
 
+/// Lock-step over real sockets: the bot's answers reach the match task and play its
+/// ticks, and a silent bot's match goes on at the deadline. (How long a tick waits, to
+/// the millisecond, is the driver's unit tests', with injected time.)
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn lockstep_advances_only_when_the_bot_answers_or_at_the_deadline() {
     let server = Server::start(&["--no-demo"]);
-    let (id, _, mut bot) = server.play_cf("lockstep", 400).await;
+    // A deadline of a minute: every tick here is played by an answer, or the next
+    // perception would not come within `next`'s 10 s.
+    let (id, _, mut bot) = server.play_cf("lockstep", 60_000).await;
     next(&mut bot).await;
-    // Answering at once: the match runs as fast as the bot (far faster than 60 Hz).
-    let started = Instant::now();
     let first = next_of(&mut bot, "perception").await["tick"]
         .as_u64()
         .unwrap();
@@ -194,23 +212,27 @@ async fn lockstep_advances_only_when_the_bot_answers_or_at_the_deadline() {
         bot.send(Message::Text(command.to_string().into()))
             .await
             .unwrap();
-        tick = next_of(&mut bot, "perception").await["tick"]
+        let next = next_of(&mut bot, "perception").await["tick"]
             .as_u64()
             .unwrap();
+        assert_eq!(next, tick + 1, "lock-step perceives every tick");
+        tick = next;
     }
-    assert!(
-        started.elapsed() < Duration::from_secs(2),
-        "120 answered ticks took {:?}",
-        started.elapsed()
-    );
-    // Silent: each tick waits for the 400 ms deadline.
-    let waiting = server.tick(&id);
-    tokio::time::sleep(Duration::from_millis(1000)).await;
-    let later = server.tick(&id);
-    assert!(
-        (1..=4).contains(&(later - waiting)),
-        "{waiting} → {later} in 1 s without answers"
-    );
+    // Not answered, the last perception's tick holds the match.
+    assert_eq!(server.tick(&id), tick);
+    // Silent, with a short deadline: the match still goes on, a tick at a time.
+    let (_, _, mut silent) = server.play_cf("lockstep", 50).await;
+    next(&mut silent).await;
+    let mut tick = next_of(&mut silent, "perception").await["tick"]
+        .as_u64()
+        .unwrap();
+    for _ in 0..3 {
+        let next = next_of(&mut silent, "perception").await["tick"]
+            .as_u64()
+            .unwrap();
+        assert_eq!(next, tick + 1);
+        tick = next;
+    }
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -301,8 +323,13 @@ async fn malformed_input_gets_an_error_and_the_match_keeps_ticking() {
         .as_str()
         .unwrap()
         .contains("not a baseball action"));
+    // Tick 0 is stale once the match is past tick 4 (perceptions every tick).
+    while next_of(&mut bot, "perception").await["tick"]
+        .as_u64()
+        .unwrap()
+        <= 4
+    {}
     let stale = json!({"type": "command", "tick": 0, "action": {"kind": "stand"}});
-    tokio::time::sleep(Duration::from_millis(200)).await;
     bot.send(Message::Text(stale.to_string().into()))
         .await
         .unwrap();
@@ -551,8 +578,10 @@ async fn flooding_is_rate_limited_then_closed_with_1008() {
     assert_eq!(code, Some(CloseCode::Policy));
     // The match is unharmed.
     let before = server.tick(&id);
-    tokio::time::sleep(Duration::from_millis(200)).await;
-    assert!(server.tick(&id) > before);
+    until(Duration::from_secs(5), "the match stopped ticking", || {
+        server.tick(&id) > before
+    })
+    .await;
 }
 
 /// A realtime match of `duration_s` whose one fielder, `cf`, a bot plays: its id and
@@ -743,7 +772,8 @@ async fn recorded_matches_are_listed_downloaded_and_played_with_seek() {
         .send(control(json!({"type": "control", "action": "pause"})))
         .await
         .unwrap();
-    tokio::time::sleep(Duration::from_millis(200)).await;
+    // Frames sent before the pause may still be on the way: read until 100 ms pass
+    // without one.
     while let Ok(Some(Ok(_))) =
         tokio::time::timeout(Duration::from_millis(100), viewer.next()).await
     {}
@@ -788,9 +818,8 @@ async fn a_recorded_bot_match_verifies_with_its_command_log() {
     let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
     let (id, _, mut bot) = server.play_cf("realtime", 1000).await;
     next(&mut bot).await;
-    let started = Instant::now();
     let mut k = 0.0;
-    while started.elapsed() < Duration::from_millis(1500) {
+    for _ in 0..90 {
         let p = next_of(&mut bot, "perception").await;
         k += 0.05;
         let command = json!({"type": "command", "tick": p["tick"], "action": {"kind": "run_to", "target": [60.0 - k, 50.0]}});
@@ -799,7 +828,11 @@ async fn a_recorded_bot_match_verifies_with_its_command_log() {
             .unwrap();
     }
     drop(bot);
-    tokio::time::sleep(Duration::from_millis(300)).await;
+    // The departure is logged once the match task has handed cf back.
+    until(Duration::from_secs(5), "cf was not handed back", || {
+        !bot_controls(&server, &id, "cf")
+    })
+    .await;
     ureq::delete(&server.http(&format!("/api/matches/{id}")))
         .set("Authorization", &format!("Bearer {ADMIN}"))
         .call()
@@ -823,15 +856,23 @@ async fn a_server_killed_mid_match_leaves_a_readable_replay() {
     let dir = empty_dir("server-killed");
     let mut server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
     let (id, _) = server.create(json!({"sport": "baseball"}));
-    tokio::time::sleep(Duration::from_millis(1500)).await;
+    let file = || {
+        std::fs::read_dir(&dir)
+            .unwrap()
+            .flatten()
+            .map(|e| e.path())
+            .find(|p| p.to_string_lossy().contains(&id))
+    };
+    // Killed once its replay has 30 frames on disk after its header (and a line that
+    // may be partial).
+    let lines = |p: std::path::PathBuf| std::fs::read_to_string(p).map_or(0, |t| t.lines().count());
+    until(Duration::from_secs(10), "no 30 frames written", || {
+        file().map_or(0, lines) > 31
+    })
+    .await;
     server.child.kill().unwrap(); // SIGKILL
     server.child.wait().unwrap();
-    let file = std::fs::read_dir(&dir)
-        .unwrap()
-        .flatten()
-        .map(|e| e.path())
-        .find(|p| p.to_string_lossy().contains(&id))
-        .unwrap();
+    let file = file().unwrap();
     let info: Value = serde_json::from_slice(
         &Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
             .args(["replay", "info", "--json"])
@@ -850,7 +891,10 @@ async fn a_server_killed_mid_match_leaves_a_readable_replay() {
 async fn a_basketball_agents_cost_map_is_served_at_its_pose() {
     let server = Server::start(&[]);
     // Let the demo run a little so agents have moved.
-    tokio::time::sleep(Duration::from_millis(500)).await;
+    until(Duration::from_secs(10), "the demo does not tick", || {
+        server.tick("demo-basketball") >= 30
+    })
+    .await;
     let map = server.get("/api/matches/demo-basketball/costmap/o1");
     let behaviour = map["behaviour"].as_str().unwrap();
     assert!(["dribble", "run"].contains(&behaviour), "{behaviour}");

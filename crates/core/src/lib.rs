@@ -38,6 +38,10 @@
 //! * [`protocol`]: the WebSocket messages (version 2), as the server sends and reads them.
 //! * [`session`]: a world with its id and frame rate, stepping and encoding frames: what
 //!   the server, headless runs and replay verification all drive.
+//! * [`driver`]: a match as a sans-IO state machine: the realtime, fast and lock-step
+//!   tick policies, lock-step deadlines, the stale/future tick windows and bot seats.
+//!   It takes events and `now` and says when it next needs waking; the server's match
+//!   task only forwards sockets and timers to it.
 //! * [`replay`]: replay files (JSON lines: header, frames, bot commands, footer with a
 //!   hash over the frames), written append-only, read back to a torn record, verified by
 //!   re-simulation.
@@ -48,6 +52,7 @@
 
 pub mod basketball;
 pub mod costmap;
+pub mod driver;
 pub mod fielding;
 /// Shared test inputs (synthetic clips and graphs; the CMU library, graphs and
 /// capabilities built once per test binary): this crate's tests and, with the `fixtures`
