@@ -16,7 +16,8 @@
 //! here spectators and replay viewers are refused while the server is near its cap, so
 //! the last places go to requests, admins and bots.
 
-use super::api::ApiError;
+use super::error::ApiError;
+use super::hosts::split_host;
 use super::state::AppState;
 use axum::extract::FromRequestParts;
 use axum::http::request::Parts;
@@ -120,53 +121,10 @@ fn host_is_ours(host: &str, listening: SocketAddr, allowed_hosts: &[String]) -> 
         })
 }
 
-/// `name[:port]`, with IPv6 addresses in brackets (`[::1]:7878`); the brackets are
-/// dropped from the name.
-fn split_host(host: &str) -> (&str, Option<u16>) {
-    if let Some(rest) = host.strip_prefix('[') {
-        let (name, after) = rest.split_once(']').unwrap_or((rest, ""));
-        return (name, after.strip_prefix(':').and_then(|p| p.parse().ok()));
-    }
-    match host.rsplit_once(':') {
-        Some((name, port)) => (name, port.parse().ok()),
-        None => (host, None),
-    }
-}
-
-/// Checks an `allowed_hosts` entry: a host name or IP address (IPv6 in brackets), with
-/// an optional port.
-pub fn valid_host(entry: &str) -> bool {
-    let (name, port) = split_host(entry);
-    let port_written = match entry.strip_prefix('[') {
-        Some(rest) => rest.contains("]:"),
-        None => entry.contains(':'),
-    };
-    let name_ok = name.parse::<IpAddr>().is_ok()
-        || (!name.is_empty()
-            && name
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '.'));
-    name_ok && (!port_written || port.is_some())
-}
-
-/// Checks an `allowed_origins` entry: `*`, or a scheme and host with an optional
-/// port and nothing after (`https://example.com:8443`), as browsers send it.
-pub fn valid_origin(entry: &str) -> bool {
-    if entry == "*" {
-        return true;
-    }
-    let Some(rest) = entry
-        .strip_prefix("http://")
-        .or_else(|| entry.strip_prefix("https://"))
-    else {
-        return false;
-    };
-    !rest.is_empty() && !rest.contains(['/', '?', '#', ' ']) && !rest.ends_with(':')
-}
-
 #[cfg(test)]
 mod tests {
-    use super::{check_origin, host_is_ours, valid_host, valid_origin};
+    use super::{check_origin, host_is_ours};
+    use crate::hosts::{valid_host, valid_origin};
     use axum::http::HeaderMap;
     use std::net::SocketAddr;
 

@@ -2,6 +2,7 @@
 //! `{"error": {"code": .., "message": ..}}`, with the status that fits.
 
 use super::auth;
+pub use super::error::ApiError;
 use super::match_task;
 use super::slot::Slot;
 use super::state::{AppState, Control, MatchEntry};
@@ -15,50 +16,6 @@ use fieldhouse_core::sim::Scenario;
 use serde_json::{json, Value};
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
-
-#[derive(Debug)]
-pub struct ApiError {
-    status: StatusCode,
-    code: &'static str,
-    message: String,
-}
-
-impl ApiError {
-    pub fn new(status: StatusCode, code: &'static str, message: impl Into<String>) -> Self {
-        ApiError {
-            status,
-            code,
-            message: message.into(),
-        }
-    }
-    pub fn not_found(id: &str) -> Self {
-        Self::new(
-            StatusCode::NOT_FOUND,
-            "not_found",
-            format!("no match \"{id}\""),
-        )
-    }
-    pub fn gone(id: &str) -> Self {
-        Self::new(
-            StatusCode::GONE,
-            "ended",
-            format!("match \"{id}\" has ended"),
-        )
-    }
-    pub fn unauthorized(message: &str) -> Self {
-        Self::new(StatusCode::UNAUTHORIZED, "unauthorized", message)
-    }
-    pub fn forbidden(message: &str) -> Self {
-        Self::new(StatusCode::FORBIDDEN, "forbidden", message)
-    }
-}
-
-impl IntoResponse for ApiError {
-    fn into_response(self) -> Response {
-        let body = json!({"error": {"code": self.code, "message": self.message}});
-        (self.status, Json(body)).into_response()
-    }
-}
 
 /// Checks the admin bearer token: missing is 401, wrong is 403.
 fn admin(app: &AppState, headers: &HeaderMap) -> Result<(), ApiError> {

@@ -1,7 +1,7 @@
 //! The server's settings: defaults that suit a laptop, overridable by a TOML file
 //! (`serve --config FILE`) and by flags.
 
-use super::admission::{valid_host, valid_origin};
+use super::hosts::{valid_host, valid_origin};
 use serde::{Deserialize, Deserializer};
 use std::net::{IpAddr, SocketAddr, ToSocketAddrs};
 use std::path::Path;

@@ -34,6 +34,8 @@ pub mod auth;
 pub mod budget;
 pub mod config;
 pub mod demo;
+pub mod error;
+pub mod hosts;
 pub mod listener;
 pub mod match_task;
 pub mod metrics;
@@ -180,7 +182,7 @@ pub fn router(app: Arc<AppState>) -> Router {
     let shed = ServiceBuilder::new()
         .layer(HandleErrorLayer::new(move |_: tower::BoxError| {
             metrics.overloaded.fetch_add(1, Relaxed);
-            std::future::ready(api::ApiError::new(
+            std::future::ready(error::ApiError::new(
                 StatusCode::SERVICE_UNAVAILABLE,
                 "overloaded",
                 "too many requests in flight (max_concurrent_requests); try again",

@@ -367,7 +367,11 @@ fn accept(
     let place = match settings.connections.open(peer.ip()) {
         Ok(place) => Arc::new(place),
         Err(refused) => {
-            settings.metrics.refuse_connection(refused);
+            let counter = match refused {
+                Refused::PerIp => &settings.metrics.refused_per_ip,
+                Refused::Full => &settings.metrics.refused_full,
+            };
+            counter.fetch_add(1, Relaxed);
             refuse(&stream, refused);
             return;
         }

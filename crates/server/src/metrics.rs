@@ -40,14 +40,6 @@ pub struct Metrics {
 }
 
 impl Metrics {
-    pub fn refuse_connection(&self, refused: super::listener::Refused) {
-        let counter = match refused {
-            super::listener::Refused::PerIp => &self.refused_per_ip,
-            super::listener::Refused::Full => &self.refused_full,
-        };
-        counter.fetch_add(1, Relaxed);
-    }
-
     pub fn observe_tick(&self, seconds: f64) {
         self.ticks.fetch_add(1, Relaxed);
         self.tick_count.fetch_add(1, Relaxed);

@@ -8,8 +8,8 @@
 //! send to a viewer is bounded by `send_timeout_ms`, like a spectator's.
 
 use super::admission::AdmittedSpectator;
-use super::api::ApiError;
 use super::budget::Verdict;
+use super::error::ApiError;
 use super::range::{self, Wanted};
 use super::replay_dir;
 use super::state::AppState;
