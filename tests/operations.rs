@@ -197,7 +197,8 @@ fn the_container_files_use_flags_and_settings_the_binary_has() {
     for input in [
         "Cargo.toml",
         "Cargo.lock",
-        "build.rs",
+        // The workspace's library crates (the core's build script packs data/).
+        "crates",
         "data",
         "src",
         "web",
