@@ -1,7 +1,7 @@
 // The fielder's-eye panel: what the selected fielder sees of the ball in flight.
 //
 // Two plots, computed from the frames exactly as the server's sweep measures them
-// (src/fielding/path_shape.rs), so the page and `fieldhouse catch-sweep` agree:
+// (crates/core/src/fielding/path_shape.rs), so the page and `fieldhouse catch-sweep` agree:
 // * the image path: the ball projected on a vertical plane facing home plate from the
 //   fielder, u = lateral offset / depth and v = (height − eye) / depth. McBeath's LOT
 //   keeps it on a straight line; straightness is λmax/(λmax+λmin) of the points'
