@@ -3,8 +3,8 @@
 //! or refuse it without panicking either.
 #![no_main]
 
-use fieldhouse::protocol::{decode, ClientMessage};
-use fieldhouse::sim::{Scenario, World};
+use fieldhouse_core::protocol::{decode, ClientMessage};
+use fieldhouse_core::sim::{Scenario, World};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

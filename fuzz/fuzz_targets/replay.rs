@@ -5,7 +5,7 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Ok(replay) = fieldhouse::replay::parse(data) {
+    if let Ok(replay) = fieldhouse_core::replay::parse(data) {
         let _ = (replay.complete(), replay.match_id(), replay.frames_hash());
         let _: Vec<u64> = replay.log.iter().map(|l| l.tick()).collect();
     }

@@ -5,7 +5,7 @@
 //! motion data and stops at the check.
 #![no_main]
 
-use fieldhouse::sim::{Scenario, Sport, World};
+use fieldhouse_core::sim::{Scenario, Sport, World};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
