@@ -50,6 +50,10 @@
 //! * [`names`]: the names users type for presets, and the error a wrong one gets.
 //! * [`words`]: how counts and figures read in text for people (`1 possession`, `2.82`).
 
+// Every public item of the core is documented: other crates build on it, and its
+// documentation is where units, frames and the papers' conventions are stated.
+#![warn(missing_docs)]
+
 pub mod basketball;
 pub mod costmap;
 pub mod driver;
