@@ -19,7 +19,7 @@
 //!
 //! # Follow one tick
 //!
-//! 1. A bot's command arrives on its socket (`server::ws`, the bot socket loop), is
+//! 1. A bot's command arrives on its socket (`server::bot`, the bot socket loop), is
 //!    checked (size, strict JSON, message budget), decoded by [`protocol::decode`], and
 //!    sent to its match's task as a `server::state::Control::Command`.
 //! 2. The match task (`server::match_task`, `Ticker::forward`) hands it to the match's

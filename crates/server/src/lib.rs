@@ -8,7 +8,10 @@
 //! * [`match_task`]: the tick loop of one match (realtime, fast, lockstep).
 //! * [`slot`]: a match's place among the `max_matches`, taken atomically.
 //! * [`sweep`]: ended matches leave the table after a while.
-//! * [`ws`]: spectator and bot WebSockets.
+//! * [`spectator`]: the spectator WebSocket: a match's frames, newest first.
+//! * [`bot`]: the bot WebSocket: an agent's perceptions out, commands in.
+//! * [`socket`]: what every WebSocket shares: close codes, reading, writing under a
+//!   timeout, closing.
 //! * [`replays`]: recorded matches: listed, downloaded, played with controls.
 //! * [`replay_dir`]: which files in the replay directory are replays, opened safely.
 //! * [`range`]: HTTP byte ranges, for resuming a download.
@@ -31,6 +34,7 @@ pub mod admission;
 pub mod agones;
 pub mod api;
 pub mod auth;
+pub mod bot;
 pub mod budget;
 pub mod config;
 pub mod demo;
@@ -45,11 +49,12 @@ pub mod replay_dir;
 pub mod replays;
 pub mod retention;
 pub mod slot;
+pub mod socket;
+pub mod spectator;
 pub mod state;
 pub mod sweep;
 pub mod upgrade;
 pub mod web;
-pub mod ws;
 
 pub use config::ServerConfig;
 
@@ -212,8 +217,8 @@ pub fn router(app: Arc<AppState>) -> Router {
     Router::new()
         .merge(api)
         .merge(probes)
-        .route("/ws/matches/{id}", get(ws::spectate))
-        .route("/ws/matches/{id}/play", get(ws::play))
+        .route("/ws/matches/{id}", get(spectator::spectate))
+        .route("/ws/matches/{id}/play", get(bot::play))
         .route("/ws/replays/{id}", get(replays::watch))
         .route("/", get(web::index))
         .route("/web/{file}", get(web::file))

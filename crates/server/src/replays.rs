@@ -12,9 +12,9 @@ use super::budget::Verdict;
 use super::error::ApiError;
 use super::range::{self, Wanted};
 use super::replay_dir;
+use super::socket::{budget, classify, refusal, shut, Read, Sender, Sent, GOING_AWAY, POLICY};
 use super::state::AppState;
 use super::upgrade::{Socket, Upgrade};
-use super::ws::{budget, classify, refusal, shut, Read, Sender, Sent, GOING_AWAY, POLICY};
 use axum::body::Body;
 use axum::extract::{Path, State};
 use axum::http::header::{
