@@ -220,3 +220,35 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
         .await;
     metrics.bots.fetch_sub(1, Relaxed);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Owed;
+
+    #[test]
+    fn each_perception_is_owed_one_answer_and_only_the_newest_are_remembered() {
+        let mut owed = Owed::default();
+        owed.owe(6);
+        owed.owe(12);
+        assert!(owed.settle(12));
+        assert!(
+            !owed.settle(12),
+            "a second answer to the same perception pays"
+        );
+        assert!(
+            !owed.settle(18),
+            "nor does an answer to a perception never sent"
+        );
+        assert!(owed.settle(6), "answers may come out of order");
+        for tick in 0..(Owed::MAX as u64 + 10) {
+            owed.owe(tick);
+        }
+        assert!(
+            !owed.settle(9),
+            "forgotten: older than the newest {}",
+            Owed::MAX
+        );
+        assert!(owed.settle(10));
+        assert_eq!(owed.0.len(), Owed::MAX - 1);
+    }
+}
