@@ -3,7 +3,8 @@
 //! and deterministic like the rest of the core: the server's match task drives it.
 //!
 //! * [`scenario`]: what a match is made of, checked field by field.
-//! * [`fly`]: baseball and cricket fly balls with fielders.
+//! * [`fly`]: baseball and cricket fly balls with fielders: the play loop, with its
+//!   scenario checks (`fly/setup.rs`) and its wire shapes (`fly/wire.rs`) beside it.
 //! * [`hoops`]: basketball, the core's game with a line-up from the scenario.
 
 pub mod fly;
