@@ -32,7 +32,7 @@ const MAX_TARGET_M: f64 = 250.0;
 
 /// What a bot may tell a fielder.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum FielderOrder {
+pub(crate) enum FielderOrder {
     /// Accelerate along this ground vector (m/s²), clamped to the body's limits.
     Accelerate(DVec2),
     /// Run to this point as fast as the body allows, arriving at rest.
@@ -60,15 +60,18 @@ enum Play {
     Between { until_tick: u64 },
 }
 
+/// The score of a fly-ball match, in balls.
 #[derive(Debug, Clone, Serialize)]
-pub struct Score {
-    pub balls: u64,
-    pub caught: u64,
-    pub dropped: u64,
+pub(crate) struct Score {
+    pub(crate) balls: u64,
+    pub(crate) caught: u64,
+    pub(crate) dropped: u64,
 }
 
+/// A baseball or cricket match: the fielders, the ball in play (or the dead time
+/// before the next), the seeded draw of launches, the score.
 #[derive(Debug, Clone)]
-pub struct FlyWorld {
+pub(crate) struct FlyWorld {
     sport: Sport,
     dt: f64,
     tick: u64,
@@ -89,7 +92,7 @@ pub struct FlyWorld {
 }
 
 impl FlyWorld {
-    pub fn new(s: &Scenario) -> Result<FlyWorld, ScenarioError> {
+    pub(crate) fn new(s: &Scenario) -> Result<FlyWorld, ScenarioError> {
         let Setup {
             speed,
             elevation,
@@ -149,21 +152,21 @@ impl FlyWorld {
         })
     }
 
-    pub fn tick(&self) -> u64 {
+    pub(crate) fn tick(&self) -> u64 {
         self.tick
     }
 
-    pub fn agent_ids(&self) -> impl Iterator<Item = &str> {
+    pub(crate) fn agent_ids(&self) -> impl Iterator<Item = &str> {
         self.fielders.iter().map(|f| f.id.as_str())
     }
 
-    pub fn set_controlled(&mut self, k: usize, by_bot: bool) {
+    pub(crate) fn set_controlled(&mut self, k: usize, by_bot: bool) {
         self.fielders[k].by_bot = by_bot;
         self.fielders[k].order = None;
     }
 
     /// Accepts a bot's order for fielder `k`, or says why it is impossible.
-    pub fn order(&mut self, k: usize, order: FielderOrder) -> Result<(), String> {
+    pub(crate) fn order(&mut self, k: usize, order: FielderOrder) -> Result<(), String> {
         match order {
             FielderOrder::Accelerate(a) if !a.is_finite() => {
                 return Err("the acceleration is not a finite vector".into())
@@ -232,7 +235,7 @@ impl FlyWorld {
     }
 
     /// Advances one tick.
-    pub fn step(&mut self, events: &mut Vec<Value>) {
+    pub(crate) fn step(&mut self, events: &mut Vec<Value>) {
         self.tick += 1;
         let flight_ended = match &mut self.play {
             Play::Between { until_tick } => {
@@ -334,7 +337,7 @@ impl FlyWorld {
     }
 
     /// A scripted session is over once its last ball is dead.
-    pub fn finished(&self) -> bool {
+    pub(crate) fn finished(&self) -> bool {
         matches!(self.play, Play::Between { .. })
             && self
                 .script

@@ -15,7 +15,7 @@ impl FlyWorld {
     /// The field as a client draws it.
     /// `eye_height_m` lets a spectator draw what a fielder sees (tan ψ, the image path)
     /// from the frames, with the eye the fielders perceive from.
-    pub fn field(&self) -> Value {
+    pub(crate) fn field(&self) -> Value {
         let eye = self
             .fielders
             .first()
@@ -32,14 +32,14 @@ impl FlyWorld {
         }
     }
 
-    pub fn agents_info(&self) -> Vec<Value> {
+    pub(crate) fn agents_info(&self) -> Vec<Value> {
         self.fielders
             .iter()
             .map(|f| json!({"id": f.id, "team": "fielding", "strategy": f.strategy.name(), "home": f.home.to_array()}))
             .collect()
     }
 
-    pub fn state(&self) -> (Value, Vec<Value>, Value) {
+    pub(crate) fn state(&self) -> (Value, Vec<Value>, Value) {
         let ball = match self.ball_state() {
             Some(b) => {
                 json!({"state": "flight", "position": b.pos.to_array(), "velocity": b.vel.to_array()})
@@ -70,7 +70,7 @@ impl FlyWorld {
     }
 
     /// What fielder `k` can perceive: its own body, and the ball only as an eye sees it.
-    pub fn perception(&self, k: usize) -> Value {
+    pub(crate) fn perception(&self, k: usize) -> Value {
         let f = &self.fielders[k];
         let b = &f.fielder.body;
         let eye = f.config.perception.eye_height_m;
