@@ -47,14 +47,28 @@ use std::time::Duration;
 #[derive(Debug, Clone, PartialEq)]
 pub enum Event {
     /// A bot connection `conn` takes agent `agent`.
-    BotJoin { agent: usize, conn: u64 },
+    BotJoin {
+        /// The agent's index, in the world's order of agents.
+        agent: usize,
+        /// The shell's id of the connection.
+        conn: u64,
+    },
     /// Connection `conn` of agent `agent` is gone.
-    BotLeave { agent: usize, conn: u64 },
+    BotLeave {
+        /// The agent's index, in the world's order of agents.
+        agent: usize,
+        /// The shell's id of the connection.
+        conn: u64,
+    },
     /// A bot's command for its agent, for tick `tick`.
     Command {
+        /// The agent's index, in the world's order of agents.
         agent: usize,
+        /// The shell's id of the connection it came on.
         conn: u64,
+        /// The tick of the perception it answers.
         tick: u64,
+        /// What the agent is to do.
         action: Action,
     },
     /// The match is deleted.
@@ -78,33 +92,57 @@ pub enum Wake {
 pub enum Output {
     /// A tick was played; the world is now at `tick`. (The shell shows the tick and
     /// reports the tick's duration.)
-    Ticked { tick: u64 },
+    Ticked {
+        /// The tick the world is at now.
+        tick: u64,
+    },
     /// A frame to publish to spectators and record, encoded once.
-    Frame { tick: u64, frame: String },
+    Frame {
+        /// The tick it shows.
+        tick: u64,
+        /// The encoded `frame` message.
+        frame: String,
+    },
     /// A `perception` for the bot on connection `conn` of agent `agent`, for `tick`:
     /// it owes an answer to it.
     Perception {
+        /// The agent's index.
         agent: usize,
+        /// The connection to send it on.
         conn: u64,
+        /// The tick perceived.
         tick: u64,
+        /// The encoded `perception` message.
         text: String,
     },
     /// An `error` for the bot on connection `conn` (a client error, for the metrics);
     /// `replaced`: its agent was taken over, and this is the connection's last message.
     Error {
+        /// The agent's index.
         agent: usize,
+        /// The connection to send it on.
         conn: u64,
+        /// The encoded `error` message.
         text: String,
+        /// Whether the connection lost its agent to another and is to be closed.
         replaced: bool,
     },
     /// A record for the replay's log (a bot's `command` or `control` record).
     Log(String),
     /// Who controls `agent` now (`true`: a bot).
-    Controlled { agent: usize, by_bot: bool },
+    Controlled {
+        /// The agent's index.
+        agent: usize,
+        /// Whether a bot controls it (`false`: its built-in brain).
+        by_bot: bool,
+    },
     /// A tick started more than a tick period late.
     Overrun,
     /// The match ended, and why; nothing follows.
-    End { reason: &'static str },
+    End {
+        /// `finished` or `deleted`.
+        reason: &'static str,
+    },
 }
 
 /// A bot seated at an agent.
@@ -154,6 +192,7 @@ impl MatchDriver {
         }
     }
 
+    /// The session being played: its world, for the shell's status and metrics.
     pub fn session(&self) -> &Session {
         &self.session
     }

@@ -43,6 +43,7 @@ pub fn clip(name: &str, seconds: f64, path: impl Fn(f64) -> (DVec2, f64)) -> Cli
     .unwrap()
 }
 
+/// A path for [`clip`]: straight along +x at `speed` m/s, facing +x.
 pub fn straight(speed: f64) -> impl Fn(f64) -> (DVec2, f64) {
     move |t| (DVec2::new(speed * t, 0.0), 0.0)
 }

@@ -7,9 +7,9 @@ use thiserror::Error;
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("unknown {kind} \"{given}\"; expected one of {}", .expected.join(", "))]
 pub struct UnknownName {
-    pub kind: &'static str,
-    pub given: String,
-    pub expected: &'static [&'static str],
+    kind: &'static str,
+    given: String,
+    expected: &'static [&'static str],
 }
 
 /// Looks `given` up among `choices`, each a name with its value.

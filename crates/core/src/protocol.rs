@@ -10,22 +10,33 @@ use crate::strict_json::{self, Refused};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
+/// The protocol's name, sent in every `hello` so a client knows what it is talking to.
 pub const PROTOCOL: &str = "fieldhouse";
+/// The protocol's version: within it fields are only added; a breaking change bumps it.
 pub const VERSION: u32 = 2;
 
 /// Everything static about a match, as `hello` and `GET /api/matches/{id}` show it.
 #[derive(Debug, Clone, Serialize)]
 pub struct MatchInfo {
+    /// The match's id, as in its URLs.
     pub id: String,
+    /// The scenario's name, if it gave one.
     pub name: Option<String>,
+    /// `baseball`, `cricket` or `basketball`.
     pub sport: &'static str,
+    /// `realtime`, `fast` or `lockstep`: how ticks are paced.
     pub mode: &'static str,
+    /// The seed of every random draw in the match: the same seed, the same match.
     pub seed: u64,
+    /// Simulation ticks per second of match time, Hz.
     pub tick_hz: f64,
+    /// Frames sent to spectators per second of match time, Hz.
     pub frame_hz: f64,
     /// Bots get a `perception` every this many ticks, and answer with a `command`.
     pub perception_every_ticks: u64,
+    /// The field as a client draws it; its shape depends on the sport (PROTOCOL.md).
     pub field: Value,
+    /// Each agent's static description: id, team, strategy (and a fielder's home).
     pub agents: Vec<Value>,
     /// Where the motion data came from, named without any path of the server's
     /// ([`crate::motion::MotionSource`]'s `Display`).
@@ -42,23 +53,31 @@ pub struct Limits {
     pub messages_per_second: u32,
 }
 
+/// The first message on every socket: the protocol, the client's role, the match and
+/// the limits.
 #[derive(Debug, Clone, Serialize)]
 pub struct Hello<'a> {
+    /// Always `hello`.
     #[serde(rename = "type")]
     pub kind: &'static str,
+    /// Always [`PROTOCOL`].
     pub protocol: &'static str,
+    /// Always [`VERSION`].
     pub version: u32,
     /// `spectator` or `bot`.
     pub role: &'static str,
+    /// Everything static about the match.
     #[serde(rename = "match")]
     pub match_info: &'a MatchInfo,
     /// The agent a bot controls.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub agent: Option<&'a str>,
+    /// What the client must respect.
     pub limits: Limits,
 }
 
 impl<'a> Hello<'a> {
+    /// A `hello` of this protocol and version.
     pub fn new(
         role: &'static str,
         match_info: &'a MatchInfo,
@@ -80,36 +99,54 @@ impl<'a> Hello<'a> {
 /// The world at one tick, with the events since the previous frame.
 #[derive(Debug, Clone, Serialize)]
 pub struct Frame<'a> {
+    /// Always `frame`.
     #[serde(rename = "type")]
     pub kind: &'static str,
+    /// The match's id.
     #[serde(rename = "match")]
     pub match_id: &'a str,
+    /// The tick this frame shows.
     pub tick: u64,
+    /// Match time, s: `tick / tick_hz`, to the millisecond.
     pub time_s: f64,
+    /// The ball now; its shape depends on the sport (PROTOCOL.md).
     pub ball: &'a Value,
+    /// Every agent now, in the order of `hello`'s `agents`.
     pub agents: &'a [Value],
+    /// The score so far.
     pub score: &'a Value,
+    /// What happened since the previous frame (launches, catches, passes, shots…).
     pub events: &'a [Value],
 }
 
+/// The last message of a match's sockets: why it ended, and its result.
 #[derive(Debug, Clone, Serialize)]
 pub struct End<'a> {
+    /// Always `end`.
     #[serde(rename = "type")]
     pub kind: &'static str,
+    /// The match's id.
     #[serde(rename = "match")]
     pub match_id: &'a str,
+    /// The tick the match ended on.
     pub tick: u64,
     /// `finished`, `deleted`, `shutdown` or `error` (the server failed running it).
     pub reason: &'a str,
+    /// The final score.
     pub result: &'a Value,
 }
 
+/// What a bot's agent perceives at a tick; the bot answers with a `command` for it.
 #[derive(Debug, Clone, Serialize)]
 pub struct Perception<'a> {
+    /// Always `perception`.
     #[serde(rename = "type")]
     pub kind: &'static str,
+    /// The tick perceived, which the bot's `command` names.
     pub tick: u64,
+    /// Match time, s: `tick / tick_hz`.
     pub time_s: f64,
+    /// The id of the agent perceiving.
     pub agent: &'a str,
     /// What the agent perceives; its shape depends on the sport (PROTOCOL.md).
     pub perception: &'a Value,
@@ -118,13 +155,17 @@ pub struct Perception<'a> {
 /// An error about a client's message; the connection stays open.
 #[derive(Debug, Clone, Serialize)]
 pub struct ErrorMessage<'a> {
+    /// Always `error`.
     #[serde(rename = "type")]
     pub kind: &'static str,
+    /// What kind of error, for programs: `malformed_json`, `bad_message`, `rate_limited`…
     pub code: &'a str,
+    /// What is wrong, for people.
     pub message: &'a str,
 }
 
 impl<'a> ErrorMessage<'a> {
+    /// An `error` with this code and message.
     pub fn new(code: &'a str, message: &'a str) -> Self {
         ErrorMessage {
             kind: "error",
@@ -139,7 +180,12 @@ impl<'a> ErrorMessage<'a> {
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ClientMessage {
     /// The action for its agent, answering the perception of `tick`.
-    Command { tick: u64, action: Action },
+    Command {
+        /// The tick of the perception this answers.
+        tick: u64,
+        /// What the agent is to do.
+        action: Action,
+    },
 }
 
 /// Reads a client's message, or says what is wrong with it: `(code, message)` with code

@@ -7,9 +7,12 @@ use crate::protocol::{encode, Frame};
 use crate::sim::World;
 use serde_json::Value;
 
+/// A match being played: its world, id and frame rate, and the events not yet framed.
 pub struct Session {
+    /// The match's world, for its clock, status and result.
     pub world: World,
-    pub id: String,
+    /// The match's id, which every frame carries.
+    id: String,
     frame_every: u64,
     /// Events since the last frame.
     events: Vec<Value>,
@@ -18,6 +21,8 @@ pub struct Session {
 }
 
 impl Session {
+    /// A session of `world`, framed every `tick_hz / frame_hz` ticks (at least every
+    /// tick); both rates in Hz of match time.
     pub fn new(world: World, id: String, tick_hz: f64, frame_hz: f64) -> Session {
         Session {
             world,

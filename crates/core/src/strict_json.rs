@@ -15,7 +15,12 @@ pub enum Refused {
     /// JSON, but an object names a key twice: `path` is the object's place in the
     /// document (`agents[1]`), empty for the top level; `message` names the key
     /// (`duplicate key "id" at line 1 column 30`).
-    DuplicateKey { path: String, message: String },
+    DuplicateKey {
+        /// Where the object is, as a path into the document (`agents[1]`).
+        path: String,
+        /// Which key, and where in the text.
+        message: String,
+    },
 }
 
 impl fmt::Display for Refused {

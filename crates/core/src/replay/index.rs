@@ -29,9 +29,12 @@ struct FrameAt {
 /// A replay file's header, footer and frame positions: everything but the frames.
 #[derive(Debug, Clone)]
 pub struct Index {
+    /// The header record (see the module doc of [`super`]).
     pub header: Value,
+    /// The scenario the header records, parsed.
     pub scenario: Scenario,
     frames: Vec<FrameAt>,
+    /// The footer record, if the file has one.
     pub footer: Option<Value>,
     /// Why the readable prefix ends early, as [`super::Replay::problem`].
     pub problem: Option<String>,
@@ -202,6 +205,7 @@ impl Index {
         self.frames.len()
     }
 
+    /// Whether no frame is indexed.
     pub fn is_empty(&self) -> bool {
         self.frames.is_empty()
     }

@@ -54,6 +54,7 @@ pub const FORMAT: u32 = 1;
 /// Where a recorder's bytes go: written, and made durable when the replay is finished.
 /// A file syncs to disk; a test's sink may do anything (be slow, fail).
 pub trait Durable: Write {
+    /// Flushes and makes what was written durable (a file: `fsync`).
     fn sync(&mut self) -> io::Result<()>;
 }
 
@@ -183,19 +184,28 @@ fn hex(bytes: &[u8]) -> String {
 /// A bot's log entry, as read back.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Logged {
+    /// A bot took or gave back an agent.
     Control {
+        /// The tick it happened after.
         tick: u64,
+        /// The agent's id.
         agent: String,
+        /// `true`: a bot took it; `false`: its built-in brain has it back.
         bot: bool,
     },
+    /// A command the world accepted.
     Command {
+        /// The tick it was applied after.
         tick: u64,
+        /// The agent's id.
         agent: String,
+        /// What the agent was told.
         action: Action,
     },
 }
 
 impl Logged {
+    /// The tick the entry takes effect after.
     pub fn tick(&self) -> u64 {
         match self {
             Logged::Control { tick, .. } | Logged::Command { tick, .. } => *tick,
@@ -206,11 +216,15 @@ impl Logged {
 /// A replay read back: everything up to the first torn or unreadable record.
 #[derive(Debug, Clone)]
 pub struct Replay {
+    /// The header record (see the module doc).
     pub header: Value,
+    /// The scenario the header records, parsed.
     pub scenario: Scenario,
     /// Frame lines, exactly as written, with their ticks.
     pub frames: Vec<(u64, String)>,
+    /// The bot log, in file order.
     pub log: Vec<Logged>,
+    /// The footer record, if the file has one.
     pub footer: Option<Value>,
     /// Why reading stopped early (a torn last record, or the line that did not parse).
     pub problem: Option<String>,
@@ -253,10 +267,22 @@ pub fn first_tick(header: &Value) -> u64 {
 /// (`{e:#}` shows it), and a message that also showed it would say it twice.
 #[derive(Debug, Error)]
 pub enum ReplayError {
+    /// The file could not be read.
     #[error("cannot read {path}")]
-    Io { path: PathBuf, source: io::Error },
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: io::Error,
+    },
+    /// The file has no readable replay header.
     #[error("{path}: not a fieldhouse replay: {reason}")]
-    NotAReplay { path: PathBuf, reason: String },
+    NotAReplay {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with its first line.
+        reason: String,
+    },
 }
 
 /// Reads a replay file. Only a missing or unreadable header is an error: anything after

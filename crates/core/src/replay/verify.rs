@@ -12,7 +12,9 @@ use std::sync::Arc;
 /// A replay that played back identically.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Verified {
+    /// Frames compared.
     pub frames: usize,
+    /// The tick the re-simulation reached (from tick 0).
     pub ticks: u64,
 }
 
@@ -23,15 +25,29 @@ pub enum Mismatch {
     Unplayable(String),
     /// The first frame that differs, and where in it.
     Frame {
+        /// The frame's tick.
         tick: u64,
+        /// The first field that differs, as a path into the frame (`agents[2].position`).
         field: String,
+        /// Its value in the file.
         recorded: String,
+        /// Its value re-simulated.
         replayed: String,
     },
     /// The replay has frames the re-simulation never made, or the other way round.
-    Count { recorded: usize, replayed: usize },
+    Count {
+        /// Frames in the file.
+        recorded: usize,
+        /// Frames the re-simulation made.
+        replayed: usize,
+    },
     /// The footer's hash is not the hash of the frames.
-    Hash { footer: String, frames: String },
+    Hash {
+        /// The footer's hash, hex.
+        footer: String,
+        /// The hash of the frames read, hex.
+        frames: String,
+    },
 }
 
 impl fmt::Display for Mismatch {

@@ -10,10 +10,11 @@ use serde_json::{json, Value};
 use std::str::FromStr;
 use std::sync::Arc;
 
-pub struct HoopsWorld {
-    pub game: Game,
+/// A basketball match: the core's game, and when it ends.
+pub(crate) struct HoopsWorld {
+    pub(crate) game: Game,
     /// Possessions to play; none: for ever.
-    pub possessions: Option<u64>,
+    pub(crate) possessions: Option<u64>,
 }
 
 /// Reads agent `i`'s strategy as its team's choice of `T`: every agent of a team that
@@ -37,7 +38,7 @@ fn team_choice<T: FromStr<Err = UnknownName> + PartialEq + Copy>(
 }
 
 impl HoopsWorld {
-    pub fn new(s: &Scenario, caps: Arc<Capabilities>) -> Result<HoopsWorld, ScenarioError> {
+    pub(crate) fn new(s: &Scenario, caps: Arc<Capabilities>) -> Result<HoopsWorld, ScenarioError> {
         let mut params = GameParams {
             tick_hz: s.tick_hz,
             seed: s.seed,
@@ -135,7 +136,7 @@ impl HoopsWorld {
         })
     }
 
-    pub fn step(&mut self, events: &mut Vec<Value>) {
+    pub(crate) fn step(&mut self, events: &mut Vec<Value>) {
         let mut happened: Vec<Event> = Vec::new();
         self.game.step(&mut happened);
         events.extend(
@@ -145,12 +146,12 @@ impl HoopsWorld {
         );
     }
 
-    pub fn finished(&self) -> bool {
+    pub(crate) fn finished(&self) -> bool {
         self.possessions
             .is_some_and(|n| self.game.possessions() >= n)
     }
 
-    pub fn field(&self) -> Value {
+    pub(crate) fn field(&self) -> Value {
         let p = self.game.params();
         json!({
             "kind": "basketball",
@@ -162,7 +163,7 @@ impl HoopsWorld {
         })
     }
 
-    pub fn agents_info(&self) -> Vec<Value> {
+    pub(crate) fn agents_info(&self) -> Vec<Value> {
         let p = self.game.params();
         self.game
             .agents()
@@ -180,7 +181,7 @@ impl HoopsWorld {
             .collect()
     }
 
-    pub fn state(&self) -> (Value, Vec<Value>, Value) {
+    pub(crate) fn state(&self) -> (Value, Vec<Value>, Value) {
         let snap = self.game.snapshot();
         let agents = snap
             .agents
@@ -206,7 +207,7 @@ impl HoopsWorld {
 
     /// What agent `k` perceives: the court as a player sees it (everyone's position and
     /// heading, the ball, the clock).
-    pub fn perception(&self, k: usize) -> Value {
+    pub(crate) fn perception(&self, k: usize) -> Value {
         let snap = self.game.snapshot();
         json!({
             "self": snap.agents[k].id,
@@ -219,7 +220,7 @@ impl HoopsWorld {
         })
     }
 
-    pub fn order(&mut self, k: usize, order: Order) -> Result<(), String> {
+    pub(crate) fn order(&mut self, k: usize, order: Order) -> Result<(), String> {
         self.game.order(k, order)
     }
 }

@@ -3,11 +3,12 @@
 //! and deterministic like the rest of the core: the server's match task drives it.
 //!
 //! * [`scenario`]: what a match is made of, checked field by field.
-//! * [`fly`]: baseball and cricket fly balls with fielders.
-//! * [`hoops`]: basketball, the core's game with a line-up from the scenario.
+//! * `fly`: baseball and cricket fly balls with fielders: the play loop, with its
+//!   scenario checks (`fly/setup.rs`) and its wire shapes (`fly/wire.rs`) beside it.
+//! * `hoops`: basketball, the core's game with a line-up from the scenario.
 
-pub mod fly;
-pub mod hoops;
+mod fly;
+mod hoops;
 pub mod scenario;
 
 #[cfg(test)]
@@ -32,13 +33,25 @@ use std::sync::Arc;
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Action {
     /// Fielder: accelerate along `[ax, az]`, m/s² (clamped to the body's limits).
-    Accelerate { accel: [f64; 2] },
+    Accelerate {
+        /// `[ax, az]`, m/s², on the ground plane.
+        accel: [f64; 2],
+    },
     /// Fielder: run to `[x, z]` and stop there.
-    RunTo { target: [f64; 2] },
+    RunTo {
+        /// `[x, z]`, m, within 250 m of the batter.
+        target: [f64; 2],
+    },
     /// Basketball: move toward `[x, z]` (dribbling if holding the ball).
-    MoveTo { target: [f64; 2] },
+    MoveTo {
+        /// `[x, z]`, m, on the court (within 1 m of it).
+        target: [f64; 2],
+    },
     /// Basketball: pass to the teammate with this id.
-    Pass { to: String },
+    Pass {
+        /// The receiver's agent id.
+        to: String,
+    },
     /// Basketball: shoot from here.
     Shoot {},
     /// Stop: a fielder decelerates to rest, a player stands.
@@ -63,6 +76,8 @@ enum Inner {
     Hoops(Box<HoopsWorld>),
 }
 
+/// One match's world, whatever the sport: built from a scenario, stepped a tick at a
+/// time, commanded by bots.
 pub struct World {
     sport: Sport,
     tick_hz: f64,
@@ -95,10 +110,7 @@ impl World {
         })
     }
 
-    pub fn sport(&self) -> Sport {
-        self.sport
-    }
-
+    /// Ticks played since the start (0 before the first step).
     pub fn tick(&self) -> u64 {
         match &self.inner {
             Inner::Fly(w) => w.tick(),
@@ -106,6 +118,7 @@ impl World {
         }
     }
 
+    /// Match time, s: ticks played over `tick_hz`.
     pub fn time_s(&self) -> f64 {
         self.tick() as f64 / self.tick_hz
     }
@@ -127,6 +140,7 @@ impl World {
             }
     }
 
+    /// The agents' ids, in the order every index `k` refers to.
     pub fn agent_ids(&self) -> Vec<String> {
         match &self.inner {
             Inner::Fly(w) => w.agent_ids().map(str::to_string).collect(),

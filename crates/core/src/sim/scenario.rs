@@ -7,15 +7,20 @@ use crate::strict_json::{self, Refused};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
+/// The game a match plays.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Sport {
+    /// Fly balls to outfielders in fair territory (azimuth 0 to 90°).
     Baseball,
+    /// Fly balls to fielders around the ring, hit all round the wicket.
     Cricket,
+    /// Half-court possessions with motion-captured players.
     Basketball,
 }
 
 impl Sport {
+    /// Its name in scenarios and on the wire (`baseball`).
     pub fn name(self) -> &'static str {
         match self {
             Sport::Baseball => "baseball",
@@ -40,6 +45,7 @@ pub enum Mode {
 }
 
 impl Mode {
+    /// Its name in scenarios and on the wire (`realtime`).
     pub fn name(self) -> &'static str {
         match self {
             Mode::Realtime => "realtime",
@@ -79,8 +85,11 @@ pub struct AgentSpec {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LimitsSpec {
+    /// Top running speed, m/s, in (0, 50].
     pub max_speed_m_s: f64,
+    /// Largest acceleration on the ground plane, m/s², in (0, 100].
     pub max_accel_m_s2: f64,
+    /// Time from the hit to the first step, s, in [0, 5] (default: a human's 0.3 s).
     #[serde(default)]
     pub reaction_s: Option<f64>,
 }
@@ -91,9 +100,13 @@ pub struct LimitsSpec {
 pub struct LaunchSpec {
     /// Match time to hit it, s (or `pause_s` after the previous ball is dead, if later).
     pub time_s: f64,
+    /// Launch speed off the bat, m/s, 1 to 70.
     pub speed_m_s: f64,
+    /// Launch angle above the horizontal, degrees, 1 to 89.
     pub elevation_deg: f64,
+    /// Direction from +x toward +z, degrees, -360 to 360.
     pub azimuth_deg: f64,
+    /// Backspin, rpm, 0 to 6000 (default 0).
     #[serde(default)]
     pub spin_rpm: f64,
 }
@@ -142,19 +155,25 @@ fn default_deadline_ms() -> u64 {
     1000
 }
 
+/// A whole match, as a client or a scenario file describes it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scenario {
+    /// A name for people, shown with the match.
     #[serde(default)]
     pub name: Option<String>,
+    /// The game played.
     pub sport: Sport,
+    /// Seeds every random draw: the same scenario and seed play the same match.
     #[serde(default = "default_seed")]
     pub seed: u64,
+    /// Simulation ticks per second of match time, Hz, 1 to 1000 (default 60).
     #[serde(default = "default_tick_hz")]
     pub tick_hz: f64,
     /// Frames sent to spectators per second (a divisor of the tick rate is exact).
     #[serde(default = "default_frame_hz")]
     pub frame_hz: f64,
+    /// How ticks are paced (default `realtime`).
     #[serde(default)]
     pub mode: Mode,
     /// Lockstep: how long a tick waits for bots, ms.
@@ -167,6 +186,7 @@ pub struct Scenario {
     /// The agents; none: the sport's default line-up.
     #[serde(default)]
     pub agents: Vec<AgentSpec>,
+    /// The sport's options.
     #[serde(default)]
     pub options: Options,
 }
@@ -175,8 +195,9 @@ pub struct Scenario {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ScenarioError {
     /// The field, as a path (`agents[2].strategy`); empty for the document as a whole.
-    pub path: String,
-    pub message: String,
+    pub(crate) path: String,
+    /// What is wrong with it.
+    pub(crate) message: String,
 }
 
 impl fmt::Display for ScenarioError {
@@ -192,7 +213,8 @@ impl fmt::Display for ScenarioError {
 impl std::error::Error for ScenarioError {}
 
 impl ScenarioError {
-    pub fn at(path: impl Into<String>, message: impl Into<String>) -> ScenarioError {
+    /// The error of the field at `path`.
+    pub(crate) fn at(path: impl Into<String>, message: impl Into<String>) -> ScenarioError {
         ScenarioError {
             path: path.into(),
             message: message.into(),

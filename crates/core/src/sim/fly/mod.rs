@@ -2,17 +2,26 @@
 //! seeded distribution), and fielders chase each one with their strategies, or as their
 //! bots command. Baseball puts three outfielders in fair territory; cricket puts
 //! fielders around the ring, with balls hit all round the wicket.
+//!
+//! This file is the world and its play loop: a ball launched, each tick the fielders
+//! moved and the catch tested, the dead time between balls. Around it:
+//!
+//! * [`setup`]: what is checked about a fly-ball scenario, and the line-up it gives.
+//! * [`wire`]: how the world shows itself: the field, frames, a fielder's perception.
 
-use super::mark_bot;
-use super::scenario::{range, LaunchSpec, Scenario, ScenarioError, Sport};
+mod setup;
+mod wire;
+
 use crate::fielding::{forecast, Body, CatchZone, Fielder, FielderConfig, Limits, StrategyKind};
-use crate::perception::{PerceptionConfig, Sighting};
+use crate::perception::Sighting;
 use crate::physics::{AirModel, BallSpec, BallState, Flight, Launch, NATHAN_AIR_DENSITY};
+use crate::sim::scenario::{LaunchSpec, Scenario, ScenarioError, Sport};
 use glam::DVec2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use serde_json::{json, Value};
+use setup::Setup;
 
 /// Longest flight simulated.
 const MAX_FLIGHT_S: f64 = 20.0;
@@ -23,7 +32,7 @@ const MAX_TARGET_M: f64 = 250.0;
 
 /// What a bot may tell a fielder.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum FielderOrder {
+pub(crate) enum FielderOrder {
     /// Accelerate along this ground vector (m/s²), clamped to the body's limits.
     Accelerate(DVec2),
     /// Run to this point as fast as the body allows, arriving at rest.
@@ -51,15 +60,18 @@ enum Play {
     Between { until_tick: u64 },
 }
 
+/// The score of a fly-ball match, in balls.
 #[derive(Debug, Clone, Serialize)]
-pub struct Score {
-    pub balls: u64,
-    pub caught: u64,
-    pub dropped: u64,
+pub(crate) struct Score {
+    pub(crate) balls: u64,
+    pub(crate) caught: u64,
+    pub(crate) dropped: u64,
 }
 
+/// A baseball or cricket match: the fielders, the ball in play (or the dead time
+/// before the next), the seeded draw of launches, the score.
 #[derive(Debug, Clone)]
-pub struct FlyWorld {
+pub(crate) struct FlyWorld {
     sport: Sport,
     dt: f64,
     tick: u64,
@@ -79,120 +91,18 @@ pub struct FlyWorld {
     score: Score,
 }
 
-/// The default line-up: baseball's three outfielders (left, centre, right) with three
-/// strategies; cricket's five fielders on a 55 m ring.
-fn default_lineup(sport: Sport) -> Vec<(String, StrategyKind, DVec2)> {
-    let at = |distance: f64, deg: f64| distance * DVec2::from_angle(f64::to_radians(deg));
-    match sport {
-        Sport::Cricket => [
-            ("long-off", StrategyKind::Chapman, 20.0),
-            ("long-on", StrategyKind::LotOptical, 92.0),
-            ("deep-midwicket", StrategyKind::Predictive, 164.0),
-            ("deep-square", StrategyKind::Chapman, 236.0),
-            ("third-man", StrategyKind::LotOptical, 308.0),
-        ]
-        .into_iter()
-        .map(|(id, s, deg)| (id.to_string(), s, at(55.0, deg)))
-        .collect(),
-        _ => [
-            ("lf", StrategyKind::Chapman, 20.0),
-            ("cf", StrategyKind::LotOptical, 45.0),
-            ("rf", StrategyKind::Predictive, 70.0),
-        ]
-        .into_iter()
-        .map(|(id, s, deg)| (id.to_string(), s, at(80.0, deg)))
-        .collect(),
-    }
-}
-
 impl FlyWorld {
-    pub fn new(s: &Scenario) -> Result<FlyWorld, ScenarioError> {
-        let cricket = s.sport == Sport::Cricket;
-        let o = &s.options;
-        let speed = range(
-            "options.launch_speed_m_s",
-            o.launch_speed_m_s,
-            if cricket { (20.0, 35.0) } else { (25.0, 45.0) },
-            (1.0, 70.0),
-        )?;
-        let elevation = range(
-            "options.launch_elevation_deg",
-            o.launch_elevation_deg,
-            if cricket { (25.0, 60.0) } else { (25.0, 65.0) },
-            (1.0, 89.0),
-        )?;
-        let azimuth = range(
-            "options.launch_azimuth_deg",
-            o.launch_azimuth_deg,
-            if cricket { (0.0, 360.0) } else { (0.0, 90.0) },
-            (-360.0, 360.0),
-        )?;
-        let spin = range(
-            "options.spin_rpm",
-            o.spin_rpm,
-            (1000.0, 3000.0),
-            (0.0, 6000.0),
-        )?;
-        let pause_s = o.pause_s.unwrap_or(2.0);
-        if !(pause_s.is_finite() && (0.0..=60.0).contains(&pause_s)) {
-            return Err(ScenarioError::at("options.pause_s", "between 0 and 60 s"));
-        }
-        let human = FielderConfig::default();
-        let lineup: Vec<(String, StrategyKind, DVec2, FielderConfig)> = if s.agents.is_empty() {
-            default_lineup(s.sport)
-                .into_iter()
-                .map(|(id, strategy, at)| (id, strategy, at, human))
-                .collect()
-        } else {
-            let defaults = default_lineup(s.sport);
-            s.agents
-                .iter()
-                .enumerate()
-                .map(|(i, a)| {
-                    if a.team.is_some() {
-                        return Err(ScenarioError::at(
-                            format!("agents[{i}].team"),
-                            "fielders have no team",
-                        ));
-                    }
-                    let strategy = match &a.strategy {
-                        Some(name) => name.parse::<StrategyKind>().map_err(|e| {
-                            ScenarioError::at(format!("agents[{i}].strategy"), e.to_string())
-                        })?,
-                        None => StrategyKind::Chapman,
-                    };
-                    let at = match a.position {
-                        Some([x, z])
-                            if x.is_finite() && z.is_finite() && x.hypot(z) <= MAX_TARGET_M =>
-                        {
-                            DVec2::new(x, z)
-                        }
-                        Some(_) => {
-                            return Err(ScenarioError::at(
-                                format!("agents[{i}].position"),
-                                format!("must be finite and within {MAX_TARGET_M} m of the batter"),
-                            ))
-                        }
-                        None => defaults[i % defaults.len()].2,
-                    };
-                    let mut config = human;
-                    if let Some(l) = a.limits {
-                        let reaction = l.reaction_s.unwrap_or(human.limits.reaction_s);
-                        let ok = |x: f64, hi: f64| x.is_finite() && x > 0.0 && x <= hi;
-                        if !(ok(l.max_speed_m_s, 50.0) && ok(l.max_accel_m_s2, 100.0) && reaction.is_finite() && (0.0..=5.0).contains(&reaction)) {
-                            return Err(ScenarioError::at(format!("agents[{i}].limits"), "max_speed_m_s in (0, 50], max_accel_m_s2 in (0, 100], reaction_s in [0, 5]"));
-                        }
-                        config.limits = Limits { max_speed: l.max_speed_m_s, max_accel: l.max_accel_m_s2, reaction_s: reaction };
-                    }
-                    Ok((a.id.clone(), strategy, at, config))
-                })
-                .collect::<Result<_, _>>()?
-        };
+    pub(crate) fn new(s: &Scenario) -> Result<FlyWorld, ScenarioError> {
+        let Setup {
+            speed,
+            elevation,
+            azimuth,
+            spin,
+            pause_s,
+            lineup,
+            script,
+        } = setup::check(s)?;
         let dt = 1.0 / s.tick_hz;
-        let script = match &o.launches {
-            Some(list) => Some(check_script(list)?),
-            None => None,
-        };
         let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
         rng.set_stream(3);
         let fielders = lineup
@@ -218,7 +128,7 @@ impl FlyWorld {
             sport: s.sport,
             dt,
             tick: 0,
-            ball: if cricket {
+            ball: if s.sport == Sport::Cricket {
                 BallSpec::CRICKET
             } else {
                 BallSpec::BASEBALL
@@ -242,21 +152,21 @@ impl FlyWorld {
         })
     }
 
-    pub fn tick(&self) -> u64 {
+    pub(crate) fn tick(&self) -> u64 {
         self.tick
     }
 
-    pub fn agent_ids(&self) -> impl Iterator<Item = &str> {
+    pub(crate) fn agent_ids(&self) -> impl Iterator<Item = &str> {
         self.fielders.iter().map(|f| f.id.as_str())
     }
 
-    pub fn set_controlled(&mut self, k: usize, by_bot: bool) {
+    pub(crate) fn set_controlled(&mut self, k: usize, by_bot: bool) {
         self.fielders[k].by_bot = by_bot;
         self.fielders[k].order = None;
     }
 
     /// Accepts a bot's order for fielder `k`, or says why it is impossible.
-    pub fn order(&mut self, k: usize, order: FielderOrder) -> Result<(), String> {
+    pub(crate) fn order(&mut self, k: usize, order: FielderOrder) -> Result<(), String> {
         match order {
             FielderOrder::Accelerate(a) if !a.is_finite() => {
                 return Err("the acceleration is not a finite vector".into())
@@ -325,7 +235,7 @@ impl FlyWorld {
     }
 
     /// Advances one tick.
-    pub fn step(&mut self, events: &mut Vec<Value>) {
+    pub(crate) fn step(&mut self, events: &mut Vec<Value>) {
         self.tick += 1;
         let flight_ended = match &mut self.play {
             Play::Between { until_tick } => {
@@ -426,121 +336,14 @@ impl FlyWorld {
         }
     }
 
-    /// The field as a client draws it.
-    /// `eye_height_m` lets a spectator draw what a fielder sees (tan ψ, the image path)
-    /// from the frames, with the eye the fielders perceive from.
-    pub fn field(&self) -> Value {
-        let eye = self
-            .fielders
-            .first()
-            .map_or(PerceptionConfig::default().eye_height_m, |f| {
-                f.config.perception.eye_height_m
-            });
-        match self.sport {
-            Sport::Cricket => {
-                json!({"kind": "cricket", "batter": [0.0, 0.0], "boundary_m": 65.0, "inner_ring_m": 27.4, "pitch_length_m": 20.12, "eye_height_m": eye})
-            }
-            _ => {
-                json!({"kind": "baseball", "home": [0.0, 0.0], "base_path_m": 27.43, "fence_m": 110.0, "foul_lines_deg": [0.0, 90.0], "eye_height_m": eye})
-            }
-        }
-    }
-
-    pub fn agents_info(&self) -> Vec<Value> {
-        self.fielders
-            .iter()
-            .map(|f| json!({"id": f.id, "team": "fielding", "strategy": f.strategy.name(), "home": f.home.to_array()}))
-            .collect()
-    }
-
-    pub fn state(&self) -> (Value, Vec<Value>, Value) {
-        let ball = match self.ball_state() {
-            Some(b) => {
-                json!({"state": "flight", "position": b.pos.to_array(), "velocity": b.vel.to_array()})
-            }
-            None => json!({"state": "dead", "position": [0.0, 1.0, 0.0]}),
-        };
-        let agents = self
-            .fielders
-            .iter()
-            .map(|f| {
-                let b = &f.fielder.body;
-                let mut v = json!({
-                    "id": f.id,
-                    "position": b.pos.to_array(),
-                    "heading": if b.vel.length() > 1e-6 { b.vel.y.atan2(b.vel.x) } else { (-f.home).y.atan2(-f.home.x) },
-                    "speed": b.vel.length(),
-                    "strategy": f.strategy.name(),
-                });
-                mark_bot(&mut v, f.by_bot);
-                v
-            })
-            .collect();
-        (
-            ball,
-            agents,
-            serde_json::to_value(&self.score).expect("scores serialise"),
-        )
-    }
-
-    /// What fielder `k` can perceive: its own body, and the ball only as an eye sees it.
-    pub fn perception(&self, k: usize) -> Value {
-        let f = &self.fielders[k];
-        let b = &f.fielder.body;
-        let eye = f.config.perception.eye_height_m;
-        let optics = self.ball_state().map(|ball| {
-            let now = Sighting::of(ball.t, ball.pos, b.pos, eye);
-            let rates = f.last_seen.map(|prev| {
-                let dt = (now.t - prev.t).max(self.dt);
-                let d_alpha = crate::motion::wrap_angle(now.alpha() - prev.alpha());
-                json!({"d_tan_psi_dt": (now.tan_psi - prev.tan_psi) / dt, "d_alpha_dt": d_alpha / dt})
-            });
-            // The ground distance is what the built-in strategies scale their gains by, so
-            // a bot gets it too.
-            json!({"tan_psi": now.tan_psi, "alpha": now.alpha(), "distance_m": now.distance, "rates": rates, "t": ball.t})
-        });
-        let limits = &f.config.limits;
-        json!({
-            "self": {"position": b.pos.to_array(), "velocity": b.vel.to_array(), "home": f.home.to_array()},
-            "ball_in_play": optics.is_some(),
-            "optics": optics,
-            "limits": {"max_speed_m_s": limits.max_speed, "max_accel_m_s2": limits.max_accel},
-        })
-    }
-
     /// A scripted session is over once its last ball is dead.
-    pub fn finished(&self) -> bool {
+    pub(crate) fn finished(&self) -> bool {
         matches!(self.play, Play::Between { .. })
             && self
                 .script
                 .as_ref()
                 .is_some_and(|s| self.scripted >= s.len())
     }
-}
-
-/// Checks scripted launches field by field.
-fn check_script(list: &[LaunchSpec]) -> Result<Vec<LaunchSpec>, ScenarioError> {
-    if list.is_empty() {
-        return Err(ScenarioError::at("options.launches", "at least one launch"));
-    }
-    for (i, l) in list.iter().enumerate() {
-        let checks = [
-            ("time_s", l.time_s, 0.0, 1e6),
-            ("speed_m_s", l.speed_m_s, 1.0, 70.0),
-            ("elevation_deg", l.elevation_deg, 1.0, 89.0),
-            ("azimuth_deg", l.azimuth_deg, -360.0, 360.0),
-            ("spin_rpm", l.spin_rpm, 0.0, 6000.0),
-        ];
-        for (field, x, lo, hi) in checks {
-            if !(x.is_finite() && (lo..=hi).contains(&x)) {
-                return Err(ScenarioError::at(
-                    format!("options.launches[{i}].{field}"),
-                    format!("{x} is outside [{lo}, {hi}]"),
-                ));
-            }
-        }
-    }
-    Ok(list.to_vec())
 }
 
 /// The acceleration a bot's order asks for now (the body clamps it to its limits).
