@@ -82,9 +82,12 @@ fn trickled_headers_and_silent_connections_are_closed_at_the_header_timeout() {
         "closed after {after:?}, not at the 1 s header timeout"
     );
     dripping.join().unwrap();
-    std::thread::sleep(Duration::from_millis(1500));
-    let open = silent.iter().filter(|s| !closed_by_server(s)).count();
-    assert_eq!(open, 0, "silent connections outlive the header timeout");
+    // They were opened with the trickle, so they are due now; they get as long as it had.
+    common::until_blocking(
+        Duration::from_secs(3),
+        "silent connections outlive the header timeout",
+        || silent.iter().all(closed_by_server),
+    );
     // A prompt client is unaffected.
     assert_eq!(server.get("/readyz")["ready"], true);
 }
@@ -97,9 +100,12 @@ fn every_connection_counts_against_its_address_not_only_websockets() {
     let idle: Vec<TcpStream> = (0..30)
         .map(|_| TcpStream::connect(&server.addr).unwrap())
         .collect();
-    std::thread::sleep(Duration::from_millis(300));
-    let open = idle.iter().filter(|s| !closed_by_server(s)).count();
-    assert!(open <= 10, "{open} idle connections held by one address");
+    // Well within the header timeout (10 s), which would close them all anyway.
+    common::until_blocking(
+        Duration::from_secs(2),
+        "one address kept more than 10 of its 30 idle connections",
+        || idle.iter().filter(|s| !closed_by_server(s)).count() <= 10,
+    );
     // Requests still get in (an idle connection makes room).
     assert_eq!(server.get("/readyz")["ready"], true);
     drop(idle);
@@ -155,7 +161,16 @@ async fn with_descriptors_short_health_checks_and_admins_still_get_in() {
             idle.push(stream);
         }
     }
-    tokio::time::sleep(Duration::from_millis(200)).await;
+    // The server has run out: it says so, once.
+    common::until(
+        Duration::from_secs(5),
+        "the server never ran out of descriptors",
+        || {
+            let log = server.log.lock().unwrap();
+            log.iter().any(|line| line.contains("cannot accept"))
+        },
+    )
+    .await;
     let started = Instant::now();
     assert_eq!(
         tokio::task::spawn_blocking({
@@ -343,34 +358,31 @@ async fn a_bot_that_stops_reading_is_closed_within_the_send_timeout() {
     let (stalled, _) = tokio_tungstenite::client_async(request, stream)
         .await
         .unwrap();
-    // It never reads again. Wait until the server's writes to it stop: its socket is
-    // full and the server's write to it is waiting.
-    let deadline = Instant::now() + Duration::from_secs(30);
-    let mut written = -1.0;
-    loop {
-        tokio::time::sleep(Duration::from_millis(500)).await;
-        let now = server.metric("fieldhouse_bytes_out_total");
-        if now == written {
-            break;
-        }
-        assert!(
-            Instant::now() < deadline,
-            "the server kept writing to a bot that reads nothing"
-        );
-        written = now;
-    }
+    // It never reads again. Wait until the server's writes to it stop (no byte out for
+    // half a second): its socket is full and the server's write to it is waiting.
+    let (mut written, mut since) = (-1.0, Instant::now());
+    common::until(
+        Duration::from_secs(30),
+        "the server kept writing to a bot that reads nothing",
+        || {
+            let now = server.metric("fieldhouse_bytes_out_total");
+            if now != written {
+                (written, since) = (now, Instant::now());
+            }
+            since.elapsed() >= Duration::from_millis(500)
+        },
+    )
+    .await;
     // Its owner reconnects with the same token and reads; the stalled connection must
     // not keep a place (before, it stayed connected for as long as its client lived).
     let mut fresh = connect(&url).await;
     assert_eq!(next_of(&mut fresh, "hello").await["role"], "bot");
-    let deadline = Instant::now() + Duration::from_secs(5);
-    while server.metric("fieldhouse_connections{role=\"bot\"}") > 1.0 {
-        assert!(
-            Instant::now() < deadline,
-            "a bot that stopped reading is still connected after its token reconnected"
-        );
-        tokio::time::sleep(Duration::from_millis(100)).await;
-    }
+    common::until(
+        Duration::from_secs(5),
+        "a bot that stopped reading is still connected after its token reconnected",
+        || server.metric("fieldhouse_connections{role=\"bot\"}") <= 1.0,
+    )
+    .await;
     assert!(server.metric("fieldhouse_slow_clients_dropped_total") >= 1.0);
     drop(stalled);
 }
@@ -441,6 +453,32 @@ fn requests_beyond_the_concurrency_limit_are_shed_not_queued() {
     assert!(server.metric("fieldhouse_requests_shed_total") >= shed as f64);
 }
 
+/// Whether the server has closed its end of `client`'s connection, as the kernel's
+/// table of TCP sockets says (the server's socket has left ESTABLISHED), without
+/// reading what the server sent.
+fn server_side_closed(server: &Server, client: &TcpStream) -> bool {
+    let hex = |addr: std::net::SocketAddr| match addr {
+        std::net::SocketAddr::V4(a) => {
+            format!(
+                "{:08X}:{:04X}",
+                u32::from_ne_bytes(a.ip().octets()),
+                a.port()
+            )
+        }
+        std::net::SocketAddr::V6(_) => panic!("the tests listen on IPv4 loopback"),
+    };
+    let (local, remote) = (
+        hex(server.addr.parse().unwrap()),
+        hex(client.local_addr().unwrap()),
+    );
+    let table = std::fs::read_to_string("/proc/net/tcp").unwrap();
+    // Rows: slot, local address, remote address, state (01 is ESTABLISHED), ...
+    !table.lines().any(|row| {
+        let fields: Vec<&str> = row.split_whitespace().collect();
+        fields.get(1..4) == Some(&[local.as_str(), remote.as_str(), "01"][..])
+    })
+}
+
 #[test]
 fn a_download_whose_client_stops_reading_is_closed_at_the_send_timeout() {
     let file = settings("stalled-download", "send_timeout_ms = 1000\n");
@@ -463,8 +501,17 @@ fn a_download_whose_client_stops_reading_is_closed_at_the_send_timeout() {
         server.addr
     )
     .unwrap();
-    // Read nothing for a while: the socket buffers fill and the server's writes stall.
-    std::thread::sleep(Duration::from_secs(4));
+    assert!(
+        !server_side_closed(&server, &client),
+        "the server's end of the download is not in /proc/net/tcp"
+    );
+    // Read nothing: the socket buffers fill, the server's writes stall, and at the send
+    // timeout (1 s) it gives up and closes its end.
+    common::until_blocking(
+        Duration::from_secs(10),
+        "the server kept a download whose client reads nothing",
+        || server_side_closed(&server, &client),
+    );
     client
         .set_read_timeout(Some(Duration::from_secs(10)))
         .unwrap();

@@ -193,16 +193,21 @@ async fn ticks_near_the_top_of_u64_are_future_ticks_and_the_match_lives() {
         assert_eq!(error["code"], "future_tick", "{tick}: {error}");
     }
     // Old ticks are stale once the match has gone on.
-    while server.tick(&id) < 30 {
-        tokio::time::sleep(Duration::from_millis(50)).await;
-    }
+    common::until(
+        Duration::from_secs(10),
+        "the match never reached tick 30",
+        || server.tick(&id) >= 30,
+    )
+    .await;
     send(&mut bot, stand(0)).await;
     assert_eq!(next_of(&mut bot, "error").await["code"], "stale_tick");
     let summary = server.get(&format!("/api/matches/{id}"));
     assert_eq!(summary["status"], "running");
     let before = server.tick(&id);
-    tokio::time::sleep(Duration::from_millis(200)).await;
-    assert!(server.tick(&id) > before, "the match still ticks");
+    common::until(Duration::from_secs(5), "the match stopped ticking", || {
+        server.tick(&id) > before
+    })
+    .await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -241,22 +246,22 @@ async fn ended_matches_leave_the_list_after_their_time_to_live() {
     let server = Server::start(&["--no-demo", "--ended-match-ttl-s", "1"]);
     let (id, _) = server.create(json!({"sport": "baseball", "mode": "fast", "duration_s": 1.0}));
     let started = Instant::now();
-    let mut seen_ended = false;
-    loop {
-        let listed = server.get("/api/matches")["matches"]
+    let (mut seen_ended, mut listed) = (false, Vec::new());
+    common::found_within(Duration::from_secs(10), || {
+        listed = server.get("/api/matches")["matches"]
             .as_array()
             .unwrap()
             .clone();
         match listed.iter().find(|m| m["id"] == id.as_str()) {
-            Some(m) => seen_ended |= m["status"] == "ended",
-            None => break,
+            Some(m) => {
+                seen_ended |= m["status"] == "ended";
+                None
+            }
+            None => Some(()),
         }
-        assert!(
-            started.elapsed() < Duration::from_secs(10),
-            "still listed: {listed:?}"
-        );
-        tokio::time::sleep(Duration::from_millis(100)).await;
-    }
+    })
+    .await
+    .unwrap_or_else(|| panic!("still listed: {listed:?}"));
     assert!(seen_ended, "listed as ended for a while before it left");
     println!(
         "created, ended and gone from the list in {:?}",
@@ -360,24 +365,31 @@ async fn at_most_max_matches_ended_matches_are_kept_the_most_recent() {
     for _ in 0..5 {
         let (id, _) =
             server.create(json!({"sport": "baseball", "mode": "fast", "duration_s": 0.5}));
-        let started = Instant::now();
-        while server.get(&format!("/api/matches/{id}"))["status"] != "ended" {
-            assert!(
-                started.elapsed() < Duration::from_secs(10),
-                "{id} never ended"
-            );
-            tokio::time::sleep(Duration::from_millis(50)).await;
-        }
+        common::until(
+            Duration::from_secs(10),
+            &format!("{id} never ended"),
+            || server.get(&format!("/api/matches/{id}"))["status"] == "ended",
+        )
+        .await;
         ids.push(id);
     }
-    // The sweep runs at least once a second, and at every creation.
-    tokio::time::sleep(Duration::from_millis(1500)).await;
-    let listed: Vec<String> = server.get("/api/matches")["matches"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| m["id"].as_str().unwrap().to_string())
-        .collect();
+    // The sweep runs at least once a second, and at every creation: wait for it to cut
+    // the list down, then see which it kept.
+    let list = || -> Vec<String> {
+        server.get("/api/matches")["matches"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| m["id"].as_str().unwrap().to_string())
+            .collect()
+    };
+    common::until(
+        Duration::from_secs(3),
+        "the sweep never cut the ended matches down to max_matches",
+        || list().len() <= 2,
+    )
+    .await;
+    let listed = list();
     let mut newest = ids[3..].to_vec();
     newest.sort();
     let mut kept = listed.clone();

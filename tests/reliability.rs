@@ -13,17 +13,14 @@ use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::client::IntoClientRequest;
 use tokio_tungstenite::tungstenite::Error as WsError;
 
-/// Waits until match `id` is past tick `before`, asking every 20 ms for at most 5 s.
-/// (A wait on the condition, not a sleep that hopes it was long enough.)
+/// Waits until match `id` is past tick `before` (at most 5 s).
 async fn ticks_past(server: &Server, id: &str, before: u64) {
-    let deadline = Instant::now() + Duration::from_secs(5);
-    while server.tick(id) <= before {
-        assert!(
-            Instant::now() < deadline,
-            "{id} stopped ticking at {before}"
-        );
-        tokio::time::sleep(Duration::from_millis(20)).await;
-    }
+    common::until(
+        Duration::from_secs(5),
+        &format!("{id} stopped ticking at {before}"),
+        || server.tick(id) > before,
+    )
+    .await;
 }
 
 /// Opens a WebSocket sending `origin`, if any: the socket, or the HTTP status of the

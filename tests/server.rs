@@ -4,6 +4,7 @@
 mod common;
 
 use common::server::*;
+use common::until;
 use futures_util::{SinkExt, StreamExt};
 use serde_json::{json, Value};
 use std::process::Command;
@@ -72,17 +73,6 @@ async fn demo_matches_are_listed_and_stream_schema_valid_frames() {
         .unwrap();
     assert!(metrics.contains("fieldhouse_ticks_total"));
     assert!(metrics.contains("fieldhouse_tick_duration_seconds_bucket"));
-}
-
-/// Waits until `done` holds, asking every 20 ms for at most `within`; panics with
-/// `what` if it never does. (For state the server reaches in its own time: a wait on
-/// the condition, not a sleep that hopes it was long enough.)
-async fn until(within: Duration, what: &str, mut done: impl FnMut() -> bool) {
-    let deadline = Instant::now() + within;
-    while !done() {
-        assert!(Instant::now() < deadline, "{what} (waited {within:?})");
-        tokio::time::sleep(Duration::from_millis(20)).await;
-    }
 }
 
 /// Whether a bot controls agent `agent` of match `id`, as the API says.

@@ -8,6 +8,49 @@ pub(crate) mod server;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+/// How often the waits below ask again.
+const ASK_EVERY: Duration = Duration::from_millis(20);
+
+/// What `found` finds, asked every 20 ms for at most `within`: None if it found nothing
+/// in that time. For a wait whose failure should say what it saw last (the caller keeps
+/// that); [`until`] is the usual wait.
+pub(crate) async fn found_within<T>(
+    within: Duration,
+    mut found: impl FnMut() -> Option<T>,
+) -> Option<T> {
+    let deadline = Instant::now() + within;
+    loop {
+        if let Some(t) = found() {
+            return Some(t);
+        }
+        if Instant::now() >= deadline {
+            return None;
+        }
+        tokio::time::sleep(ASK_EVERY).await;
+    }
+}
+
+/// Waits until `done`, asking every 20 ms; after `within`, panics with `what` (what
+/// never happened). A wait on the condition, not a sleep that hopes it was long enough.
+pub(crate) async fn until(within: Duration, what: &str, mut done: impl FnMut() -> bool) {
+    if found_within(within, || done().then_some(()))
+        .await
+        .is_none()
+    {
+        panic!("{what} (waited {within:?})");
+    }
+}
+
+/// [`until`] for a test that has no runtime of its own.
+pub(crate) fn until_blocking(within: Duration, what: &str, done: impl FnMut() -> bool) {
+    tokio::runtime::Builder::new_current_thread()
+        .enable_time()
+        .build()
+        .expect("a runtime for the wait")
+        .block_on(until(within, what, done));
+}
 
 /// Runs the binary with a command line written as one string (no argument has spaces),
 /// without ambient motion, cache or log settings, so each test says what it uses.
