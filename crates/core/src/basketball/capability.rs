@@ -66,12 +66,12 @@ pub enum Motion {
 /// motion-graph node playing (so a client can draw the pose).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Stride {
-    pub at: Walker,
-    pub node: u32,
+    pub(crate) at: Walker,
+    pub(crate) node: u32,
 }
 
 impl Mover {
-    pub fn new(
+    pub(crate) fn new(
         behaviour: &'static str,
         graph: MotionGraph,
         maps: Vec<(StartState, CostMap)>,

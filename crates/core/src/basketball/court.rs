@@ -49,7 +49,7 @@ impl Court {
         DVec2::new(p.x.clamp(0.0, self.length_m), p.y.clamp(-half, half))
     }
 
-    pub fn distance_to_basket(&self, p: DVec2) -> f64 {
+    pub(crate) fn distance_to_basket(&self, p: DVec2) -> f64 {
         p.distance(self.basket)
     }
 

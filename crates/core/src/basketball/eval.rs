@@ -12,7 +12,7 @@ use std::sync::Arc;
 pub struct EvalReport {
     pub offense: &'static str,
     pub possessions: u64,
-    pub points: u64,
+    pub(crate) points: u64,
     pub points_per_possession: f64,
     /// Standard error of `points_per_possession`.
     pub standard_error: f64,
@@ -22,15 +22,15 @@ pub struct EvalReport {
     pub blocked: u64,
     /// Turnovers to a defender: steals off the dribble plus intercepted passes.
     pub stolen: u64,
-    pub intercepted: u64,
+    pub(crate) intercepted: u64,
     pub shot_clock_violations: u64,
     pub passes: u64,
-    pub three_pointers: u64,
+    pub(crate) three_pointers: u64,
     /// Mean distance to the basket of the shots taken, m.
     pub mean_shot_distance_m: f64,
     /// Mean time from a possession's start to its outcome, s.
     pub mean_possession_s: f64,
-    pub ticks: u64,
+    pub(crate) ticks: u64,
     /// Every possession's outcome, in order: possession k of two reports began from the
     /// same positions with the same random draws, so they pair.
     pub by_possession: Vec<Possession>,
@@ -39,8 +39,8 @@ pub struct EvalReport {
 /// How one possession ended.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Possession {
-    pub points: u32,
-    pub outcome: Outcome,
+    pub(crate) points: u32,
+    pub(crate) outcome: Outcome,
     /// Distance to the basket of its shot, m, if it ended in one.
     pub shot_m: Option<f64>,
 }

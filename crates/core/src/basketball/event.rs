@@ -85,35 +85,35 @@ fn chosen_on_the_wire<S: serde::Serializer>(
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct AgentView {
-    pub id: String,
+pub(crate) struct AgentView {
+    pub(crate) id: String,
     /// Not in frames: a player's team never changes, and the `hello` lists it.
     #[serde(skip)]
     pub team: Team,
-    pub behaviour: &'static str,
-    pub position: [f64; 2],
+    pub(crate) behaviour: &'static str,
+    pub(crate) position: [f64; 2],
     /// Radians from +x toward +z.
     pub heading: f64,
-    pub node: Option<u32>,
-    pub action: Action,
+    pub(crate) node: Option<u32>,
+    pub(crate) action: Action,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct BallView {
+pub(crate) struct BallView {
     /// `held`, `pass` or `shot`.
     pub state: &'static str,
     /// x, y (height), z, m.
     pub position: [f64; 3],
-    pub holder: Option<String>,
+    pub(crate) holder: Option<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Snapshot {
-    pub tick: u64,
-    pub time_s: f64,
-    pub possession: u64,
-    pub shot_clock_s: f64,
-    pub score: u32,
-    pub ball: BallView,
-    pub agents: Vec<AgentView>,
+pub(crate) struct Snapshot {
+    pub(crate) tick: u64,
+    pub(crate) time_s: f64,
+    pub(crate) possession: u64,
+    pub(crate) shot_clock_s: f64,
+    pub(crate) score: u32,
+    pub(crate) ball: BallView,
+    pub(crate) agents: Vec<AgentView>,
 }

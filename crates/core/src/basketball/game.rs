@@ -153,19 +153,19 @@ impl Game {
         game
     }
 
-    pub fn params(&self) -> &GameParams {
+    pub(crate) fn params(&self) -> &GameParams {
         &self.params
     }
 
-    pub fn agents(&self) -> &[Agent] {
+    pub(crate) fn agents(&self) -> &[Agent] {
         &self.agents
     }
 
-    pub fn tick(&self) -> u64 {
+    pub(crate) fn tick(&self) -> u64 {
         self.tick
     }
 
-    pub fn time_s(&self) -> f64 {
+    pub(crate) fn time_s(&self) -> f64 {
         self.tick as f64 / self.params.tick_hz
     }
 
@@ -194,7 +194,7 @@ impl Game {
         self.targets[k] = None;
     }
 
-    pub fn is_controlled(&self, k: usize) -> bool {
+    pub(crate) fn is_controlled(&self, k: usize) -> bool {
         self.controlled[k]
     }
 
@@ -553,7 +553,7 @@ impl Game {
     }
 
     /// The whole court now, as a client draws it.
-    pub fn snapshot(&self) -> Snapshot {
+    pub(crate) fn snapshot(&self) -> Snapshot {
         let now = self.time_s();
         let ball = match self.ball {
             Ball::Held { by } => {

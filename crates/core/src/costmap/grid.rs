@@ -86,7 +86,7 @@ impl Obstacle {
         }
     }
 
-    pub fn contains(&self, p: DVec2) -> bool {
+    pub(crate) fn contains(&self, p: DVec2) -> bool {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
     }
 }
@@ -110,10 +110,6 @@ impl AgentPose {
         (world - self.position).rotate(DVec2::from_angle(-self.heading))
     }
 
-    pub fn to_world(&self, local: DVec2) -> DVec2 {
-        self.position + local.rotate(DVec2::from_angle(self.heading))
-    }
-
     /// [`AgentPose::to_local`] with the rotation worked out once, for the many look-ups
     /// of one decision.
     pub fn frame(&self) -> LocalFrame {
@@ -133,12 +129,12 @@ pub struct LocalFrame {
 
 impl LocalFrame {
     #[inline]
-    pub fn to_local(&self, world: DVec2) -> DVec2 {
+    pub(crate) fn to_local(self, world: DVec2) -> DVec2 {
         (world - self.position).rotate(self.unrotate)
     }
 
-    /// A point of the agent's frame in the world: [`AgentPose::to_world`] without the
-    /// trigonometry.
+    /// A point of the agent's frame in the world: the inverse of [`AgentPose::to_local`],
+    /// without the trigonometry.
     #[inline]
     pub fn to_world(&self, local: DVec2) -> DVec2 {
         // Rotating back by the heading is rotating by the conjugate of `unrotate`.
@@ -181,7 +177,7 @@ mod tests {
             heading: 1.0,
         };
         let w = DVec2::new(-4.0, 7.5);
-        assert!((pose.to_world(pose.to_local(w)) - w).length() < 1e-12);
+        assert!((pose.frame().to_world(pose.to_local(w)) - w).length() < 1e-12);
         assert!((pose.frame().to_local(w) - pose.to_local(w)).length() < 1e-12);
         // One metre straight ahead of the agent is (1, 0) in its frame.
         let ahead = pose.position + DVec2::from_angle(1.0);

@@ -147,8 +147,8 @@ fn near_walks(
 /// The Monte Carlo costs of a few fixed cells after a number of walks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ConvergencePoint {
-    pub iterations: u64,
-    pub costs: Vec<Option<u32>>,
+    pub(crate) iterations: u64,
+    pub(crate) costs: Vec<Option<u32>>,
 }
 
 /// Points (agent frame, metres) whose Monte Carlo cost is recorded against iterations.
