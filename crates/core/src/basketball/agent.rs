@@ -25,7 +25,9 @@ pub enum Action {
     DribbleToShot,
     /// Without the ball: toward the goal, staying open for a pass.
     ReadyForPass,
+    /// With the ball: shooting.
     Shoot,
+    /// With the ball: passing to a teammate.
     Pass,
     /// The defender: toward the ball.
     Defend,

@@ -61,6 +61,8 @@ pub(super) enum Ball {
     },
 }
 
+/// A game in progress: the court, the agents, the ball, the score and the random draws;
+/// [`Game::step`] plays it one tick on.
 pub struct Game {
     pub(super) caps: Arc<Capabilities>,
     pub(super) params: GameParams,
@@ -102,9 +104,12 @@ pub enum Order {
     MoveTo(DVec2),
     /// Pass to the teammate with this agent index.
     Pass {
+        /// The teammate's agent index (offense first, then defense).
         to: usize,
     },
+    /// Shoot from where the agent stands; it must have the ball.
     Shoot,
+    /// Stop the current move and stand.
     Stand,
 }
 
@@ -174,6 +179,7 @@ impl Game {
         self.possession
     }
 
+    /// Points the offense has scored so far.
     pub fn score(&self) -> u32 {
         self.score
     }

@@ -9,9 +9,13 @@
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
+/// An n × n grid of square cells centred on the agent, in its frame: x ahead, z on its
+/// right, m.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Grid {
+    /// Side of the whole grid, m: a whole number of cells.
     pub size_m: f64,
+    /// Side of a cell, m.
     pub cell_m: f64,
     /// Cells along each side.
     pub n: usize,
@@ -28,6 +32,7 @@ impl Grid {
         }
     }
 
+    /// Cells in the grid: n².
     pub fn cells(&self) -> usize {
         self.n * self.n
     }
@@ -73,7 +78,9 @@ pub(crate) fn cell_index(rel: DVec2, n: usize) -> Option<usize> {
 /// An axis-aligned rectangle on the ground that no path may enter.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Obstacle {
+    /// The corner with the smallest x and z, m.
     pub min: DVec2,
+    /// The corner with the largest x and z, m.
     pub max: DVec2,
 }
 
@@ -99,7 +106,9 @@ pub(super) fn blocked(obstacles: &[Obstacle], p: DVec2) -> bool {
 /// Where an agent stands in the world and which way it faces (radians from +x toward +z).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct AgentPose {
+    /// Where it stands on the ground, (x, z), m.
     pub position: DVec2,
+    /// Which way it faces: radians from +x toward +z.
     pub heading: f64,
 }
 
