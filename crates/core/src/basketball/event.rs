@@ -119,11 +119,11 @@ pub(crate) struct AgentView {
     pub(crate) id: String,
     /// Not in frames: a player's team never changes, and the `hello` lists it.
     #[serde(skip)]
-    pub team: Team,
+    pub(crate) team: Team,
     pub(crate) behaviour: &'static str,
     pub(crate) position: [f64; 2],
     /// Radians from +x toward +z.
-    pub heading: f64,
+    pub(crate) heading: f64,
     pub(crate) node: Option<u32>,
     pub(crate) action: Action,
 }
@@ -131,9 +131,9 @@ pub(crate) struct AgentView {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub(crate) struct BallView {
     /// `held`, `pass` or `shot`.
-    pub state: &'static str,
+    pub(crate) state: &'static str,
     /// x, y (height), z, m.
-    pub position: [f64; 3],
+    pub(crate) position: [f64; 3],
     pub(crate) holder: Option<String>,
 }
 
