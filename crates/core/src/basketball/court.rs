@@ -7,7 +7,7 @@ use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
 /// The half court's dimensions and the squares a shooter considers. Points are (x, z)
-/// on the floor, m, as the module says.
+/// on the floor, m: x from the baseline, z across, the basket on z = 0.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Court {
     /// Baseline to half-court line, m (FIBA: 14).

@@ -35,8 +35,8 @@ pub enum Method {
     /// The paper's: random walks on the motion graph, keeping the cheapest arrival in
     /// each cell.
     Mc,
-    /// Systematic search of the graph's walks (backward over cost-to-go maps, or forward
-    /// around obstacles), with random walks near the start.
+    /// Systematic search of the graph's walks: backward over cost-to-go maps, topped up
+    /// near the start with random walks; forward where there are obstacles.
     Search,
     /// The baseline: distance around obstacles at the behaviour's top speed, ignoring
     /// how a body turns; it stores no paths.
