@@ -8,7 +8,7 @@ use serde::Serialize;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Team {
+pub(crate) enum Team {
     Offense,
     Defense,
 }
@@ -25,7 +25,9 @@ pub enum Action {
     DribbleToShot,
     /// Without the ball: toward the goal, staying open for a pass.
     ReadyForPass,
+    /// With the ball: shooting.
     Shoot,
+    /// With the ball: passing to a teammate.
     Pass,
     /// The defender: toward the ball.
     Defend,
@@ -40,11 +42,11 @@ pub struct Movement {
     played: f64,
     /// What the move was planned for: the goal on the court and the behaviour.
     pub goal: DVec2,
-    pub behaviour: &'static str,
+    pub(crate) behaviour: &'static str,
 }
 
 impl Movement {
-    pub fn new(strides: Vec<Stride>, goal: DVec2, behaviour: &'static str) -> Movement {
+    pub(crate) fn new(strides: Vec<Stride>, goal: DVec2, behaviour: &'static str) -> Movement {
         debug_assert!(!strides.is_empty());
         Movement {
             strides,
@@ -76,21 +78,21 @@ impl Movement {
         (at, if f < 0.5 { a.node } else { b.node })
     }
 
-    pub fn finished(&self) -> bool {
+    pub(crate) fn finished(&self) -> bool {
         self.played >= (self.strides.len() - 1) as f64
     }
 }
 
 #[derive(Debug, Clone)]
-pub struct Agent {
-    pub id: String,
-    pub team: Team,
-    pub pose: AgentPose,
+pub(crate) struct Agent {
+    pub(crate) id: String,
+    pub(crate) team: Team,
+    pub(crate) pose: AgentPose,
     /// The motion-graph node playing, for drawing the body; `None` before it first moves.
     pub node: Option<u32>,
     /// The behaviour whose graph `node` is of: a move with it goes on from `node`.
     pub playing: Option<&'static str>,
-    pub action: Action,
+    pub(crate) action: Action,
     pub(super) movement: Option<Movement>,
     /// When it next decides (the agents re-plan a few times a second).
     pub(super) next_plan_s: f64,
@@ -102,7 +104,7 @@ pub struct Agent {
 }
 
 impl Agent {
-    pub fn new(id: String, team: Team, position: DVec2, heading: f64) -> Agent {
+    pub(crate) fn new(id: String, team: Team, position: DVec2, heading: f64) -> Agent {
         Agent {
             id,
             team,

@@ -17,6 +17,7 @@ use std::path::Path;
 pub struct Mover {
     /// The behaviour's name (`dribble`, `run`, `defense`), as frames label a player.
     pub behaviour: &'static str,
+    /// The behaviour's motion graph, built from its clips: every move is a walk on it.
     pub graph: MotionGraph,
     /// One map per start state ([`start_states`]): standing first, then each moving state.
     pub states: Vec<StateMap>,
@@ -33,7 +34,9 @@ pub struct Mover {
 /// A start state's map, with the ground each cell's stored path covers.
 #[derive(Debug, Clone)]
 pub struct StateMap {
+    /// The start state: its name and the graph node the map starts from.
     pub state: StartState,
+    /// The map from that state, in the agent's frame.
     pub map: CostMap,
     /// Per map cell: checking a move against the court costs a few hull vertices instead
     /// of a walk of every frame.
@@ -66,12 +69,12 @@ pub enum Motion {
 /// motion-graph node playing (so a client can draw the pose).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Stride {
-    pub at: Walker,
-    pub node: u32,
+    pub(crate) at: Walker,
+    pub(crate) node: u32,
 }
 
 impl Mover {
-    pub fn new(
+    pub(crate) fn new(
         behaviour: &'static str,
         graph: MotionGraph,
         maps: Vec<(StartState, CostMap)>,
@@ -427,11 +430,14 @@ fn leads(graph: &MotionGraph, starts: &[u32]) -> Vec<Lead> {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum DefenderMotion {
+    /// Defensive footwork: the `defense` clips.
     Defense,
+    /// Running, as an offensive player without the ball does.
     Run,
 }
 
 impl DefenderMotion {
+    /// The behaviour's name, as users write it and frames label a player.
     pub fn name(self) -> &'static str {
         match self {
             DefenderMotion::Defense => "defense",
@@ -462,14 +468,21 @@ pub const HORIZON_FRAMES: u32 = 240;
 pub enum Stage {
     /// Building a behaviour's motion graph from this many frames of capture.
     Graph {
+        /// The behaviour (`dribble`, `run`, `defense`).
         behaviour: &'static str,
+        /// Frames of capture the graph is built from.
         frames: usize,
     },
     /// Searching a behaviour's cost map (none was cached).
-    Map { behaviour: &'static str },
+    Map {
+        /// The behaviour (`dribble`, `run`, `defense`).
+        behaviour: &'static str,
+    },
     /// A behaviour's cost map is ready: read from the cache, or just built.
     Ready {
+        /// The behaviour (`dribble`, `run`, `defense`).
         behaviour: &'static str,
+        /// True when the maps came from the cache.
         cached: bool,
     },
 }
@@ -503,6 +516,8 @@ pub struct Capabilities {
     pub run: Mover,
     /// Defensive footwork.
     pub defense: Mover,
+    /// Where the motion capture came from (the embedded CMU clips or a user's
+    /// directory), as runs report it.
     pub source: MotionSource,
 }
 
@@ -567,6 +582,7 @@ impl Capabilities {
         }
     }
 
+    /// The mover a defender moving with `motion` uses.
     pub fn defender(&self, motion: DefenderMotion) -> &Mover {
         match motion {
             DefenderMotion::Defense => &self.defense,

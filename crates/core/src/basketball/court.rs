@@ -6,6 +6,8 @@
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
+/// The half court's dimensions and the squares a shooter considers. Points are (x, z)
+/// on the floor, m: x from the baseline, z across, the basket on z = 0.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Court {
     /// Baseline to half-court line, m (FIBA: 14).
@@ -33,6 +35,7 @@ impl Default for Court {
 }
 
 impl Court {
+    /// Whether `p` is on the court, lines included.
     pub fn contains(&self, p: DVec2) -> bool {
         (0.0..=self.length_m).contains(&p.x) && p.y.abs() <= 0.5 * self.width_m
     }
@@ -49,7 +52,7 @@ impl Court {
         DVec2::new(p.x.clamp(0.0, self.length_m), p.y.clamp(-half, half))
     }
 
-    pub fn distance_to_basket(&self, p: DVec2) -> f64 {
+    pub(crate) fn distance_to_basket(&self, p: DVec2) -> f64 {
         p.distance(self.basket)
     }
 

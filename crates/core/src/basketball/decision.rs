@@ -57,18 +57,28 @@ impl Candidate {
 /// The square chosen, with everything needed to check the rule by hand.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Chosen {
+    /// The square's centre on the court, (x, z), m.
     pub cell: [f64; 2],
+    /// The chance a shot from the square goes in.
     pub success: f64,
+    /// C_o: the defenders' soonest time to the square, s.
     pub c_o: f64,
+    /// C_d: the shooter's dribbling time to the square, s.
     pub c_d: f64,
+    /// T_s: from the decision to shoot until the ball leaves the hands, s.
     pub t_s: f64,
+    /// ε: the margin the defender must be late by, s.
     pub epsilon: f64,
     /// True when the shooter already stands on the square: shoot now.
     pub here: bool,
 }
 
+/// A decision with its working: the square chosen and every square considered, so the
+/// rule can be checked by hand (`basketball-decide`).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Decision {
+    /// The safe square with the best shot (of equal shots, the one the shooter reaches
+    /// sooner); `None` when no square is safe.
     pub chosen: Option<Chosen>,
     /// Every square the shooter can reach within its map's horizon.
     pub candidates: Vec<Candidate>,
@@ -76,8 +86,11 @@ pub struct Decision {
 
 /// The shooter's side of the rule: who it is, what it models the defenders with.
 pub struct Situation<'a> {
+    /// The court whose squares are considered.
     pub court: &'a Court,
+    /// Shot success against distance, to rank the safe squares.
     pub shot: &'a ShotModel,
+    /// T_s and ε.
     pub params: &'a DecisionParams,
     /// What the shooter reaches dribbling, from where it is and how it moves.
     pub shooter: Reach<'a>,
@@ -93,8 +106,11 @@ pub enum Opponent<'a> {
     /// `reaction_s` + distance / `speed_m_s` from where the defender stands, the same in
     /// every direction.
     Isotropic {
+        /// Where the defender stands on the court, (x, z), m.
         at: DVec2,
+        /// Time before it sets off, s.
         reaction_s: f64,
+        /// Its speed once moving, m/s.
         speed_m_s: f64,
     },
     /// No model: never in time.
@@ -102,6 +118,8 @@ pub enum Opponent<'a> {
 }
 
 impl Opponent<'_> {
+    /// C_o for the world point `world`: the seconds this model says the defender needs
+    /// to get there (infinite for [`Opponent::Ignored`]).
     #[inline]
     pub fn seconds(&self, world: DVec2) -> f64 {
         match self {
@@ -196,6 +214,8 @@ impl Situation<'_> {
         })
     }
 
+    /// Applies the rule to every square and keeps them all ([`Keep::All`]), with the
+    /// choice: what `basketball-decide` prints.
     pub fn decide(&self) -> Decision {
         let mut candidates = Vec::new();
         let chosen = self.decide_into(&mut candidates, Keep::All);

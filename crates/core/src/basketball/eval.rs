@@ -8,41 +8,50 @@ use super::params::GameParams;
 use serde::Serialize;
 use std::sync::Arc;
 
+/// What [`evaluate`] measured of one offense: totals over its possessions and the
+/// statistics offenses are compared by.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EvalReport {
+    /// The offense's name (`simple` or `costmap`).
     pub offense: &'static str,
+    /// Possessions played.
     pub possessions: u64,
-    pub points: u64,
+    pub(crate) points: u64,
+    /// Mean points scored per possession: the paper's measure.
     pub points_per_possession: f64,
     /// Standard error of `points_per_possession`.
     pub standard_error: f64,
     /// Shots released or blocked.
     pub shots: u64,
+    /// Shots that went in.
     pub made: u64,
+    /// Shots a defender blocked.
     pub blocked: u64,
     /// Turnovers to a defender: steals off the dribble plus intercepted passes.
     pub stolen: u64,
-    pub intercepted: u64,
+    pub(crate) intercepted: u64,
+    /// Possessions that ran out the shot clock.
     pub shot_clock_violations: u64,
+    /// Passes thrown (caught or intercepted).
     pub passes: u64,
-    pub three_pointers: u64,
+    pub(crate) three_pointers: u64,
     /// Mean distance to the basket of the shots taken, m.
     pub mean_shot_distance_m: f64,
     /// Mean time from a possession's start to its outcome, s.
     pub mean_possession_s: f64,
-    pub ticks: u64,
+    pub(crate) ticks: u64,
     /// Every possession's outcome, in order: possession k of two reports began from the
     /// same positions with the same random draws, so they pair.
-    pub by_possession: Vec<Possession>,
+    pub(crate) by_possession: Vec<Possession>,
 }
 
 /// How one possession ended.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Possession {
-    pub points: u32,
-    pub outcome: Outcome,
+pub(crate) struct Possession {
+    pub(crate) points: u32,
+    pub(crate) outcome: Outcome,
     /// Distance to the basket of its shot, m, if it ended in one.
-    pub shot_m: Option<f64>,
+    pub(crate) shot_m: Option<f64>,
 }
 
 /// Plays `possessions` possessions with `params` (possession k starts from the same
@@ -143,11 +152,17 @@ pub fn evaluate(caps: Arc<Capabilities>, params: GameParams, possessions: u64) -
 /// z test (normal approximation, sound at thousands of possessions).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Comparison {
+    /// Mean of `a`'s points minus `b`'s, per possession.
     pub difference: f64,
+    /// Standard error of `difference`.
     pub standard_error: f64,
+    /// The 95 % confidence interval of `difference`, low then high.
     pub ci95: [f64; 2],
+    /// `difference` over its standard error (0 when that is 0).
     pub z: f64,
+    /// Two-sided p-value of `z`.
     pub p_two_sided: f64,
+    /// Possessions paired.
     pub possessions: usize,
 }
 

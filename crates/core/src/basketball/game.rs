@@ -61,6 +61,8 @@ pub(super) enum Ball {
     },
 }
 
+/// A game in progress: the court, the agents, the ball, the score and the random draws;
+/// [`Game::step`] plays it one tick on.
 pub struct Game {
     pub(super) caps: Arc<Capabilities>,
     pub(super) params: GameParams,
@@ -102,9 +104,12 @@ pub enum Order {
     MoveTo(DVec2),
     /// Pass to the teammate with this agent index.
     Pass {
+        /// The teammate's agent index (offense first, then defense).
         to: usize,
     },
+    /// Shoot from where the agent stands; it must have the ball.
     Shoot,
+    /// Stop the current move and stand.
     Stand,
 }
 
@@ -153,19 +158,19 @@ impl Game {
         game
     }
 
-    pub fn params(&self) -> &GameParams {
+    pub(crate) fn params(&self) -> &GameParams {
         &self.params
     }
 
-    pub fn agents(&self) -> &[Agent] {
+    pub(crate) fn agents(&self) -> &[Agent] {
         &self.agents
     }
 
-    pub fn tick(&self) -> u64 {
+    pub(crate) fn tick(&self) -> u64 {
         self.tick
     }
 
-    pub fn time_s(&self) -> f64 {
+    pub(crate) fn time_s(&self) -> f64 {
         self.tick as f64 / self.params.tick_hz
     }
 
@@ -174,6 +179,7 @@ impl Game {
         self.possession
     }
 
+    /// Points the offense has scored so far.
     pub fn score(&self) -> u32 {
         self.score
     }
@@ -194,7 +200,7 @@ impl Game {
         self.targets[k] = None;
     }
 
-    pub fn is_controlled(&self, k: usize) -> bool {
+    pub(crate) fn is_controlled(&self, k: usize) -> bool {
         self.controlled[k]
     }
 
@@ -553,7 +559,7 @@ impl Game {
     }
 
     /// The whole court now, as a client draws it.
-    pub fn snapshot(&self) -> Snapshot {
+    pub(crate) fn snapshot(&self) -> Snapshot {
         let now = self.time_s();
         let ball = match self.ball {
             Ball::Held { by } => {

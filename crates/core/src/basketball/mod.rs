@@ -25,13 +25,14 @@ pub mod params;
 pub mod safe;
 pub mod shot;
 
-pub use agent::{Action, Agent, Team};
+pub use agent::Action;
+pub(crate) use agent::Team;
 pub use brain::RUN_OFF_M;
 pub use capability::{Capabilities, DefenderMotion, Motion, Mover, Reach, StateMap, Stride};
 pub use court::Court;
 pub use decision::{Candidate, Chosen, Decision, DecisionParams, Keep, Opponent, Situation};
 pub use eval::{compare, evaluate, Comparison, EvalReport};
-pub use event::{Event, Outcome, Snapshot};
+pub use event::{Event, Outcome};
 pub use game::{Game, Order};
 pub use params::{Brain, DefenderModel, DefenderParams, GameParams, SimpleParams};
 pub use shot::ShotModel;

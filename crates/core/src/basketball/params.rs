@@ -22,6 +22,7 @@ pub enum Brain {
 }
 
 impl Brain {
+    /// The offense's name, as users write it and reports print it.
     pub fn name(self) -> &'static str {
         match self {
             Brain::Simple => "simple",
@@ -56,13 +57,19 @@ pub enum DefenderModel {
     Paper,
     /// No motion model: `reaction_s` + distance / `speed_m_s`, the same in every
     /// direction (a defender that turns for free).
-    Isotropic { reaction_s: f64, speed_m_s: f64 },
+    Isotropic {
+        /// Time before the defender sets off, s.
+        reaction_s: f64,
+        /// Its speed once moving, m/s.
+        speed_m_s: f64,
+    },
     /// No model at all: every square in range is safe (shoot from the best one), and
     /// the pass falls back to the `simple` offense's fixed radius.
     None,
 }
 
 impl DefenderModel {
+    /// The model's name, as users write it (`own`, `paper`, `isotropic`, `none`).
     pub fn name(self) -> &'static str {
         match self {
             DefenderModel::Own => "own",
@@ -103,6 +110,7 @@ pub struct DefenderParams {
     pub block_success: f64,
     /// Seconds between its steal attempts on the same dribbler.
     pub attempt_every_s: f64,
+    /// The behaviour it moves with.
     pub motion: DefenderMotion,
 }
 
@@ -136,16 +144,27 @@ impl Default for SimpleParams {
     }
 }
 
+/// A game's whole setting; the default is the paper's two offensive players against one
+/// defender, at 60 Hz, with the `costmap` offense.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct GameParams {
+    /// Ticks per second of game time, Hz.
     pub tick_hz: f64,
+    /// How the offense decides.
     pub offense: Brain,
+    /// Offensive players; the first starts each possession with the ball.
     pub offense_players: usize,
+    /// Defenders.
     pub defenders: usize,
+    /// The half court.
     pub court: Court,
+    /// Shot success against distance.
     pub shot: ShotModel,
+    /// T_s and ε of opponent modelling.
     pub decision: DecisionParams,
+    /// The defenders' reach and chances.
     pub defender: DefenderParams,
+    /// The `simple` offense's thresholds.
     pub simple: SimpleParams,
     /// The `costmap` offense passes when a defender can reach it within this, s (its
     /// passing radius, measured in the defender's time rather than metres).
@@ -153,14 +172,20 @@ pub struct GameParams {
     /// How the `costmap` offense models the defender when it picks a square to shoot
     /// from, and when it decides whether it is pressed.
     pub shot_model: DefenderModel,
+    /// How the `costmap` offense models the defender when it decides whether to pass
+    /// (see `shot_model`).
     pub pass_model: DefenderModel,
+    /// The shot clock each possession starts with, s (FIBA: 24).
     pub shot_clock_s: f64,
     /// How often agents decide, s.
     pub replan_s: f64,
+    /// Speed of a pass, m/s.
     pub pass_speed_m_s: f64,
     /// Speed of a shot toward the ring, m/s (only how long spectators see it fly: the
     /// outcome is settled at release).
     pub shot_speed_m_s: f64,
+    /// Seeds every random draw: the possessions' starts and their shots, steals and
+    /// blocks. The same seed gives the same game.
     pub seed: u64,
 }
 

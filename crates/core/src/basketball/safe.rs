@@ -22,8 +22,8 @@ use serde::Serialize;
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SafeSquares {
     #[serde(rename = "box")]
-    pub bounds: [usize; 4],
-    pub bits: String,
+    pub(crate) bounds: [usize; 4],
+    pub(crate) bits: String,
 }
 
 impl SafeSquares {

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+/// The chance a shot goes in against its distance to the basket: `scale_m / d`, capped.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ShotModel {
     /// Success at distance d is `scale_m / d`, metres: 1.5 gives 50 % from 3 m and 25 %

@@ -2,6 +2,7 @@
 //! times are known in closed form, and games that must end, repeat, and keep their
 //! positions finite.
 
+use super::event::Snapshot;
 use super::*;
 use crate::costmap::{AgentPose, BuildParams, CostMap, Grid, Method};
 use crate::fixtures;

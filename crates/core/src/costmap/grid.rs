@@ -9,9 +9,13 @@
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
+/// An n × n grid of square cells centred on the agent, in its frame: x ahead, z on its
+/// right, m.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Grid {
+    /// Side of the whole grid, m: a whole number of cells.
     pub size_m: f64,
+    /// Side of a cell, m.
     pub cell_m: f64,
     /// Cells along each side.
     pub n: usize,
@@ -28,6 +32,7 @@ impl Grid {
         }
     }
 
+    /// Cells in the grid: n².
     pub fn cells(&self) -> usize {
         self.n * self.n
     }
@@ -73,7 +78,9 @@ pub(crate) fn cell_index(rel: DVec2, n: usize) -> Option<usize> {
 /// An axis-aligned rectangle on the ground that no path may enter.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Obstacle {
+    /// The corner with the smallest x and z, m.
     pub min: DVec2,
+    /// The corner with the largest x and z, m.
     pub max: DVec2,
 }
 
@@ -86,7 +93,7 @@ impl Obstacle {
         }
     }
 
-    pub fn contains(&self, p: DVec2) -> bool {
+    pub(crate) fn contains(&self, p: DVec2) -> bool {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
     }
 }
@@ -99,7 +106,9 @@ pub(super) fn blocked(obstacles: &[Obstacle], p: DVec2) -> bool {
 /// Where an agent stands in the world and which way it faces (radians from +x toward +z).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct AgentPose {
+    /// Where it stands on the ground, (x, z), m.
     pub position: DVec2,
+    /// Which way it faces: radians from +x toward +z.
     pub heading: f64,
 }
 
@@ -108,10 +117,6 @@ impl AgentPose {
     /// a map embeds anywhere: without obstacles it is the same for every pose.
     pub fn to_local(&self, world: DVec2) -> DVec2 {
         (world - self.position).rotate(DVec2::from_angle(-self.heading))
-    }
-
-    pub fn to_world(&self, local: DVec2) -> DVec2 {
-        self.position + local.rotate(DVec2::from_angle(self.heading))
     }
 
     /// [`AgentPose::to_local`] with the rotation worked out once, for the many look-ups
@@ -133,12 +138,12 @@ pub struct LocalFrame {
 
 impl LocalFrame {
     #[inline]
-    pub fn to_local(&self, world: DVec2) -> DVec2 {
+    pub(crate) fn to_local(self, world: DVec2) -> DVec2 {
         (world - self.position).rotate(self.unrotate)
     }
 
-    /// A point of the agent's frame in the world: [`AgentPose::to_world`] without the
-    /// trigonometry.
+    /// A point of the agent's frame in the world: the inverse of [`AgentPose::to_local`],
+    /// without the trigonometry.
     #[inline]
     pub fn to_world(&self, local: DVec2) -> DVec2 {
         // Rotating back by the heading is rotating by the conjugate of `unrotate`.
@@ -181,7 +186,7 @@ mod tests {
             heading: 1.0,
         };
         let w = DVec2::new(-4.0, 7.5);
-        assert!((pose.to_world(pose.to_local(w)) - w).length() < 1e-12);
+        assert!((pose.frame().to_world(pose.to_local(w)) - w).length() < 1e-12);
         assert!((pose.frame().to_local(w) - pose.to_local(w)).length() < 1e-12);
         // One metre straight ahead of the agent is (1, 0) in its frame.
         let ahead = pose.position + DVec2::from_angle(1.0);

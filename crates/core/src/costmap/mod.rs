@@ -28,15 +28,23 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize, Serializer};
 use std::str::FromStr;
 
+/// How a cost map is built.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
+    /// The paper's: random walks on the motion graph, keeping the cheapest arrival in
+    /// each cell.
     Mc,
+    /// Systematic search of the graph's walks: backward over cost-to-go maps, topped up
+    /// near the start with random walks; forward where there are obstacles.
     Search,
+    /// The baseline: distance around obstacles at the behaviour's top speed, ignoring
+    /// how a body turns; it stores no paths.
     Grassfire,
 }
 
 impl Method {
+    /// The method's name, as users write it and maps record it.
     pub fn name(self) -> &'static str {
         match self {
             Method::Mc => "mc",
@@ -67,19 +75,25 @@ impl FromStr for Method {
 /// Everything that decides a map, besides the motion graph.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BuildParams {
+    /// How the map is built.
     pub method: Method,
+    /// The cells it covers, in the agent's frame.
     pub grid: Grid,
     /// Monte Carlo walks.
     pub iterations: u64,
     /// Longest walk or search horizon, in frames.
     pub depth: u32,
+    /// Seeds the random walks (Monte Carlo, and those `search` adds near the start).
     pub seed: u64,
+    /// How finely `search` tells states apart.
     #[serde(skip)]
     pub search: SearchParams,
+    /// If set, the graph's edges whose root moves faster than this (m/s) are left out.
     pub max_speed: Option<f64>,
     /// The start pose: a node of the graph; `None` picks the graph's default (running
     /// forward at a moderate speed).
     pub start_node: Option<u32>,
+    /// Rectangles no path may enter, in the agent's frame.
     pub obstacles: Vec<Obstacle>,
 }
 
@@ -147,8 +161,8 @@ fn near_walks(
 /// The Monte Carlo costs of a few fixed cells after a number of walks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ConvergencePoint {
-    pub iterations: u64,
-    pub costs: Vec<Option<u32>>,
+    pub(crate) iterations: u64,
+    pub(crate) costs: Vec<Option<u32>>,
 }
 
 /// Points (agent frame, metres) whose Monte Carlo cost is recorded against iterations.
@@ -165,15 +179,22 @@ pub(crate) struct BuildInput {
 /// (y up; see [`Grid`]).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct CostMap {
+    /// How it was built.
     pub method: Method,
+    /// The behaviour whose motion graph it is of.
     pub behaviour: String,
+    /// The cells it covers.
     pub grid: Grid,
+    /// Frames per second of the motion data: costs are in these frames.
     pub fps: f64,
+    /// The behaviour's top root speed over the graph's frames, m/s.
     pub top_speed_m_s: f64,
+    /// The graph node every path starts from (the start state).
     pub start_node: u32,
     /// The horizon: no path longer than this many frames was followed, so an
     /// unreachable cell costs at least this much.
     pub depth: u32,
+    /// The obstacles it was built around, in the agent's frame.
     pub obstacles: Vec<Obstacle>,
     /// Frames to reach each cell, row-major (row i along z, column j along x); `None`
     /// where no path reaches it.
@@ -321,6 +342,7 @@ impl CostMap {
                 .sum::<usize>()
     }
 
+    /// Cells some path reaches.
     pub fn reachable_cells(&self) -> usize {
         self.costs.iter().filter(|c| c.is_some()).count()
     }

@@ -263,7 +263,10 @@ fn a_map_embeds_at_any_pose() {
         DVec2::new(0.7, -5.1),
     ] {
         assert!(map.cost(local).is_some(), "{local} is within the map");
-        assert_eq!(map.cost_for(&pose, pose.to_world(local)), map.cost(local));
+        assert_eq!(
+            map.cost_for(&pose, pose.frame().to_world(local)),
+            map.cost(local)
+        );
     }
 }
 

@@ -12,9 +12,13 @@ use std::str::FromStr;
 /// `moving` (the most common running state), or a node id.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Start {
+    /// The graph's default: running forward at about half the top speed.
     Default,
+    /// The slowest node.
     Standing,
+    /// The most common running state.
     Moving,
+    /// This node of the graph.
     Node(u32),
 }
 
@@ -47,7 +51,10 @@ impl Start {
 /// A start state of a graph: its name and the node a map of it starts from.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, serde::Deserialize)]
 pub struct StartState {
+    /// What people call it: `standing`, or pace, direction and turn of the way the
+    /// data moves (`slow-forward-straight`).
     pub name: String,
+    /// The graph node a map of it starts from.
     pub node: u32,
 }
 
