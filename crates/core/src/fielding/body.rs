@@ -9,9 +9,11 @@ use std::str::FromStr;
 /// Physical limits of a fielder. `f64::INFINITY` means no limit.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Limits {
+    /// Top running speed, m/s.
     pub max_speed: f64,
+    /// Largest acceleration the fielder can achieve, m/s² (braking and turning included).
     pub max_accel: f64,
-    /// Time from the hit to the first step.
+    /// Time from the hit to the first step, s.
     pub reaction_s: f64,
 }
 
@@ -31,7 +33,8 @@ impl Limits {
         reaction_s: 0.0,
     };
 
-    pub fn is_limited(&self) -> bool {
+    /// Whether both speed and acceleration are finite.
+    pub(crate) fn is_limited(&self) -> bool {
         self.max_speed.is_finite() && self.max_accel.is_finite()
     }
 }
@@ -46,12 +49,15 @@ impl FromStr for Limits {
 /// Where a fielder is and how it moves.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Body {
+    /// Position on the ground, (x, z) in m.
     pub pos: DVec2,
+    /// Velocity on the ground, (x, z) in m/s.
     pub vel: DVec2,
 }
 
 impl Body {
-    pub fn at_rest(pos: DVec2) -> Body {
+    /// A body standing still at `pos`.
+    pub(crate) fn at_rest(pos: DVec2) -> Body {
         Body {
             pos,
             vel: DVec2::ZERO,

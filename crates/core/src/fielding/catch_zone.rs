@@ -7,9 +7,11 @@ use serde::Serialize;
 /// The region around a fielder in which a descending ball is caught.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct CatchZone {
-    /// Horizontal reach from the fielder's centre.
+    /// Horizontal reach from the fielder's centre, m.
     pub reach_m: f64,
+    /// Lowest height above the ground at which a ball is caught, m.
     pub min_height_m: f64,
+    /// Highest height above the ground at which a ball is caught, m.
     pub max_height_m: f64,
 }
 
@@ -26,16 +28,18 @@ impl Default for CatchZone {
 
 /// One tick's worth of relative motion, ball and fielder both moving linearly inside it.
 #[derive(Debug, Clone, Copy)]
-pub struct Pass {
-    pub closest_m: f64,
+pub(crate) struct Pass {
+    /// Closest horizontal distance between ball and fielder while the ball is in the
+    /// height band, m.
+    pub(crate) closest_m: f64,
     /// Fraction of the tick at which the ball first comes within reach, if it does.
-    pub caught_s: Option<f64>,
+    pub(crate) caught_s: Option<f64>,
 }
 
 impl CatchZone {
     /// Examines the tick from (ball0, fielder0) to (ball1, fielder1). Returns `None` when
     /// the ball is not descending through the height band during the tick.
-    pub fn pass(
+    pub(crate) fn pass(
         &self,
         ball0: DVec3,
         ball1: DVec3,

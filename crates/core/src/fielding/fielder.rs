@@ -12,7 +12,9 @@ use rand_chacha::ChaCha8Rng;
 /// Everything about a fielder except where it stands and how it decides.
 #[derive(Debug, Clone, Copy)]
 pub struct FielderConfig {
+    /// How fast the body can run, accelerate and react.
     pub limits: Limits,
+    /// The eye: its height, delay and noise.
     pub perception: PerceptionConfig,
     /// Seeds the perceptual noise; irrelevant when noise is off.
     pub noise_seed: u64,
@@ -37,9 +39,11 @@ pub struct Step {
     pub accel: DVec2,
 }
 
+/// One fielder: its body, its strategy's memory, its perception history and the noise
+/// that blurs what it sees.
 #[derive(Debug, Clone)]
-pub struct Fielder {
-    pub body: Body,
+pub(crate) struct Fielder {
+    pub(crate) body: Body,
     brain: Brain,
     history: PerceptionHistory,
     noise: ChaCha8Rng,
@@ -50,7 +54,7 @@ pub struct Fielder {
 
 impl Fielder {
     /// A fielder at rest at `start`; `forecast` is consulted only by `predictive`.
-    pub fn new(
+    pub(crate) fn new(
         strategy: StrategyKind,
         start: DVec2,
         home: DVec2,
@@ -70,7 +74,7 @@ impl Fielder {
 
     /// Looks at the ball (at `ball` at time `t`), decides, and moves for `dt`. Before its
     /// reaction time a fielder watches but does not move.
-    pub fn step(&mut self, t: f64, ball: DVec3, dt: f64) -> Step {
+    pub(crate) fn step(&mut self, t: f64, ball: DVec3, dt: f64) -> Step {
         let (limits, perception) = (&self.config.limits, &self.config.perception);
         let sighting = Sighting::of(t, ball, self.body.pos, perception.eye_height_m);
         self.history

@@ -12,9 +12,10 @@ mod sweep;
 mod trial;
 
 pub use body::{Body, Limits};
-pub use catch_zone::{CatchZone, Pass};
-pub use fielder::{Fielder, FielderConfig, Step};
-pub use path_shape::{OpticalFit, PathShape};
+pub use catch_zone::CatchZone;
+pub(crate) use fielder::Fielder;
+pub use fielder::{FielderConfig, Step};
+pub(crate) use path_shape::{OpticalFit, PathShape};
 pub use strategy::{Brain, Forecast, StrategyKind};
 pub use sweep::{LaunchDistribution, StrategySummary, Sweep, SweepCase, SweepReport};
 pub use trial::{forecast, Outcome, TraceEntry, Trial, TrialConfig, TrialResult};

@@ -14,14 +14,16 @@ use serde::Serialize;
 /// deviation is under 2 % of the chord (or 0.25 m) counts as straight.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum PathShape {
+pub(crate) enum PathShape {
     Straight,
     ConvexTowardHome,
     ConcaveAwayFromHome,
 }
 
 impl PathShape {
-    pub fn of(path: &[DVec2], home: DVec2) -> PathShape {
+    /// The shape of `path` (the fielder's positions on the ground) with home plate at
+    /// `home`.
+    pub(crate) fn of(path: &[DVec2], home: DVec2) -> PathShape {
         let (Some(&start), Some(&end)) = (path.first(), path.last()) else {
             return PathShape::Straight;
         };
@@ -62,7 +64,7 @@ impl PathShape {
 ///   on a plane facing home plate — lies along their principal axis, λ_max/(λ_max+λ_min).
 ///   An image that rises along a straight line (LOT) gives 1.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct OpticalFit {
+pub(crate) struct OpticalFit {
     n: f64,
     t: Moments,
     tan_psi: Moments,
@@ -86,7 +88,10 @@ impl Moments {
 }
 
 impl OpticalFit {
-    pub fn add(&mut self, t: f64, ball: DVec3, fielder: DVec2, home: DVec2, eye: f64) {
+    /// Adds the sighting at time `t` of the ball at `ball` from a fielder at `fielder`
+    /// with its eye `eye` m up, facing home plate at `home`; a sighting the measures
+    /// should not count (see `counts_optically`) is skipped.
+    pub(crate) fn add(&mut self, t: f64, ball: DVec3, fielder: DVec2, home: DVec2, eye: f64) {
         if !counts_optically(ball, fielder, eye) {
             return;
         }
@@ -114,7 +119,7 @@ impl OpticalFit {
     }
 
     /// `None` with fewer than three samples.
-    pub fn tan_psi_r2(&self) -> Option<f64> {
+    pub(crate) fn tan_psi_r2(&self) -> Option<f64> {
         if self.n < 3.0 {
             return None;
         }
@@ -128,7 +133,8 @@ impl OpticalFit {
         })
     }
 
-    pub fn image_r2(&self) -> Option<f64> {
+    /// `None` with fewer than three samples.
+    pub(crate) fn image_r2(&self) -> Option<f64> {
         if self.n < 3.0 {
             return None;
         }

@@ -21,12 +21,18 @@ const MAX_FLIGHT_S: f64 = 20.0;
 /// uniformly random direction.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct LaunchDistribution {
-    pub speed_m_s: (f64, f64),
-    pub elevation_deg: (f64, f64),
-    pub azimuth_deg: (f64, f64),
-    pub spin_rpm: (f64, f64),
-    pub launch_height_m: f64,
-    pub fielder_distance_m: (f64, f64),
+    /// Launch speed range, m/s.
+    pub(crate) speed_m_s: (f64, f64),
+    /// Elevation range, degrees above the horizontal.
+    pub(crate) elevation_deg: (f64, f64),
+    /// Azimuth range, degrees from +x toward +z.
+    pub(crate) azimuth_deg: (f64, f64),
+    /// Backspin range, rpm.
+    pub(crate) spin_rpm: (f64, f64),
+    /// Height every ball leaves the bat at, m.
+    pub(crate) launch_height_m: f64,
+    /// Range of the fielder's start distance from the landing point, m.
+    pub(crate) fielder_distance_m: (f64, f64),
 }
 
 impl Default for LaunchDistribution {
@@ -45,50 +51,77 @@ impl Default for LaunchDistribution {
 /// One launch of a sweep with the fielder's start.
 #[derive(Debug, Clone)]
 pub struct SweepCase {
+    /// The ball's launch.
     pub launch: Launch,
+    /// Where the fielder starts, (x, z) in m.
     pub start: DVec2,
+    /// The launch flown to the ground.
     pub flight: Flight,
 }
 
 /// The physical setting shared by all launches of a sweep.
 #[derive(Debug, Clone, Copy)]
 pub struct Sweep {
+    /// The ball flown.
     pub ball: BallSpec,
+    /// The forces on it besides gravity.
     pub air: AirModel,
+    /// Air density, kg/m³.
     pub air_density: f64,
+    /// The tick, s.
     pub dt: f64,
+    /// The fielder and catch zone of every trial.
     pub trial: TrialConfig,
 }
 
 /// What one strategy did over a whole sweep.
 #[derive(Debug, Clone, Serialize)]
 pub struct StrategySummary {
+    /// The strategy summarised.
     pub strategy: StrategyKind,
-    pub trials: usize,
-    pub caught: usize,
+    /// Trials run: one per case.
+    pub(crate) trials: usize,
+    /// Trials that ended in a catch.
+    pub(crate) caught: usize,
+    /// `caught / trials` (0 without trials).
     pub catch_rate: f64,
     /// Balls the `predictive` fielder caught, and this strategy's share of them.
     pub catchable: usize,
-    pub caught_catchable: usize,
+    pub(crate) caught_catchable: usize,
+    /// `caught_catchable / catchable` (0 when no ball was catchable).
     pub catchable_rate: f64,
+    /// Mean over trials of each trial's peak acceleration, m/s².
     pub mean_peak_accel: f64,
+    /// Largest peak acceleration of any trial, m/s².
     pub max_peak_accel: f64,
+    /// Mean over trials of each trial's time-averaged |a|, m/s².
     pub mean_accel: f64,
+    /// Mean over trials of each trial's peak speed, m/s.
     pub mean_peak_speed: f64,
+    /// Largest peak speed of any trial, m/s.
     pub max_peak_speed: f64,
+    /// Share of trials whose path was straight (see `PathShape`).
     pub share_straight: f64,
+    /// Share of trials whose path bulged toward home plate.
     pub share_convex_toward_home: f64,
+    /// Share of trials whose path bulged away from home plate.
     pub share_concave_away_from_home: f64,
     /// Medians over trials of the optical straightness measures (see `OpticalFit`).
     pub median_tan_psi_r2: f64,
+    /// See `median_tan_psi_r2`: the image path's straightness.
     pub median_image_r2: f64,
 }
 
+/// A sweep's result: every strategy's summary over the same cases.
 #[derive(Debug, Clone, Serialize)]
 pub struct SweepReport {
+    /// Cases (launches) in the sweep.
     pub n: usize,
+    /// The seed the cases were drawn with.
     pub seed: u64,
-    pub distribution: LaunchDistribution,
+    /// What the cases were drawn from.
+    pub(crate) distribution: LaunchDistribution,
+    /// One summary per strategy, in the order asked for.
     pub strategies: Vec<StrategySummary>,
 }
 
@@ -140,6 +173,7 @@ impl Sweep {
             .collect()
     }
 
+    /// The free flight of `launch` in this sweep's ball and air, sampled every `dt`.
     pub fn fly(&self, launch: &Launch) -> Flight {
         let air = launch.air(self.air, self.air_density, &self.ball);
         Flight::simulate(launch.initial_state(), &air, self.dt, MAX_FLIGHT_S)

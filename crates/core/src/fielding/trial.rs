@@ -10,7 +10,9 @@ use serde::Serialize;
 /// Everything about a trial except the ball and the fielder's start.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct TrialConfig {
+    /// The fielder's limits and senses.
     pub fielder: FielderConfig,
+    /// Where around the fielder a ball is caught.
     pub zone: CatchZone,
     /// Keep one [`TraceEntry`] a tick (costs an allocation; sweeps leave it off).
     pub record_trace: bool,
@@ -19,45 +21,63 @@ pub struct TrialConfig {
 /// How a trial ended.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Outcome {
+    /// Whether the fielder caught the ball.
     pub caught: bool,
-    /// When the ball was caught, or when it reached the ground.
+    /// When the ball was caught, or when it reached the ground, s.
     pub time_s: f64,
-    /// Closest horizontal approach while the ball descended through the catch band.
+    /// Closest horizontal approach while the ball descended through the catch band, m.
     pub miss_distance_m: f64,
-    /// Where the ball's free flight first reaches y = 0, even if it was caught before.
+    /// Where the ball's free flight first reaches y = 0, (x, z) in m, even if it was
+    /// caught before.
     pub ball_landing: [f64; 2],
 }
 
 /// The state of one tick, as `fieldhouse catch --json` prints it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct TraceEntry {
+    /// Time since the launch, s.
     pub t: f64,
+    /// The ball, (x, y, z) in m.
     pub ball: [f64; 3],
+    /// The fielder on the ground, (x, z) in m.
     pub fielder: [f64; 2],
+    /// tan ψ of the ball as the eye really saw it (before noise).
     pub tan_psi: f64,
-    pub alpha: f64,
-    /// The acceleration achieved over the tick that starts here.
+    /// Bearing α of the ball, rad from +x toward +z, before noise.
+    pub(crate) alpha: f64,
+    /// The acceleration achieved over the tick that starts here, m/s².
     pub accel: [f64; 2],
 }
 
+/// What one trial measured.
 #[derive(Debug, Clone)]
 pub struct TrialResult {
+    /// The fielder's strategy.
     pub strategy: StrategyKind,
+    /// Caught or not, when, and how close.
     pub outcome: Outcome,
+    /// Largest acceleration achieved in any tick, m/s².
     pub peak_accel: f64,
+    /// Largest speed reached, m/s.
     pub peak_speed: f64,
-    /// Time-average of |a| from the first step to the end.
+    /// Time-average of |a| from the first step to the end, m/s².
     pub mean_accel: f64,
+    /// Distance the fielder ran, m.
     pub path_length_m: f64,
     /// The fielder's position every tick.
     pub path: Vec<DVec2>,
-    pub optical: OpticalFit,
+    /// The straightness measures of what the fielder saw.
+    pub(crate) optical: OpticalFit,
+    /// One entry a tick when the config records a trace, else empty.
     pub trace: Vec<TraceEntry>,
 }
 
 /// A fielder of one strategy against one precomputed flight.
 pub struct Trial<'a> {
+    /// The ball's flight, sampled every tick; the ground under its first
+    /// sample is home plate.
     pub flight: &'a Flight,
+    /// The fielder and catch zone.
     pub config: &'a TrialConfig,
 }
 
@@ -79,6 +99,8 @@ impl Trial<'_> {
         forecast(self.flight, &self.config.zone)
     }
 
+    /// Runs a fielder of `strategy` from `start` ((x, z), m) until it catches the ball or
+    /// the flight ends.
     pub fn run(&self, strategy: StrategyKind, start: DVec2) -> TrialResult {
         let (flight, cfg) = (self.flight, self.config);
         let dt = flight.dt;

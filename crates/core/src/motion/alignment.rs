@@ -1,39 +1,12 @@
-//! The ground alignment of two weighted point clouds (Kovar, Gleicher & Pighin 2002): the
-//! rotation about the vertical axis and the translation on the ground that best map one
-//! onto the other, in closed form.
+//! The ground alignment of two weighted point clouds (Kovar, Gleicher & Pighin 2002): how
+//! far apart they are after the rotation about the vertical axis and the translation on
+//! the ground that best map one onto the other, in closed form. Transitions need only
+//! that distance; the tests recover the transform itself and check the two agree.
 
-use glam::{DVec2, DVec3};
-
-/// A rigid motion of the ground: rotate by `theta` about +y, then translate by `offset`
-/// (x, z). It maps (x, z) to (x·cos θ + z·sin θ + x₀, −x·sin θ + z·cos θ + z₀): the
-/// rotation is by θ about +y in a right-handed, y-up frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GroundTransform {
-    pub theta: f64,
-    pub offset: DVec2,
-}
-
-impl GroundTransform {
-    pub const IDENTITY: GroundTransform = GroundTransform {
-        theta: 0.0,
-        offset: DVec2::ZERO,
-    };
-
-    pub fn apply(&self, p: DVec3) -> DVec3 {
-        let (sin, cos) = self.theta.sin_cos();
-        DVec3::new(
-            p.x * cos + p.z * sin + self.offset.x,
-            p.y,
-            -p.x * sin + p.z * cos + self.offset.y,
-        )
-    }
-}
-
-/// Weighted sums over pairs of points (p, p′) that the closed form needs. Accumulate
-/// with [`Moments::add`]; the same sums also give the aligned distance without a second
-/// pass over the points.
+/// Weighted sums over pairs of points (p, p′) that the closed form needs. The same sums
+/// give the aligned distance without a second pass over the points.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Moments {
+pub(crate) struct Moments {
     w: f64,
     x: f64,
     z: f64,
@@ -49,25 +22,10 @@ pub struct Moments {
 }
 
 impl Moments {
-    /// Adds the pair (p, p′) with weight w; p′ is the cloud to be moved onto p.
-    #[inline]
-    pub fn add(&mut self, w: f64, p: DVec3, q: DVec3) {
-        self.w += w;
-        self.x += w * p.x;
-        self.z += w * p.z;
-        self.x2 += w * q.x;
-        self.z2 += w * q.z;
-        self.dot += w * (p.x * q.x + p.z * q.z);
-        self.cross += w * (p.x * q.z - q.x * p.z);
-        self.norm += w * p.length_squared();
-        self.norm2 += w * q.length_squared();
-        self.yy += w * p.y * q.y;
-    }
-
     /// Moments from sums computed elsewhere (unit weights, `w` points): Σx, Σz, Σ|p|² of
     /// each cloud and the cross sums Σ(x x′ + z z′), Σ(x z′ − x′ z), Σ y y′. Lets a caller
     /// that compares many windows reuse per-frame sums instead of revisiting points.
-    pub fn from_sums(w: f64, p: [f64; 3], q: [f64; 3], cross: [f64; 3]) -> Moments {
+    pub(crate) fn from_sums(w: f64, p: [f64; 3], q: [f64; 3], cross: [f64; 3]) -> Moments {
         Moments {
             w,
             x: p[0],
@@ -82,21 +40,6 @@ impl Moments {
         }
     }
 
-    /// The transform that best maps the p′ cloud onto the p cloud (least weighted squares).
-    pub fn alignment(&self) -> GroundTransform {
-        let w = self.w;
-        let theta = (self.cross - (self.x * self.z2 - self.x2 * self.z) / w)
-            .atan2(self.dot - (self.x * self.x2 + self.z * self.z2) / w);
-        let (sin, cos) = theta.sin_cos();
-        GroundTransform {
-            theta,
-            offset: DVec2::new(
-                (self.x - self.x2 * cos - self.z2 * sin) / w,
-                (self.z + self.x2 * sin - self.z2 * cos) / w,
-            ),
-        }
-    }
-
     /// Σw·|p − T(p′)|² for the best alignment T, from the sums alone, without finding T.
     ///
     /// With both clouds centred on the ground (the best offset brings their weighted
@@ -104,7 +47,7 @@ impl Moments {
     /// Σw p̄·Rp̄′ = cos θ·a + sin θ·b + Σw y y′ with a, b the centred cross sums below:
     /// at its best θ that is √(a² + b²) + Σw y y′. No angle is needed, which matters when
     /// every pair of windows of a behaviour is compared.
-    pub fn aligned_distance(&self) -> f64 {
+    pub(crate) fn aligned_distance(&self) -> f64 {
         let w = self.w;
         let a = self.dot - (self.x * self.x2 + self.z * self.z2) / w;
         let b = self.cross - (self.x * self.z2 - self.x2 * self.z) / w;
@@ -117,8 +60,66 @@ impl Moments {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::{DVec2, DVec3};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    // The transform itself: the oracle the aligned distance is checked against (the
+    // library needs only the distance).
+
+    /// A rigid motion of the ground: rotate by `theta` about +y, then translate by
+    /// `offset` (x, z). It maps (x, z) to (x·cos θ + z·sin θ + x₀, −x·sin θ + z·cos θ + z₀): the
+    /// rotation is by θ about +y in a right-handed, y-up frame.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    struct GroundTransform {
+        /// The rotation about +y, rad.
+        theta: f64,
+        /// The translation on the ground, (x, z) in m.
+        offset: DVec2,
+    }
+
+    impl GroundTransform {
+        fn apply(&self, p: DVec3) -> DVec3 {
+            let (sin, cos) = self.theta.sin_cos();
+            DVec3::new(
+                p.x * cos + p.z * sin + self.offset.x,
+                p.y,
+                -p.x * sin + p.z * cos + self.offset.y,
+            )
+        }
+    }
+
+    impl Moments {
+        /// Adds the pair (p, p′) with weight w; p′ is the cloud to be moved onto p.
+        fn add(&mut self, w: f64, p: DVec3, q: DVec3) {
+            self.w += w;
+            self.x += w * p.x;
+            self.z += w * p.z;
+            self.x2 += w * q.x;
+            self.z2 += w * q.z;
+            self.dot += w * (p.x * q.x + p.z * q.z);
+            self.cross += w * (p.x * q.z - q.x * p.z);
+            self.norm += w * p.length_squared();
+            self.norm2 += w * q.length_squared();
+            self.yy += w * p.y * q.y;
+        }
+
+        /// The transform that best maps the p′ cloud onto the p cloud (least weighted
+        /// squares).
+        fn alignment(&self) -> GroundTransform {
+            let w = self.w;
+            let theta = (self.cross - (self.x * self.z2 - self.x2 * self.z) / w)
+                .atan2(self.dot - (self.x * self.x2 + self.z * self.z2) / w);
+            let (sin, cos) = theta.sin_cos();
+            GroundTransform {
+                theta,
+                offset: DVec2::new(
+                    (self.x - self.x2 * cos - self.z2 * sin) / w,
+                    (self.z + self.x2 * sin - self.z2 * cos) / w,
+                ),
+            }
+        }
+    }
 
     fn cloud(rng: &mut ChaCha8Rng, n: usize) -> Vec<(f64, DVec3)> {
         (0..n)

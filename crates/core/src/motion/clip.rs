@@ -6,11 +6,13 @@ use thiserror::Error;
 
 /// The joints a clip must have: the root (first joint) and the two hip joints, whose
 /// left-to-right axis gives the direction the body faces.
-pub const LEFT_HIP: &str = "LeftUpLeg";
-pub const RIGHT_HIP: &str = "RightUpLeg";
+pub(crate) const LEFT_HIP: &str = "LeftUpLeg";
+/// The right hip joint (see [`LEFT_HIP`]).
+pub(crate) const RIGHT_HIP: &str = "RightUpLeg";
 
+/// Why joint positions do not make a clip.
 #[derive(Debug, Clone, PartialEq, Error)]
-pub enum ClipError {
+pub(crate) enum ClipError {
     #[error("clip {clip}: no joint named {joint} (needed to tell which way the body faces)")]
     MissingJoint { clip: String, joint: &'static str },
     #[error(
@@ -32,8 +34,10 @@ pub struct Clip {
     pub name: String,
     /// The behaviour the clip shows: the folder it came from, e.g. `run`.
     pub behaviour: String,
-    pub fps: f64,
-    pub joint_names: Vec<String>,
+    /// Frames per second.
+    pub(crate) fps: f64,
+    /// Joint names, in the order of each frame's positions.
+    pub(crate) joint_names: Vec<String>,
     /// Global joint positions, frame-major: `positions[f * joints + j]`. Joint 0 is the root.
     positions: Vec<DVec3>,
     /// Heading of the body per frame: angle of its forward direction on the ground,
@@ -42,7 +46,9 @@ pub struct Clip {
 }
 
 impl Clip {
-    pub fn new(
+    /// A clip from frame-major global joint positions (m, y up); fails when there are
+    /// no frames, the positions are not whole frames, or a hip joint is missing.
+    pub(crate) fn new(
         name: impl Into<String>,
         behaviour: impl Into<String>,
         fps: f64,
@@ -92,10 +98,11 @@ impl Clip {
         })
     }
 
-    pub fn joint_count(&self) -> usize {
+    pub(crate) fn joint_count(&self) -> usize {
         self.joint_names.len()
     }
 
+    /// Frames in the clip.
     pub fn frame_count(&self) -> usize {
         self.positions.len() / self.joint_count()
     }
@@ -112,7 +119,8 @@ impl Clip {
         DVec2::new(p.x, p.z)
     }
 
-    pub fn heading(&self, f: usize) -> f64 {
+    /// Heading of frame `f`: rad from +x toward +z.
+    pub(crate) fn heading(&self, f: usize) -> f64 {
         self.headings[f]
     }
 
@@ -124,10 +132,6 @@ impl Clip {
             headings: self.headings[..frames].to_vec(),
             ..self.clone()
         }
-    }
-
-    pub fn duration_s(&self) -> f64 {
-        self.frame_count() as f64 / self.fps
     }
 }
 

@@ -42,19 +42,34 @@ impl Default for GraphParams {
     }
 }
 
+/// Why a motion graph could not be built.
 #[derive(Debug, Error)]
 pub enum GraphError {
+    /// No clip shows the behaviour asked for.
     #[error("no clips of behaviour \"{behaviour}\"")]
-    NoClips { behaviour: String },
+    NoClips {
+        /// The behaviour asked for.
+        behaviour: String,
+    },
+    /// Every clip is shorter than the frames a transition compares.
     #[error("behaviour \"{behaviour}\": clips are too short for a {window}-frame window")]
-    TooShort { behaviour: String, window: usize },
+    TooShort {
+        /// The behaviour asked for.
+        behaviour: String,
+        /// The window, frames.
+        window: usize,
+    },
 }
 
+/// An edge of the graph: play from node `from` to node `to`, moving the root by `step`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Edge {
+    /// The node the edge leaves.
     pub from: u32,
+    /// The node the edge enters.
     pub to: u32,
-    pub step: RootStep,
+    /// The root's motion over the edge, in the body's frame at `from`.
+    pub(crate) step: RootStep,
     /// Frames the edge takes to play; 1 for the edges of a graph built from clips.
     pub frames: u32,
     /// A cut between (or within) clips rather than the clip's own next frame.
@@ -64,9 +79,13 @@ pub struct Edge {
 /// Counts a user checks a graph by.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct GraphStats {
+    /// Frames of all the clips: the nodes before pruning.
     pub frames: usize,
+    /// Clips the graph was built from.
     pub clips: usize,
+    /// Transitions found under the threshold.
     pub transitions_before_pruning: usize,
+    /// Transitions left in the largest strongly connected component.
     pub transitions_after_pruning: usize,
     /// Nodes in the largest strongly connected component: the nodes kept.
     pub largest_scc: usize,
@@ -77,17 +96,22 @@ pub struct GraphStats {
     /// The roughest kept transition and the 95th percentile of them: RMS joint distance
     /// after alignment, m (0 when no transition is kept).
     pub transition_worst_m: f64,
+    /// See `transition_worst_m`: the 95th percentile, m.
     pub transition_p95_m: f64,
 }
 
 /// How much of one clip the graph kept, and how it is joined to the rest.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ClipCoverage {
+    /// The clip's name.
     pub name: String,
+    /// Frames the clip offered the graph.
     pub frames: usize,
+    /// Of those, frames kept in the largest strongly connected component.
     pub kept: usize,
     /// Kept transitions into and out of the clip's frames (from any clip, itself included).
     pub transitions_in: usize,
+    /// See `transitions_in`: the ones leaving the clip.
     pub transitions_out: usize,
     /// The smallest distance of any transition (found at the loosest threshold tried)
     /// between this clip and another, m: what a threshold must allow to join it at all.
@@ -108,11 +132,18 @@ pub struct Constraints {
     pub max_speed: Option<f64>,
 }
 
+/// The motion graph of one behaviour (Kovar et al. 2002): every kept frame a node, the
+/// clips' own next frames and the transitions between similar frames as edges, pruned to
+/// the largest strongly connected component.
 #[derive(Debug, Clone)]
 pub struct MotionGraph {
+    /// The behaviour its clips show, e.g. `run`.
     pub behaviour: String,
+    /// Frames per second: each edge plays in `frames / fps` s.
     pub fps: f64,
+    /// The window and threshold it was built with.
     pub params: GraphParams,
+    /// Its clips' names; [`Node::clip`] indexes this.
     pub clip_names: Vec<String>,
     /// Per clip, in the order of `clip_names`: frames kept and transitions.
     pub coverage: Vec<ClipCoverage>,
@@ -126,6 +157,7 @@ pub struct MotionGraph {
     /// origin, facing +x), for playback.
     poses: Vec<DVec3>,
     joints: usize,
+    /// The counts a user checks the graph by.
     pub stats: GraphStats,
 }
 
@@ -325,6 +357,7 @@ impl MotionGraph {
         })
     }
 
+    /// Nodes kept: node ids run from 0 to this, exclusive.
     pub fn node_count(&self) -> usize {
         self.nodes.len()
     }

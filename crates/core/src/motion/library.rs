@@ -11,11 +11,19 @@ use thiserror::Error;
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum MotionSource {
     /// The CMU motion capture compiled into the binary (the repository's `data/mocap`).
-    Embedded { clips: usize, fingerprint: String },
+    Embedded {
+        /// Clips loaded.
+        clips: usize,
+        /// See [`MotionSource::fingerprint`].
+        fingerprint: String,
+    },
     /// A user's own BVH capture, read from `dir`.
     Directory {
+        /// The directory given (`--mocap DIR`).
         dir: PathBuf,
+        /// Clips loaded.
         clips: usize,
+        /// See [`MotionSource::fingerprint`].
         fingerprint: String,
     },
 }
@@ -69,29 +77,39 @@ impl fmt::Display for MotionSource {
 #[derive(Debug, Clone, PartialEq, Error)]
 #[error("{}{}: {message}", file.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
 pub struct LoadProblem {
-    pub file: PathBuf,
+    /// The file (or behaviour folder) that could not be read or parsed.
+    pub(crate) file: PathBuf,
     /// 1-based line of the problem, where there is one.
     pub line: Option<usize>,
-    pub message: String,
+    /// What is wrong with it.
+    pub(crate) message: String,
 }
 
+/// Why a motion directory gave no library.
 #[derive(Debug, Error)]
 pub enum LibraryError {
     /// The chain printed with `{:#}` adds the OS error once, after this message.
     #[error("cannot read motion directory {}", dir.display())]
     Unreadable {
+        /// The directory given.
         dir: PathBuf,
+        /// The OS error.
         source: std::io::Error,
     },
+    /// Not one clip loaded.
     #[error("no BVH clip could be loaded from {} (looked for DIR/<behaviour>/*.bvh)", dir.display())]
     Empty {
+        /// The directory given.
         dir: PathBuf,
+        /// Why each file failed.
         problems: Vec<LoadProblem>,
     },
 }
 
+/// Every clip of a motion source, labelled by behaviour.
 #[derive(Debug, Clone)]
 pub struct MotionLibrary {
+    /// Where the clips came from.
     pub source: MotionSource,
     /// Clips sorted by behaviour, then name, so everything built from them is
     /// deterministic whatever order the file system lists them in.
@@ -134,6 +152,7 @@ impl MotionLibrary {
             .collect()
     }
 
+    /// The clips of `behaviour`, whole (jumps included).
     pub fn clips_of<'a>(&'a self, behaviour: &'a str) -> impl Iterator<Item = &'a Clip> + 'a {
         self.clips.iter().filter(move |c| c.behaviour == behaviour)
     }

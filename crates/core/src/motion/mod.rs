@@ -24,8 +24,11 @@ mod step;
 mod transitions;
 mod walker;
 
-pub use alignment::{GroundTransform, Moments};
-pub use clip::{Clip, ClipError, LEFT_HIP, RIGHT_HIP};
+pub use clip::Clip;
+pub(crate) use clip::ClipError;
+// The hip joints' names, for the synthetic clips of the fixtures.
+#[cfg(any(test, feature = "fixtures"))]
+pub(crate) use clip::{LEFT_HIP, RIGHT_HIP};
 pub use graph::{
     ClipCoverage, Constraints, Edge, GraphError, GraphParams, GraphStats, MotionGraph,
     AUTO_THRESHOLDS_M, AUTO_WINDOWS,
@@ -35,7 +38,6 @@ pub use library::{LibraryError, LoadProblem, MotionLibrary, MotionSource};
 pub use loader::parse_clip;
 pub use playback::PlaybackFrame;
 pub use step::{wrap_angle, Node, RootStep};
-pub use transitions::Transition;
 pub use walker::Walker;
 
 /// The frame rate everything downstream works at: the paper plays motion at 30 fps.

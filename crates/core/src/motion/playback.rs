@@ -8,8 +8,10 @@ use glam::{DVec2, DVec3};
 /// One frame of playback.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlaybackFrame {
-    pub node: u32,
-    pub root: DVec2,
+    /// The graph node being played.
+    pub(crate) node: u32,
+    /// The root on the ground, (x, z) in m.
+    pub(crate) root: DVec2,
     /// Radians from +x toward +z.
     pub heading: f64,
     /// Joint positions in world coordinates (root on the ground at `root`).

@@ -11,9 +11,12 @@ use serde::Serialize;
 /// toward +z (a right turn).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct RootStep {
-    pub dx: f64,
-    pub dz: f64,
-    pub dheading: f64,
+    /// Forward, m.
+    pub(crate) dx: f64,
+    /// Sideways toward the body's right (+z), m.
+    pub(crate) dz: f64,
+    /// Turn, rad, positive toward +z.
+    pub(crate) dheading: f64,
 }
 
 impl RootStep {
@@ -49,7 +52,9 @@ pub fn wrap_angle(a: f64) -> f64 {
 /// within a stride does not count as turning.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Node {
+    /// The clip, an index into the graph's clip names.
     pub clip: usize,
+    /// The frame of that clip.
     pub frame: usize,
     /// Root speed along the body's heading, m/s (negative when backing up).
     pub forward_speed: f64,

@@ -6,13 +6,13 @@ use super::Clip;
 
 /// A candidate cut: after frame `from` of clip `from_clip`, play frame `to` of `to_clip`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Transition {
-    pub from_clip: usize,
-    pub from: usize,
-    pub to_clip: usize,
-    pub to: usize,
+pub(crate) struct Transition {
+    pub(crate) from_clip: usize,
+    pub(crate) from: usize,
+    pub(crate) to_clip: usize,
+    pub(crate) to: usize,
     /// RMS joint distance over the window after alignment, in metres.
-    pub rms_m: f64,
+    pub(crate) rms_m: f64,
 }
 
 /// Finds every transition between (and within) `clips` whose windowed distance is a

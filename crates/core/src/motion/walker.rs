@@ -7,8 +7,10 @@ use glam::DVec2;
 /// Root position and facing (a unit vector, so a step costs no trigonometry).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Walker {
-    pub position: DVec2,
-    pub facing: DVec2,
+    /// Root position on the ground, (x, z) in m.
+    pub(crate) position: DVec2,
+    /// Unit vector of the way it faces, (x, z).
+    pub(crate) facing: DVec2,
 }
 
 impl Walker {

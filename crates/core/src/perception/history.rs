@@ -16,8 +16,10 @@ pub struct PerceptionHistory {
 /// What a strategy sees on one tick: the (possibly delayed) sighting and its rates.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Percept {
-    pub sighting: Sighting,
-    pub tan_psi: f64,
+    /// The sighting the rates are read at: the newest, or the one `delay_s` old.
+    pub(crate) sighting: Sighting,
+    /// That sighting's tan ψ.
+    pub(crate) tan_psi: f64,
     /// d(tan ψ)/dt.
     pub tan_psi_rate: f64,
     /// d²(tan ψ)/dt²: Chapman's optical acceleration.
@@ -26,10 +28,12 @@ pub struct Percept {
     pub alpha_rate: f64,
     /// The ball relative to the eye (from angles and distance), and its rate of change.
     pub relative_position: glam::DVec3,
-    pub relative_velocity: glam::DVec3,
+    /// Rate of change of `relative_position`, by a backward difference, m/s.
+    pub(crate) relative_velocity: glam::DVec3,
 }
 
 impl PerceptionHistory {
+    /// An empty history for an eye configured by `config`, sighting once every `dt` s.
     pub fn new(config: &PerceptionConfig, dt: f64) -> PerceptionHistory {
         let delay_ticks = (config.delay_s / dt).round() as usize;
         let span = config.difference_span.max(1);
@@ -41,6 +45,7 @@ impl PerceptionHistory {
         }
     }
 
+    /// Adds this tick's sighting, forgetting the oldest once the history is full.
     pub fn record(&mut self, sighting: Sighting) {
         if self.sightings.len() == self.delay_ticks + 2 * self.span + 1 {
             self.sightings.pop_front();

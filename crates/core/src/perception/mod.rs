@@ -45,6 +45,7 @@ impl Default for PerceptionConfig {
 /// turning angles back into them would cost. The angles themselves are derived on demand.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sighting {
+    /// When the eye saw it, s since the launch.
     pub t: f64,
     /// tan ψ, ψ the elevation of the ball above the horizontal through the eye.
     pub tan_psi: f64,

@@ -9,6 +9,8 @@ use std::str::FromStr;
 /// Air density at 70 °F, 15 ft altitude, 50 % relative humidity, 29.92 inHg (Nathan).
 pub const NATHAN_AIR_DENSITY: f64 = 1.194;
 
+/// Which forces act on a ball in flight besides gravity. Chosen by name (`nathan`,
+/// `vacuum`) on the command line; matches always fly Nathan's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum AirModel {
@@ -19,6 +21,7 @@ pub enum AirModel {
 }
 
 impl AirModel {
+    /// The model's name as users type it and reports show it.
     pub fn name(self) -> &'static str {
         match self {
             AirModel::Vacuum => "vacuum",
@@ -55,7 +58,15 @@ pub struct Air {
 }
 
 impl Air {
-    pub fn new(model: AirModel, density: f64, ball: &BallSpec, rpm: f64, spin_axis: DVec3) -> Air {
+    /// The air for `ball` spinning at `rpm` about `spin_axis` (normalised here; a zero
+    /// axis gives no lift), in air of `density` kg/m³.
+    pub(crate) fn new(
+        model: AirModel,
+        density: f64,
+        ball: &BallSpec,
+        rpm: f64,
+        spin_axis: DVec3,
+    ) -> Air {
         let omega = rpm.abs() * std::f64::consts::TAU / 60.0;
         Air {
             model,
@@ -65,10 +76,6 @@ impl Air {
             spin_axis: spin_axis.normalize_or_zero(),
             ball: *ball,
         }
-    }
-
-    pub fn model(&self) -> AirModel {
-        self.model
     }
 
     /// Acceleration of the ball when it moves at `v`.

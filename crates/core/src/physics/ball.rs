@@ -11,12 +11,18 @@ use std::str::FromStr;
 /// factor `S = r·ω / v`, scaled by `lift_scale`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct BallSpec {
-    pub name: &'static str,
-    pub mass_kg: f64,
-    pub radius_m: f64,
-    pub cd0: f64,
-    pub cd_per_krpm: f64,
-    pub lift_scale: f64,
+    /// The preset's name, as users type it.
+    pub(crate) name: &'static str,
+    /// Mass, kg.
+    pub(crate) mass_kg: f64,
+    /// Radius, m.
+    pub(crate) radius_m: f64,
+    /// Drag coefficient without spin.
+    pub(crate) cd0: f64,
+    /// Drag coefficient added per 1000 rpm of spin.
+    pub(crate) cd_per_krpm: f64,
+    /// Factor on Nathan's lift curve (1 for both presets).
+    pub(crate) lift_scale: f64,
 }
 
 impl BallSpec {
@@ -52,7 +58,8 @@ impl BallSpec {
         std::f64::consts::PI * self.radius_m * self.radius_m
     }
 
-    pub fn drag_coefficient(&self, rpm: f64) -> f64 {
+    /// Drag coefficient at `rpm` of spin: `cd0 + cd_per_krpm · rpm / 1000`.
+    pub(crate) fn drag_coefficient(&self, rpm: f64) -> f64 {
         self.cd0 + self.cd_per_krpm * (rpm / 1000.0)
     }
 

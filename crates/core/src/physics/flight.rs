@@ -7,8 +7,11 @@ use glam::DVec3;
 /// Where a ball is, how it moves, and when.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BallState {
+    /// Time since the launch, s.
     pub t: f64,
+    /// Position, m, with y up (y = 0 is the ground).
     pub pos: DVec3,
+    /// Velocity, m/s.
     pub vel: DVec3,
 }
 
@@ -101,7 +104,8 @@ pub(crate) fn hermite(p0: f64, m0: f64, p1: f64, m1: f64, s: f64) -> f64 {
 /// ball does not depend on who watches it.
 #[derive(Debug, Clone)]
 pub struct Flight {
-    pub dt: f64,
+    /// Time between samples (the tick), s.
+    pub(crate) dt: f64,
     /// One state a tick; the last one is the first at or below the ground.
     pub samples: Vec<BallState>,
     /// The instant and place the free flight reaches y = 0.

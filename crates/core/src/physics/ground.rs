@@ -11,10 +11,15 @@ use serde::Serialize;
 /// decelerates at 1.5 m/s² (μ ≈ 0.15), and a ball bouncing up slower than 0.5 m/s rolls.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Ground {
-    pub restitution: f64,
-    pub tangential_keep: f64,
-    pub rolling_decel: f64,
-    pub min_bounce_speed: f64,
+    /// Vertical restitution: the upward speed after a bounce per unit of downward speed
+    /// before it.
+    pub(crate) restitution: f64,
+    /// Share of the horizontal velocity a bounce keeps.
+    pub(crate) tangential_keep: f64,
+    /// Deceleration of a rolling ball by friction, m/s².
+    pub(crate) rolling_decel: f64,
+    /// Below this upward speed after a bounce (m/s) the ball stops bouncing and rolls.
+    pub(crate) min_bounce_speed: f64,
 }
 
 impl Default for Ground {

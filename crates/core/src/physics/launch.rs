@@ -8,12 +8,15 @@ use serde::Serialize;
 /// launch reads like a broadcast graphic; converted to SI once, in [`Launch::initial_state`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Launch {
+    /// Speed off the bat, m/s.
     pub speed_m_s: f64,
-    /// Angle above the horizontal.
+    /// Angle above the horizontal, degrees.
     pub elevation_deg: f64,
-    /// Horizontal direction, measured from +x toward +z.
+    /// Horizontal direction in degrees, measured from +x toward +z.
     pub azimuth_deg: f64,
+    /// Height the ball leaves the bat at, m (it starts above the origin).
     pub height_m: f64,
+    /// Spin rate, revolutions per minute.
     pub spin_rpm: f64,
     /// Tilt of the lift direction about the velocity: 0° is pure backspin (lift up),
     /// +90° is side spin that curves the ball toward increasing azimuth.
@@ -21,7 +24,8 @@ pub struct Launch {
 }
 
 impl Launch {
-    pub fn direction(&self) -> DVec3 {
+    /// Unit vector of the launch velocity (y up).
+    pub(crate) fn direction(&self) -> DVec3 {
         let (el, az) = (
             self.elevation_deg.to_radians(),
             self.azimuth_deg.to_radians(),
@@ -29,6 +33,8 @@ impl Launch {
         DVec3::new(el.cos() * az.cos(), el.sin(), el.cos() * az.sin())
     }
 
+    /// The ball at t = 0: at (0, `height_m`, 0), moving at `speed_m_s` along
+    /// the launch direction, in SI units.
     pub fn initial_state(&self) -> BallState {
         BallState {
             t: 0.0,
@@ -48,6 +54,8 @@ impl Launch {
         v.cross(lift)
     }
 
+    /// The air this launch flies through: `model` at `density` (kg/m³) for `ball`, with
+    /// this launch's spin rate and [`Launch::spin_axis`].
     pub fn air(&self, model: AirModel, density: f64, ball: &BallSpec) -> Air {
         Air::new(model, density, ball, self.spin_rpm, self.spin_axis())
     }

@@ -48,14 +48,16 @@ pub struct Chapman {
 }
 
 impl Chapman {
-    pub fn new(lateral: bool) -> Chapman {
+    /// With `lateral` off, only the radial law (`chapman-1d`).
+    pub(crate) fn new(lateral: bool) -> Chapman {
         Chapman {
             lateral,
             rate_ref: None,
         }
     }
 
-    pub fn command(&mut self, s: &Situation) -> DVec2 {
+    /// The acceleration wanted this tick, m/s².
+    pub(crate) fn command(&mut self, s: &Situation) -> DVec2 {
         let p = s.percept;
         if p.tan_psi < CLEARLY_ABOVE_EYE_TAN_PSI {
             return DVec2::ZERO;

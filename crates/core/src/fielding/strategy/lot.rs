@@ -43,7 +43,8 @@ pub struct Lot {
 }
 
 impl Lot {
-    pub fn command(&mut self, s: &Situation) -> DVec2 {
+    /// The acceleration wanted this tick, m/s².
+    pub(crate) fn command(&mut self, s: &Situation) -> DVec2 {
         let p = s.percept;
         let (rel, rel_vel) = (p.relative_position, p.relative_velocity);
         let at_apex = rel_vel.y <= 0.0 && p.tan_psi >= CLEARLY_ABOVE_EYE_TAN_PSI;

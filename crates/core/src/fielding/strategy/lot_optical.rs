@@ -60,7 +60,8 @@ struct Reference {
 }
 
 impl LotOptical {
-    pub fn command(&mut self, s: &Situation) -> DVec2 {
+    /// The acceleration wanted this tick, m/s².
+    pub(crate) fn command(&mut self, s: &Situation) -> DVec2 {
         let p = s.percept;
         let forward = (s.home - s.body.pos).normalize_or(DVec2::X);
         let side = quarter_turn(forward);

@@ -30,14 +30,21 @@ pub const CLEARLY_ABOVE_EYE_TAN_PSI: f64 = 0.05;
 /// A strategy's name, as selected on the command line and shown in reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum StrategyKind {
+    /// Chapman's optical acceleration cancellation with Tresilian's lateral term
+    /// (`chapman`).
     Chapman,
+    /// Chapman's law alone, radial only (`chapman-1d`).
     Chapman1d,
+    /// Gillies & Dodgson's Linear Optical Trajectory law (`lot`).
     Lot,
+    /// McBeath, Shaffer & Kaiser's LOT, a law on the ball's image (`lot-optical`).
     LotOptical,
+    /// Trajectory prediction: told where the ball comes down (`predictive`).
     Predictive,
 }
 
 impl StrategyKind {
+    /// Every strategy, in the order reports list them.
     pub const ALL: [StrategyKind; 5] = [
         StrategyKind::Chapman,
         StrategyKind::LotOptical,
@@ -46,6 +53,7 @@ impl StrategyKind {
         StrategyKind::Chapman1d,
     ];
 
+    /// The name as typed on the command line and shown in reports.
     pub fn name(self) -> &'static str {
         match self {
             StrategyKind::Chapman => "chapman",
@@ -80,21 +88,30 @@ impl FromStr for StrategyKind {
 /// What a strategy may consult on one tick.
 #[derive(Debug, Clone, Copy)]
 pub struct Situation<'a> {
+    /// What the fielder sees this tick.
     pub percept: &'a Percept,
+    /// The fielder's own position and velocity.
     pub body: &'a Body,
+    /// The fielder's limits (only `predictive` plans with them; the body applies them).
     pub limits: &'a Limits,
     /// Home plate (the launch point) on the ground: the fielder knows where the batter is.
     pub home: DVec2,
+    /// Time since the launch, s.
     pub t: f64,
+    /// The tick, s.
     pub dt: f64,
 }
 
 /// A fielder's running strategy with whatever it remembers between ticks.
 #[derive(Debug, Clone)]
 pub enum Brain {
+    /// `chapman` or `chapman-1d`.
     Chapman(Chapman),
+    /// `lot`.
     Lot(Lot),
+    /// `lot-optical`.
     LotOptical(LotOptical),
+    /// `predictive`.
     Predictive(Predictive),
 }
 

@@ -6,7 +6,9 @@ use glam::DVec2;
 /// Where and when the ball descends through catch height: given to `predictive` only.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Forecast {
+    /// Where on the ground, (x, z) in m.
     pub point: DVec2,
+    /// When, s since the launch.
     pub t: f64,
 }
 
@@ -25,11 +27,13 @@ pub struct Predictive {
 }
 
 impl Predictive {
-    pub fn new(forecast: Forecast) -> Predictive {
+    /// A fielder that runs to `forecast`.
+    pub(crate) fn new(forecast: Forecast) -> Predictive {
         Predictive { forecast }
     }
 
-    pub fn command(&mut self, s: &Situation) -> DVec2 {
+    /// The acceleration wanted this tick, m/s².
+    pub(crate) fn command(&mut self, s: &Situation) -> DVec2 {
         let to_go = self.forecast.point - s.body.pos;
         let distance = to_go.length();
         let time_left = self.forecast.t - s.t;
