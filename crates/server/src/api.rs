@@ -12,6 +12,7 @@ use axum::extract::{Path, State};
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::Json;
+use fieldhouse_core::driver::Event;
 use fieldhouse_core::sim::Scenario;
 use serde_json::{json, Value};
 use std::sync::atomic::Ordering::Relaxed;
@@ -157,7 +158,7 @@ pub async fn delete(
         .expect("not poisoned")
         .remove(&id)
         .ok_or_else(|| ApiError::not_found(&id))?;
-    let _ = entry.control.send(Control::Stop).await;
+    let _ = entry.control.send(Control::Driver(Event::Stop)).await;
     tracing::info!(%id, "match deleted");
     Ok(Json(json!({"id": id, "status": "deleted"})))
 }

@@ -6,15 +6,16 @@
 //! socket stays open; an oversized message closes it with 1009, flooding with 1008.
 
 use super::admission::Admitted;
-use super::api::ApiError;
 use super::auth;
 use super::budget::Verdict;
+use super::error::ApiError;
 use super::socket::{budget, classify, ending, limits, refusal, shut, Read, Sender, Sent, POLICY};
 use super::state::{AppState, Control, MatchEntry, ToBot};
 use super::upgrade::{Socket, Upgrade};
 use axum::extract::{Path, Query, State};
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
+use fieldhouse_core::driver::Event;
 use fieldhouse_core::protocol::{decode, encode, ClientMessage, ErrorMessage, Hello};
 use futures_util::StreamExt;
 use std::collections::{HashMap, VecDeque};
@@ -200,7 +201,7 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
                     match message {
                         None => error("binary", "binary frames are not part of the protocol; send JSON text"),
                         Some(Ok(ClientMessage::Command { tick, action })) => {
-                            let command = Control::Command { agent: k, conn, tick, action };
+                            let command = Control::Driver(Event::Command { agent: k, conn, tick, action });
                             if entry.control.send(command).await.is_err() {
                                 break None;
                             }
@@ -216,7 +217,7 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
     }
     let _ = entry
         .control
-        .send(Control::BotLeave { agent: k, conn })
+        .send(Control::Driver(Event::BotLeave { agent: k, conn }))
         .await;
     metrics.bots.fetch_sub(1, Relaxed);
 }

@@ -253,7 +253,7 @@ impl Ticker {
         let now = start.elapsed();
         let handled = std::time::Instant::now();
         let joined = match message {
-            None | Some(Control::Stop) => {
+            None => {
                 self.driver.handle(Event::Stop, now);
                 None
             }
@@ -261,23 +261,8 @@ impl Ticker {
                 self.driver.handle(Event::BotJoin { agent, conn }, now);
                 Some((agent, Bot { conn, out }))
             }
-            Some(Control::BotLeave { agent, conn }) => {
-                self.driver.handle(Event::BotLeave { agent, conn }, now);
-                None
-            }
-            Some(Control::Command {
-                agent,
-                conn,
-                tick,
-                action,
-            }) => {
-                let command = Event::Command {
-                    agent,
-                    conn,
-                    tick,
-                    action,
-                };
-                self.driver.handle(command, now);
+            Some(Control::Driver(event)) => {
+                self.driver.handle(event, now);
                 None
             }
             #[cfg(test)]

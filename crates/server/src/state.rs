@@ -4,8 +4,9 @@
 use super::config::ServerConfig;
 use super::metrics::Metrics;
 use fieldhouse_core::basketball::Capabilities;
+use fieldhouse_core::driver::Event;
 use fieldhouse_core::protocol::MatchInfo;
-use fieldhouse_core::sim::{Action, Mode, Scenario};
+use fieldhouse_core::sim::{Mode, Scenario};
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicU64};
 use std::sync::{Arc, Mutex, OnceLock, RwLock};
@@ -55,24 +56,17 @@ impl ToBot {
     }
 }
 
-/// What sockets and the API tell a match task.
+/// What sockets and the API tell a match task: what its driver is to handle, and a
+/// bot's arrival, which also brings the queue the task sends that bot's messages to.
 pub enum Control {
+    /// A bot connected to agent `agent` on connection `conn`; its messages go to `out`.
     BotJoin {
         agent: usize,
         conn: u64,
         out: mpsc::Sender<ToBot>,
     },
-    BotLeave {
-        agent: usize,
-        conn: u64,
-    },
-    Command {
-        agent: usize,
-        conn: u64,
-        tick: u64,
-        action: Action,
-    },
-    Stop,
+    /// Anything else, passed to the match's driver as it is.
+    Driver(Event),
     /// Makes the match task panic, standing for a bug, to test that a panic ends the
     /// match cleanly.
     #[cfg(test)]
