@@ -6,7 +6,8 @@ use anyhow::{bail, Context};
 use clap::Args;
 use fieldhouse::replay::{self, Recorder};
 use fieldhouse::session::Session;
-use fieldhouse::sim::{Scenario, Sport, World};
+use fieldhouse::protocol::Score;
+use fieldhouse::sim::{Mode, Scenario, Sport, World};
 use fieldhouse::words::{figure, plural};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::{json, Value};
@@ -86,19 +87,7 @@ pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
         .map_or("match".to_string(), |s| s.to_string_lossy().into_owned());
     // The match is named after its file; the scenario's name stays in the header.
     let id = stem.clone();
-    let info = json!({
-        "id": id,
-        "name": scenario.name,
-        "sport": scenario.sport.name(),
-        "mode": "fast",
-        "seed": scenario.seed,
-        "tick_hz": scenario.tick_hz,
-        "frame_hz": scenario.frame_hz,
-        "perception_every_ticks": world.perception_every_ticks(),
-        "field": world.field(),
-        "agents": world.agents_info(),
-        "motion_source": motion,
-    });
+    let info = world.match_info(id.clone(), &scenario, Mode::Fast, motion.clone());
     let path = args
         .out
         .clone()
@@ -134,7 +123,10 @@ pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     });
     let progress = |world: &World| match unit {
         "ticks" => world.tick(),
-        _ => world.result()["possession"].as_u64().unwrap_or(0),
+        _ => match world.result() {
+            Score::Hoops(score) => score.possession,
+            Score::Fly(_) => 0,
+        },
     };
     let started = Instant::now();
     let mut frames = 1u64;
@@ -163,7 +155,8 @@ pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
         b.finish_and_clear();
     }
     let elapsed_s = started.elapsed().as_secs_f64();
-    let (tick, result) = (session.world.tick(), session.world.result());
+    let tick = session.world.tick();
+    let result = serde_json::to_value(session.world.result()).expect("scores serialise");
     recorder
         .finish(tick, "finished", &result)
         .map_err(write_error)?;

@@ -37,6 +37,7 @@
 //!   driver does nothing more. (A server shutdown and a panic are the shell's.)
 
 use crate::protocol::{encode, ErrorMessage, Perception};
+use crate::tags;
 use crate::replay;
 use crate::session::Session;
 use crate::sim::{Action, Mode, Scenario};
@@ -349,13 +350,12 @@ impl MatchDriver {
         let (tick, time_s) = (world.tick(), world.time_s());
         for (agent, seat) in self.seats.iter().enumerate() {
             let Some(seat) = seat else { continue };
-            let perception = world.perception(agent);
             let text = encode(&Perception {
-                kind: "perception",
+                kind: tags::Perception,
                 tick,
                 time_s,
                 agent: &self.agent_ids[agent],
-                perception: &perception,
+                perception: world.perception(agent),
             });
             self.outputs.push_back(Output::Perception {
                 agent,

@@ -35,7 +35,11 @@
 //!   the `simple` and `costmap` offenses, and the possession experiment.
 //! * [`sim`]: a whole match of any sport as one deterministic [`sim::World`]: scenarios
 //!   checked field by field, fly balls with fielders, basketball, bots' commands.
-//! * [`protocol`]: the WebSocket messages (version 2), as the server sends and reads them.
+//! * [`protocol`]: the WebSocket messages (version 2) as Rust types, as the server sends
+//!   and reads them; frames are written with their numbers rounded to a millimetre.
+//! * [`tags`]: the constant strings on the wire (`"type": "frame"`, `"controller":
+//!   "bot"`) as types, which the game's own views share with the protocol.
+//! * [`schemas`]: the JSON Schemas in `proto/`, generated from the protocol's types.
 //! * [`session`]: a world with its id and frame rate, stepping and encoding frames: what
 //!   the server, headless runs and replay verification all drive.
 //! * [`driver`]: a match as a sans-IO state machine: the realtime, fast and lock-step
@@ -72,5 +76,7 @@ pub mod protocol;
 pub mod replay;
 pub mod session;
 pub mod sim;
+pub mod schemas;
 pub mod strict_json;
+pub mod tags;
 pub mod words;

@@ -3,9 +3,9 @@
 //! match tasks, headless runs and replay verification all drive one, so a replay's
 //! frames and a live match's are the same bytes from the same code.
 
-use crate::protocol::{encode, Frame};
+use crate::protocol::{encode_frame, Event, Frame};
 use crate::sim::World;
-use serde_json::Value;
+use crate::tags;
 
 /// A match being played: its world, id and frame rate, and the events not yet framed.
 pub struct Session {
@@ -15,7 +15,7 @@ pub struct Session {
     id: String,
     frame_every: u64,
     /// Events since the last frame.
-    events: Vec<Value>,
+    events: Vec<Event>,
     /// The tick of the last frame encoded.
     framed: Option<u64>,
 }
@@ -33,22 +33,19 @@ impl Session {
         }
     }
 
-    /// The frame of the world as it is now, with the events since the last one.
+    /// The frame of the world as it is now, with the events since the last one, its
+    /// numbers rounded to a millimetre ([`encode_frame`]).
     pub fn frame(&mut self) -> String {
-        let (mut ball, mut agents, mut score) = self.world.state();
-        quantise(&mut ball);
-        agents.iter_mut().for_each(quantise);
-        quantise(&mut score);
-        self.events.iter_mut().for_each(quantise);
+        let (ball, agents, score) = self.world.state();
         let tick = self.world.tick();
-        let line = encode(&Frame {
-            kind: "frame",
+        let line = encode_frame(&Frame {
+            kind: tags::Frame,
             match_id: &self.id,
             tick,
-            time_s: quantised(self.world.time_s()),
-            ball: &ball,
-            agents: &agents,
-            score: &score,
+            time_s: self.world.time_s(),
+            ball,
+            agents,
+            score,
             events: &self.events,
         });
         self.events.clear();
@@ -67,54 +64,5 @@ impl Session {
     /// The last frame, when a match stops: only if something happened since the last one.
     pub fn last_frame(&mut self) -> Option<String> {
         (self.framed != Some(self.world.tick()) || !self.events.is_empty()).then(|| self.frame())
-    }
-}
-
-/// Decimal places kept in frames: a millimetre, a milliradian (0.06°), a millisecond.
-const FRAME_DECIMALS: f64 = 1000.0;
-
-fn quantised(x: f64) -> f64 {
-    (x * FRAME_DECIMALS).round() / FRAME_DECIMALS
-}
-
-/// Rounds every fractional number in a frame's value to [`FRAME_DECIMALS`]: what a viewer
-/// can see. `99.67935425784906` costs 17 bytes to send and `99.679` 6, and a frame goes
-/// to every spectator 30 times a second. Only frames are rounded; the world keeps full
-/// precision (and bots' perceptions carry it), so the simulation is unchanged, and
-/// replays, which re-simulate and round the same way, still verify bit for bit.
-fn quantise(value: &mut Value) {
-    match value {
-        Value::Number(n) if n.is_f64() => {
-            if let Some(q) = n
-                .as_f64()
-                .map(quantised)
-                .and_then(serde_json::Number::from_f64)
-            {
-                *n = q;
-            }
-        }
-        Value::Array(items) => items.iter_mut().for_each(quantise),
-        Value::Object(fields) => fields.values_mut().for_each(quantise),
-        _ => {}
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::quantise;
-    use serde_json::json;
-
-    #[test]
-    fn frames_keep_a_millimetre_and_integers_whole() {
-        let mut v = json!({"position": [99.67935425784906, -0.00049], "tick": 12, "n": [1.0005, {"h": 1.23456789}]});
-        quantise(&mut v);
-        assert_eq!(
-            v,
-            json!({"position": [99.679, -0.0], "tick": 12, "n": [1.001, {"h": 1.235}]})
-        );
-        assert_eq!(
-            v.to_string(),
-            r#"{"n":[1.001,{"h":1.235}],"position":[99.679,-0.0],"tick":12}"#
-        );
     }
 }

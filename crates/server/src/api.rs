@@ -41,6 +41,7 @@ pub fn summary(entry: &MatchEntry) -> Value {
         .iter()
         .zip(controlled)
         .map(|(a, bot)| {
+            let a = serde_json::to_value(a).expect("agents serialise");
             json!({
                 "id": a["id"],
                 "team": a["team"],

@@ -16,7 +16,7 @@ use axum::extract::{Path, Query, State};
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 use fieldhouse_core::driver::Event;
-use fieldhouse_core::protocol::{decode, encode, ClientMessage, ErrorMessage, Hello};
+use fieldhouse_core::protocol::{decode, encode, ClientMessage, ErrorMessage, Hello, Role};
 use futures_util::StreamExt;
 use std::collections::{HashMap, VecDeque};
 use std::sync::atomic::Ordering::Relaxed;
@@ -113,7 +113,10 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
         timeout: Duration::from_millis(app.config.send_timeout_ms),
         metrics: &metrics,
     };
-    let hello = encode(&Hello::new("bot", &entry.info, Some(&agent), limits(&app)));
+    let hello = encode(&Hello {
+        agent: Some(&agent),
+        ..Hello::new(Role::Bot, &entry.info, limits(&app))
+    });
     let joined = send.text(hello.into()).await == Sent::Ok
         && entry
             .control

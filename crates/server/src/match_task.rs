@@ -16,12 +16,12 @@ use super::recording::{InDir, Limit, Recording};
 use super::slot::Slot;
 use super::state::{AppState, Control, MatchEntry, Published, ToBot};
 use fieldhouse_core::driver::{Event, MatchDriver, Output, Wake};
-use fieldhouse_core::protocol::{encode, End, MatchInfo};
+use fieldhouse_core::protocol::{encode, End};
+use fieldhouse_core::tags;
 use fieldhouse_core::replay;
 use fieldhouse_core::session::Session;
 use fieldhouse_core::sim::{Mode, Scenario, ScenarioError, World};
 use futures_util::FutureExt;
-use serde_json::Value;
 use std::panic::AssertUnwindSafe;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
@@ -45,19 +45,7 @@ pub fn spawn(
 ) -> Result<Arc<MatchEntry>, ScenarioError> {
     let world = World::new(&scenario, Some(app.caps.clone()))?;
     let agent_ids = world.agent_ids();
-    let info = MatchInfo {
-        id: id.clone(),
-        name: scenario.name.clone(),
-        sport: scenario.sport.name(),
-        mode: scenario.mode.name(),
-        seed: scenario.seed,
-        tick_hz: scenario.tick_hz,
-        frame_hz: scenario.frame_hz,
-        perception_every_ticks: world.perception_every_ticks(),
-        field: world.field(),
-        agents: world.agents_info(),
-        motion_source: app.caps.source.to_string(),
-    };
+    let info = world.match_info(id.clone(), &scenario, scenario.mode, app.caps.source.to_string());
     let tokens = scenario
         .agents
         .iter()
@@ -377,7 +365,10 @@ impl Ticker {
             let world = &self.driver.session().world;
             (world.tick(), world.result())
         }));
-        let (tick, result) = last.unwrap_or_else(|_| (self.entry.tick.load(Relaxed), Value::Null));
+        let (tick, result) = match last {
+            Ok((tick, result)) => (tick, Some(result)),
+            Err(_) => (self.entry.tick.load(Relaxed), None),
+        };
         let frame = std::panic::catch_unwind(AssertUnwindSafe(|| {
             let session = self.driver.session_mut();
             session.last_frame().map(|f| (session.world.tick(), f))
@@ -386,16 +377,17 @@ impl Ticker {
             self.publish_frame(tick, frame);
         }
         let end = Utf8Bytes::from(encode(&End {
-            kind: "end",
+            kind: tags::End,
             match_id: &self.entry.info.id,
             tick,
             reason,
-            result: &result,
+            result: result.as_ref(),
         }));
         // The replay is complete on disk before anyone hears the match ended. Its
         // writer thread syncs it; this task waits without holding the thread that
         // ticks the other matches.
         if let Some(r) = self.recorder.take() {
+            let result = serde_json::to_value(result).expect("scores serialise");
             if let Err(e) = r.finish(tick, reason, &result).await {
                 self.recording_stopped(format!("cannot finish the replay: {e}"));
             }

@@ -12,7 +12,9 @@ use super::budget::Verdict;
 use super::error::ApiError;
 use super::range::{self, Wanted};
 use super::replay_dir;
-use super::socket::{budget, classify, refusal, shut, Read, Sender, Sent, GOING_AWAY, POLICY};
+use super::socket::{
+    budget, classify, limits, refusal, shut, Read, Sender, Sent, GOING_AWAY, POLICY,
+};
 use super::state::AppState;
 use super::upgrade::{Socket, Upgrade};
 use axum::body::Body;
@@ -23,11 +25,13 @@ use axum::http::header::{
 use axum::http::{HeaderMap, HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::Json;
-use fieldhouse_core::protocol::{encode, End, ErrorMessage};
+use fieldhouse_core::protocol::{
+    decode_control, encode, Control, End, ErrorMessage, Hello, ReplayInfo, Role, ViewerMessage,
+};
+use fieldhouse_core::tags;
 use fieldhouse_core::replay::{self, Index};
 use futures_util::stream::SplitStream;
 use futures_util::StreamExt;
-use serde::Deserialize;
 use serde_json::{json, Value};
 use std::collections::VecDeque;
 use std::fs::{File, Metadata};
@@ -238,32 +242,6 @@ impl Viewed {
     }
 }
 
-/// What a replay viewer may ask.
-#[derive(Debug, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-enum Incoming {
-    Control(Control),
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(tag = "action", rename_all = "snake_case", deny_unknown_fields)]
-enum Control {
-    Play {},
-    Pause {},
-    Speed { speed: f64 },
-    Seek { tick: u64 },
-}
-
-/// Reads a viewer's message: only objects are messages (serde would also read one from
-/// an array).
-fn control(text: &str) -> Result<Incoming, String> {
-    let value = fieldhouse_core::strict_json::parse(text.as_bytes()).map_err(|e| e.to_string())?;
-    if !value.is_object() {
-        return Err("a control is a JSON object".into());
-    }
-    serde_json::from_value(value).map_err(|e| e.to_string())
-}
-
 const MIN_SPEED: f64 = 0.25;
 const MAX_SPEED: f64 = 8.0;
 
@@ -291,30 +269,27 @@ async fn view(
     let index = &viewed.index;
     let tick_hz = index.scenario.tick_hz;
     let last_tick = index.len().checked_sub(1).and_then(|k| index.tick(k));
-    let hello = json!({
-        "type": "hello",
-        "protocol": fieldhouse_core::protocol::PROTOCOL,
-        "version": fieldhouse_core::protocol::VERSION,
-        "role": "replay",
-        "match": index.header["match"],
-        "replay": {
-            "id": id,
-            "frames": index.len(),
-            "first_tick": index.tick(0),
-            "last_tick": last_tick,
-            "complete": index.complete(),
-        },
-        "limits": {"max_message_bytes": app.config.max_message_bytes, "messages_per_second": app.config.bot_messages_per_second},
+    // The match as the file recorded it: a file from an older release may hold
+    // shapes this one would not write, so it goes on as it was read.
+    let hello = encode(&Hello {
+        replay: Some(ReplayInfo {
+            complete: index.complete(),
+            first_tick: index.tick(0),
+            frames: index.len(),
+            id,
+            last_tick,
+        }),
+        ..Hello::new(Role::Replay, &index.header["match"], limits(app))
     });
     let footer = index.footer.clone().unwrap_or(Value::Null);
     let end = encode(&End {
-        kind: "end",
+        kind: tags::End,
         match_id: index.header["match"]["id"].as_str().unwrap_or_default(),
         tick: last_tick.unwrap_or(0),
         reason: footer["reason"].as_str().unwrap_or("incomplete"),
-        result: &footer["result"],
+        result: Some(&footer["result"]),
     });
-    send.deliver(hello.to_string()).await?;
+    send.deliver(hello).await?;
     // A replay without frames has only its end to show.
     if index.is_empty() {
         send.deliver(end.clone()).await?;
@@ -382,24 +357,24 @@ async fn view(
                         return Ok(());
                     }
                 }
-                let reply = match control(&text) {
-                    Ok(Incoming::Control(Control::Play {})) => {
+                let reply = match decode_control(&text) {
+                    Ok(ViewerMessage::Control(Control::Play {})) => {
                         playing = true;
                         due = Instant::now();
                         None
                     }
-                    Ok(Incoming::Control(Control::Pause {})) => {
+                    Ok(ViewerMessage::Control(Control::Pause {})) => {
                         playing = false;
                         None
                     }
-                    Ok(Incoming::Control(Control::Speed { speed: s })) if (MIN_SPEED..=MAX_SPEED).contains(&s) => {
+                    Ok(ViewerMessage::Control(Control::Speed { speed: s })) if (MIN_SPEED..=MAX_SPEED).contains(&s) => {
                         speed = s;
                         None
                     }
-                    Ok(Incoming::Control(Control::Speed { speed: s })) => {
+                    Ok(ViewerMessage::Control(Control::Speed { speed: s })) => {
                         Some(format!("speed {s} is outside {MIN_SPEED} to {MAX_SPEED}"))
                     }
-                    Ok(Incoming::Control(Control::Seek { tick })) => {
+                    Ok(ViewerMessage::Control(Control::Seek { tick })) => {
                         // The first frame at or after the tick, sent at once, paused or
                         // not: found by a binary search over the index, then read.
                         match index.seek(tick) {

@@ -15,7 +15,7 @@ use super::state::{AppState, MatchEntry};
 use super::upgrade::{Socket, Upgrade};
 use axum::extract::{Path, State};
 use axum::response::{IntoResponse, Response};
-use fieldhouse_core::protocol::{encode, Hello};
+use fieldhouse_core::protocol::{encode, Hello, Role};
 use futures_util::stream::SplitStream;
 use futures_util::{SinkExt, StreamExt};
 use std::sync::atomic::Ordering::Relaxed;
@@ -49,7 +49,7 @@ async fn spectator(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>) {
     let timeout = Duration::from_millis(app.config.send_timeout_ms);
     let shutdown = app.shutdown.clone();
     let mut published = entry.published.clone();
-    let hello = encode(&Hello::new("spectator", &entry.info, None, limits(&app)));
+    let hello = encode(&Hello::new(Role::Spectator, &entry.info, limits(&app)));
     let first = published.borrow_and_update().clone();
     let mut last_seq = first.seq;
     let mut send = Sender {

@@ -4,17 +4,21 @@ use super::capability::Stride;
 use crate::costmap::AgentPose;
 use crate::motion::Walker;
 use glam::DVec2;
+use schemars::JsonSchema;
 use serde::Serialize;
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+/// Which side a player is on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
-pub(crate) enum Team {
+pub enum Team {
+    /// With the ball: scores.
     Offense,
+    /// Without it: defends the basket.
     Defense,
 }
 
 /// What an agent is doing: the paper's offensive actions, and the defender's one.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Action {
     /// Between possessions, or a move that has run out.

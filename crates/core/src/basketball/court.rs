@@ -8,18 +8,22 @@ use serde::{Deserialize, Serialize};
 
 /// The half court's dimensions and the squares a shooter considers. Points are (x, z)
 /// on the floor, m: x from the baseline, z across, the basket on z = 0.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+///
+/// Its fields are in alphabetical order, as the `hello`'s `field.court` has always
+/// listed them ([`crate::tags`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Court {
+    /// The centre of the ring above the floor, projected onto it, [x, z], m.
+    #[schemars(with = "[f64; 2]")]
+    pub basket: DVec2,
     /// Baseline to half-court line, m (FIBA: 14).
     pub length_m: f64,
-    /// Sideline to sideline, m (FIBA: 15).
-    pub width_m: f64,
-    /// The centre of the ring above the floor, projected onto it.
-    pub basket: DVec2,
-    /// Distance of the three-point line from the basket, m (FIBA: 6.75).
-    pub three_point_m: f64,
     /// Side of a square the shooter considers, m.
     pub square_m: f64,
+    /// Distance of the three-point line from the basket, m (FIBA: 6.75).
+    pub three_point_m: f64,
+    /// Sideline to sideline, m (FIBA: 15).
+    pub width_m: f64,
 }
 
 impl Default for Court {

@@ -14,13 +14,14 @@ use super::shot::ShotModel;
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
-/// The parameters of the rule.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// The parameters of the rule (fields in alphabetical order, as the `hello`'s
+/// `field.decision` has always listed them: [`crate::tags`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct DecisionParams {
-    /// T_s: from the decision to shoot until the ball leaves the hands, s.
-    pub shot_time_s: f64,
     /// ε: the margin the defender must be late by, s.
     pub epsilon_s: f64,
+    /// T_s: from the decision to shoot until the ball leaves the hands, s.
+    pub shot_time_s: f64,
 }
 
 impl Default for DecisionParams {

@@ -3,10 +3,13 @@
 use super::agent::{Action, Team};
 use super::decision::Chosen;
 use super::safe::SafeSquares;
+use crate::tags;
+use schemars::JsonSchema;
+use serde::ser::{SerializeStruct, Serializer};
 use serde::Serialize;
 
 /// How a possession ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Outcome {
     /// A shot went in.
@@ -25,7 +28,11 @@ pub enum Outcome {
 
 /// Something that happened in a tick of [`Game::step`](super::Game::step), as frames
 /// carry it (`kind` names the variant). Agents are named by id.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+///
+/// It is serialised by hand, with its keys in alphabetical order and `kind` among them:
+/// frames keep protocol 2's key order byte for byte ([`crate::tags`]). Its schema is
+/// derived from the declaration below, which is the same set of keys.
+#[derive(Debug, Clone, PartialEq, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Event {
     /// An agent chose a new action (or, with the ball, a new shooting square). `chosen`
@@ -40,7 +47,7 @@ pub enum Event {
         /// Why, for people: the rule or threshold that decided it, or `bot order`.
         reason: String,
         /// The shooting square chosen, with C_o, C_d and the shot's chance.
-        #[serde(serialize_with = "chosen_on_the_wire")]
+        #[schemars(with = "Option<ChosenView>")]
         chosen: Option<Chosen>,
         /// The squares that satisfied the rule.
         safe: Option<SafeSquares>,
@@ -89,61 +96,159 @@ pub enum Event {
     },
 }
 
-/// `chosen` as frames carry it: without T_s and ε, which are the match's (the hello's
-/// `field.decision`) and the same in every decision.
-fn chosen_on_the_wire<S: serde::Serializer>(
-    chosen: &Option<Chosen>,
-    s: S,
-) -> Result<S::Ok, S::Error> {
-    #[derive(Serialize)]
-    struct OnTheWire {
-        cell: [f64; 2],
-        success: f64,
-        c_o: f64,
-        c_d: f64,
-        here: bool,
+impl Serialize for Event {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Event::Decision {
+                agent,
+                action,
+                reason,
+                chosen,
+                safe,
+            } => {
+                let mut o = s.serialize_struct("decision", 6)?;
+                o.serialize_field("action", action)?;
+                o.serialize_field("agent", agent)?;
+                o.serialize_field("chosen", &chosen.map(ChosenView::from))?;
+                o.serialize_field("kind", "decision")?;
+                o.serialize_field("reason", reason)?;
+                o.serialize_field("safe", safe)?;
+                o.end()
+            }
+            Event::Pass { from, to } => {
+                let mut o = s.serialize_struct("pass", 3)?;
+                o.serialize_field("from", from)?;
+                o.serialize_field("kind", "pass")?;
+                o.serialize_field("to", to)?;
+                o.end()
+            }
+            Event::PassCaught { by } => {
+                let mut o = s.serialize_struct("pass_caught", 2)?;
+                o.serialize_field("by", by)?;
+                o.serialize_field("kind", "pass_caught")?;
+                o.end()
+            }
+            Event::Shot {
+                by,
+                from,
+                distance_m,
+                success,
+                made,
+                blocked,
+                points,
+            } => {
+                let mut o = s.serialize_struct("shot", 8)?;
+                o.serialize_field("blocked", blocked)?;
+                o.serialize_field("by", by)?;
+                o.serialize_field("distance_m", distance_m)?;
+                o.serialize_field("from", from)?;
+                o.serialize_field("kind", "shot")?;
+                o.serialize_field("made", made)?;
+                o.serialize_field("points", points)?;
+                o.serialize_field("success", success)?;
+                o.end()
+            }
+            Event::PossessionEnded {
+                possession,
+                outcome,
+                points,
+                duration_s,
+                passes,
+            } => {
+                let mut o = s.serialize_struct("possession_ended", 6)?;
+                o.serialize_field("duration_s", duration_s)?;
+                o.serialize_field("kind", "possession_ended")?;
+                o.serialize_field("outcome", outcome)?;
+                o.serialize_field("passes", passes)?;
+                o.serialize_field("points", points)?;
+                o.serialize_field("possession", possession)?;
+                o.end()
+            }
+        }
     }
-    chosen
-        .map(|c| OnTheWire {
-            cell: c.cell,
-            success: c.success,
-            c_o: c.c_o,
-            c_d: c.c_d,
-            here: c.here,
-        })
-        .serialize(s)
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub(crate) struct AgentView {
-    pub(crate) id: String,
+/// A decision's `chosen` as frames carry it: without T_s and ε, which are the match's
+/// (the hello's `field.decision`) and the same in every decision.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
+pub struct ChosenView {
+    /// C_d: the shooter's dribbling time to the square, s.
+    pub c_d: f64,
+    /// C_o: the defenders' soonest time to the square, s.
+    pub c_o: f64,
+    /// The square's centre on the court, [x, z], m.
+    pub cell: [f64; 2],
+    /// True when the shooter already stands on the square: shoot now.
+    pub here: bool,
+    /// The chance a shot from the square goes in.
+    pub success: f64,
+}
+
+impl From<Chosen> for ChosenView {
+    fn from(c: Chosen) -> ChosenView {
+        ChosenView {
+            c_d: c.c_d,
+            c_o: c.c_o,
+            cell: c.cell,
+            here: c.here,
+            success: c.success,
+        }
+    }
+}
+
+/// A player in a frame: where it is, what it does, and the motion it plays.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct PlayerView<'a> {
+    /// What it is doing.
+    pub action: Action,
+    /// The behaviour whose motion graph it walks: `dribble`, `run` or `defense`.
+    pub behaviour: &'static str,
+    /// Present, as `bot`, while a connected bot moves the player.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub controller: Option<tags::Bot>,
+    /// Radians from +x toward +z.
+    pub heading: f64,
+    /// Its id.
+    pub id: &'a str,
+    /// The motion graph node it is playing, while it moves.
+    pub node: Option<u32>,
+    /// [x, z] on the court, m.
+    pub position: [f64; 2],
     /// Not in frames: a player's team never changes, and the `hello` lists it.
     #[serde(skip)]
     pub(crate) team: Team,
-    pub(crate) behaviour: &'static str,
-    pub(crate) position: [f64; 2],
-    /// Radians from +x toward +z.
-    pub(crate) heading: f64,
-    pub(crate) node: Option<u32>,
-    pub(crate) action: Action,
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub(crate) struct BallView {
+/// Where the ball is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum BallState {
+    /// A player has it (`holder`).
+    Held,
+    /// In the air between two players.
+    Pass,
+    /// On its way to the basket.
+    Shot,
+}
+
+/// The ball in a basketball frame.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct BallView<'a> {
+    /// The player holding it, if one is.
+    pub holder: Option<&'a str>,
+    /// [x, y, z], m, y up.
+    pub position: [f64; 3],
     /// `held`, `pass` or `shot`.
-    pub(crate) state: &'static str,
-    /// x, y (height), z, m.
-    pub(crate) position: [f64; 3],
-    pub(crate) holder: Option<String>,
+    pub state: BallState,
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub(crate) struct Snapshot {
+/// The court at one tick, as a game shows it.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Snapshot<'a> {
     pub(crate) tick: u64,
-    pub(crate) time_s: f64,
     pub(crate) possession: u64,
     pub(crate) shot_clock_s: f64,
     pub(crate) score: u32,
-    pub(crate) ball: BallView,
-    pub(crate) agents: Vec<AgentView>,
+    pub(crate) ball: BallView<'a>,
+    pub(crate) agents: Vec<PlayerView<'a>>,
 }

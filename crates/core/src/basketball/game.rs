@@ -16,7 +16,7 @@
 use super::agent::{Agent, Team};
 use super::capability::Capabilities;
 use super::decision::Candidate;
-use super::event::{AgentView, BallView, Event, Outcome, Snapshot};
+use super::event::{BallState, BallView, Event, Outcome, PlayerView, Snapshot};
 use super::params::GameParams;
 use glam::DVec2;
 use rand::{Rng, SeedableRng};
@@ -559,7 +559,7 @@ impl Game {
     }
 
     /// The whole court now, as a client draws it.
-    pub(crate) fn snapshot(&self) -> Snapshot {
+    pub(crate) fn snapshot(&self) -> Snapshot<'_> {
         let now = self.time_s();
         let ball = match self.ball {
             Ball::Held { by } => {
@@ -567,13 +567,13 @@ impl Game {
                 // A dribble bounces about twice a second between hand and floor.
                 let height = 0.55 + 0.45 * (now * std::f64::consts::TAU * 2.0).cos().abs();
                 BallView {
-                    state: "held",
+                    state: BallState::Held,
                     position: [p.x, height, p.y],
-                    holder: Some(self.agents[by].id.clone()),
+                    holder: Some(&self.agents[by].id),
                 }
             }
             Ball::Pass { at, .. } => BallView {
-                state: "pass",
+                state: BallState::Pass,
                 position: [at.x, 1.3, at.y],
                 holder: None,
             },
@@ -587,7 +587,7 @@ impl Game {
                 let p = from.lerp(self.params.court.basket, s);
                 let height = 2.0 + (RING_HEIGHT_M - 2.0) * s + 6.0 * s * (1.0 - s);
                 BallView {
-                    state: "shot",
+                    state: BallState::Shot,
                     position: [p.x, height, p.y],
                     holder: None,
                 }
@@ -595,7 +595,6 @@ impl Game {
         };
         Snapshot {
             tick: self.tick,
-            time_s: now,
             possession: self.possession,
             shot_clock_s: self.shot_clock_s.max(0.0),
             score: self.score,
@@ -604,9 +603,10 @@ impl Game {
                 .agents
                 .iter()
                 .enumerate()
-                .map(|(k, a)| AgentView {
-                    id: a.id.clone(),
+                .map(|(k, a)| PlayerView {
+                    id: &a.id,
                     team: a.team,
+                    controller: crate::tags::controller(self.is_controlled(k)),
                     behaviour: a
                         .movement
                         .as_ref()

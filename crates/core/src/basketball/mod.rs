@@ -25,14 +25,13 @@ pub mod params;
 pub mod safe;
 pub mod shot;
 
-pub use agent::Action;
-pub(crate) use agent::Team;
+pub use agent::{Action, Team};
 pub use brain::RUN_OFF_M;
 pub use capability::{Capabilities, DefenderMotion, Motion, Mover, Reach, StateMap, Stride};
 pub use court::Court;
 pub use decision::{Candidate, Chosen, Decision, DecisionParams, Keep, Opponent, Situation};
 pub use eval::{compare, evaluate, Comparison, EvalReport};
-pub use event::{Event, Outcome};
+pub use event::{BallState, BallView, ChosenView, Event, Outcome, PlayerView};
 pub use game::{Game, Order};
 pub use params::{Brain, DefenderModel, DefenderParams, GameParams, SimpleParams};
 pub use shot::ShotModel;

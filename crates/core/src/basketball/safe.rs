@@ -19,11 +19,16 @@ use serde::Serialize;
 /// [`Court::square_centre`] counts them); bit `r · columns + c` of `bits` (standard
 /// base64, least significant bit of each byte first) is set when square (first row + r,
 /// first column + c) is safe.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+///
+/// Its fields are in alphabetical order, as frames have always listed them
+/// ([`crate::tags`]).
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SafeSquares {
+    /// The bitmap, standard base64.
+    pub(crate) bits: String,
+    /// `[first row, first column, rows, columns]` of the box the bitmap covers.
     #[serde(rename = "box")]
     pub(crate) bounds: [usize; 4],
-    pub(crate) bits: String,
 }
 
 impl SafeSquares {

@@ -1,12 +1,13 @@
 //! Basketball in a live match: the core's [`Game`] with a line-up from the scenario.
 
-use super::mark_bot;
 use super::scenario::{Scenario, ScenarioError};
 use crate::basketball::{
     Brain, Capabilities, DefenderMotion, Event, Game, GameParams, Order, Team,
 };
+use crate::protocol::{hoops, Agent, AgentInfo, Ball, Event as AnyEvent, Field, Score, Sensed};
+use crate::tags;
+use crate::basketball::event::Snapshot;
 use crate::names::UnknownName;
-use serde_json::{json, Value};
 use std::str::FromStr;
 use std::sync::Arc;
 
@@ -136,14 +137,10 @@ impl HoopsWorld {
         })
     }
 
-    pub(crate) fn step(&mut self, events: &mut Vec<Value>) {
+    pub(crate) fn step(&mut self, events: &mut Vec<AnyEvent>) {
         let mut happened: Vec<Event> = Vec::new();
         self.game.step(&mut happened);
-        events.extend(
-            happened
-                .iter()
-                .map(|e| serde_json::to_value(e).expect("events serialise")),
-        );
+        events.extend(happened.into_iter().map(AnyEvent::Hoops));
     }
 
     pub(crate) fn finished(&self) -> bool {
@@ -151,76 +148,76 @@ impl HoopsWorld {
             .is_some_and(|n| self.game.possessions() >= n)
     }
 
-    pub(crate) fn field(&self) -> Value {
+    pub(crate) fn field(&self) -> Field {
         let p = self.game.params();
-        json!({
-            "kind": "basketball",
-            "court": p.court,
-            "shot_clock_s": p.shot_clock_s,
-            "offense": p.offense.name(),
-            "defender_motion": p.defender.motion.name(),
-            "decision": p.decision,
+        Field::Basketball(hoops::Field {
+            court: p.court,
+            decision: p.decision,
+            defender_motion: p.defender.motion.name(),
+            kind: tags::Basketball,
+            offense: p.offense.name(),
+            shot_clock_s: p.shot_clock_s,
         })
     }
 
-    pub(crate) fn agents_info(&self) -> Vec<Value> {
+    pub(crate) fn agents_info(&self) -> Vec<AgentInfo> {
         let p = self.game.params();
         self.game
             .agents()
             .iter()
             .map(|a| {
-                json!({
-                    "id": a.id,
-                    "team": a.team,
-                    "strategy": match a.team {
+                AgentInfo::Player(hoops::PlayerInfo {
+                    id: a.id.clone(),
+                    strategy: match a.team {
                         Team::Offense => p.offense.name(),
                         Team::Defense => p.defender.motion.name(),
                     },
+                    team: a.team,
                 })
             })
             .collect()
     }
 
-    pub(crate) fn state(&self) -> (Value, Vec<Value>, Value) {
+    pub(crate) fn score(&self) -> hoops::Score {
+        score_of(&self.game.snapshot())
+    }
+
+    pub(crate) fn state(&self) -> (Ball<'_>, Vec<Agent<'_>>, Score) {
         let snap = self.game.snapshot();
-        let agents = snap
-            .agents
-            .iter()
-            .enumerate()
-            .map(|(k, a)| {
-                let mut v = serde_json::to_value(a).expect("agents serialise");
-                mark_bot(&mut v, self.game.is_controlled(k));
-                v
-            })
-            .collect();
-        let score = json!({
-            "points": snap.score,
-            "possession": snap.possession,
-            "shot_clock_s": snap.shot_clock_s,
-        });
+        let score = score_of(&snap);
         (
-            serde_json::to_value(&snap.ball).expect("balls serialise"),
-            agents,
-            score,
+            Ball::Hoops(snap.ball),
+            snap.agents.into_iter().map(Agent::Player).collect(),
+            Score::Hoops(score),
         )
     }
 
     /// What agent `k` perceives: the court as a player sees it (everyone's position and
     /// heading, the ball, the clock).
-    pub(crate) fn perception(&self, k: usize) -> Value {
+    pub(crate) fn perception(&self, k: usize) -> Sensed<'_> {
         let snap = self.game.snapshot();
-        json!({
-            "self": snap.agents[k].id,
-            "team": snap.agents[k].team,
-            "has_ball": self.game.holder() == Some(k),
-            "agents": snap.agents.iter().map(|a| json!({"id": a.id, "team": a.team, "position": a.position, "heading": a.heading, "action": a.action})).collect::<Vec<_>>(),
-            "ball": snap.ball,
-            "shot_clock_s": snap.shot_clock_s,
-            "basket": self.game.params().court.basket.to_array(),
+        let me = &snap.agents[k];
+        Sensed::Player(hoops::Sensed {
+            agents: snap.agents.iter().map(hoops::Seen::from).collect(),
+            ball: snap.ball.clone(),
+            basket: self.game.params().court.basket.to_array(),
+            has_ball: self.game.holder() == Some(k),
+            me: me.id,
+            shot_clock_s: snap.shot_clock_s,
+            team: me.team,
         })
     }
 
     pub(crate) fn order(&mut self, k: usize, order: Order) -> Result<(), String> {
         self.game.order(k, order)
+    }
+}
+
+/// The score a snapshot shows.
+fn score_of(snap: &Snapshot<'_>) -> hoops::Score {
+    hoops::Score {
+        points: snap.score,
+        possession: snap.possession,
+        shot_clock_s: snap.shot_clock_s,
     }
 }

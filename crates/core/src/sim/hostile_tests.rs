@@ -68,13 +68,13 @@ fn play(world: &mut World, orders: &[(usize, Action, u8)], schema: &jsonschema::
             world.step(&mut events);
             let (ball, agents, score) = world.state();
             let frame = Frame {
-                kind: "frame",
+                kind: crate::tags::Frame,
                 match_id: "hostile",
                 tick: world.tick(),
                 time_s: world.time_s(),
-                ball: &ball,
-                agents: &agents,
-                score: &score,
+                ball,
+                agents,
+                score,
                 events: &events,
             };
             let frame: Value = serde_json::from_str(&encode(&frame)).unwrap();

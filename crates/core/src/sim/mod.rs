@@ -20,56 +20,14 @@ pub use scenario::{
     AgentSpec, LaunchSpec, LimitsSpec, Mode, Options, Scenario, ScenarioError, Sport,
 };
 
+pub use crate::protocol::Action;
+
 use crate::basketball::{Capabilities, Order};
+use crate::protocol::{Agent, AgentInfo, Ball, Event, Field, MatchInfo, Score, Sensed};
 use fly::{FielderOrder, FlyWorld};
 use glam::DVec2;
 use hoops::HoopsWorld;
-use serde::{Deserialize, Serialize};
-use serde_json::Value;
 use std::sync::Arc;
-
-/// What a bot asks of its agent.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum Action {
-    /// Fielder: accelerate along `[ax, az]`, m/s² (clamped to the body's limits).
-    Accelerate {
-        /// `[ax, az]`, m/s², on the ground plane.
-        accel: [f64; 2],
-    },
-    /// Fielder: run to `[x, z]` and stop there.
-    RunTo {
-        /// `[x, z]`, m, within 250 m of the batter.
-        target: [f64; 2],
-    },
-    /// Basketball: move toward `[x, z]` (dribbling if holding the ball).
-    MoveTo {
-        /// `[x, z]`, m, on the court (within 1 m of it).
-        target: [f64; 2],
-    },
-    /// Basketball: pass to the teammate with this id.
-    Pass {
-        /// The receiver's agent id.
-        to: String,
-    },
-    /// Basketball: shoot from here.
-    Shoot {},
-    /// Stop: a fielder decelerates to rest, a player stands.
-    Stand {},
-}
-
-impl Action {
-    fn name(&self) -> &'static str {
-        match self {
-            Action::Accelerate { .. } => "accelerate",
-            Action::RunTo { .. } => "run_to",
-            Action::MoveTo { .. } => "move_to",
-            Action::Pass { .. } => "pass",
-            Action::Shoot {} => "shoot",
-            Action::Stand {} => "stand",
-        }
-    }
-}
 
 enum Inner {
     Fly(Box<FlyWorld>),
@@ -124,7 +82,7 @@ impl World {
     }
 
     /// Advances one tick, appending the events that happened.
-    pub fn step(&mut self, events: &mut Vec<Value>) {
+    pub fn step(&mut self, events: &mut Vec<Event>) {
         match &mut self.inner {
             Inner::Fly(w) => w.step(events),
             Inner::Hoops(w) => w.step(events),
@@ -148,8 +106,33 @@ impl World {
         }
     }
 
+    /// Everything static about the match, as `hello` shows it: `scenario`'s (which
+    /// built this world) with the match's id, how it is paced, and where its motion came
+    /// from.
+    pub fn match_info(
+        &self,
+        id: String,
+        scenario: &Scenario,
+        mode: Mode,
+        motion_source: String,
+    ) -> MatchInfo {
+        MatchInfo {
+            id,
+            name: scenario.name.clone(),
+            sport: scenario.sport.name(),
+            mode: mode.name(),
+            seed: scenario.seed,
+            tick_hz: scenario.tick_hz,
+            frame_hz: scenario.frame_hz,
+            perception_every_ticks: self.perception_every_ticks(),
+            field: self.field(),
+            agents: self.agents_info(),
+            motion_source,
+        }
+    }
+
     /// The static description of the field.
-    pub fn field(&self) -> Value {
+    pub fn field(&self) -> Field {
         match &self.inner {
             Inner::Fly(w) => w.field(),
             Inner::Hoops(w) => w.field(),
@@ -157,7 +140,7 @@ impl World {
     }
 
     /// Each agent's static description (id, team, strategy).
-    pub fn agents_info(&self) -> Vec<Value> {
+    pub fn agents_info(&self) -> Vec<AgentInfo> {
         match &self.inner {
             Inner::Fly(w) => w.agents_info(),
             Inner::Hoops(w) => w.agents_info(),
@@ -165,7 +148,7 @@ impl World {
     }
 
     /// The state now: the ball, every agent, the score.
-    pub fn state(&self) -> (Value, Vec<Value>, Value) {
+    pub fn state(&self) -> (Ball<'_>, Vec<Agent<'_>>, Score) {
         match &self.inner {
             Inner::Fly(w) => w.state(),
             Inner::Hoops(w) => w.state(),
@@ -182,9 +165,9 @@ impl World {
     }
 
     /// What agent `k` perceives now.
-    pub fn perception(&self, k: usize) -> Value {
+    pub fn perception(&self, k: usize) -> Sensed<'_> {
         match &self.inner {
-            Inner::Fly(w) => w.perception(k),
+            Inner::Fly(w) => Sensed::Fielder(w.perception(k)),
             Inner::Hoops(w) => w.perception(k),
         }
     }
@@ -243,16 +226,10 @@ impl World {
     }
 
     /// The result so far (the score).
-    pub fn result(&self) -> Value {
-        self.state().2
-    }
-}
-
-/// Marks an agent's frame entry `"controller": "bot"` while a bot controls it. The
-/// built-in brain is the usual case, so it goes unsaid: frames go to every spectator 30
-/// times a second, and the word was a tenth of a basketball frame.
-fn mark_bot(agent: &mut Value, by_bot: bool) {
-    if by_bot {
-        agent["controller"] = Value::from("bot");
+    pub fn result(&self) -> Score {
+        match &self.inner {
+            Inner::Fly(w) => Score::Fly(w.score()),
+            Inner::Hoops(w) => Score::Hoops(w.score()),
+        }
     }
 }

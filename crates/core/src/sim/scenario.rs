@@ -4,11 +4,12 @@
 //! runs.
 
 use crate::strict_json::{self, Refused};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
 /// The game a match plays.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Sport {
     /// Fly balls to outfielders in fair territory (azimuth 0 to 90°).
@@ -31,7 +32,7 @@ impl Sport {
 }
 
 /// How a match's ticks are paced.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Mode {
     /// One tick per 1/tick_hz of wall-clock time.
@@ -56,10 +57,11 @@ impl Mode {
 }
 
 /// One agent of a scenario.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct AgentSpec {
     /// Unique in the match: letters, digits, `-` and `_`, at most 32.
+    #[schemars(regex(pattern = "^[A-Za-z0-9_-]{1,32}$"))]
     pub id: String,
     /// Fielders: a catching strategy (`chapman`, `lot-optical`, `predictive`, `lot`,
     /// `chapman-1d`). Basketball offense: its brain (`simple`, `costmap`; one per team);
@@ -82,37 +84,45 @@ pub struct AgentSpec {
 }
 
 /// A fielder's physical limits.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LimitsSpec {
     /// Top running speed, m/s, in (0, 50].
+    #[schemars(extend("exclusiveMinimum" = 0, "maximum" = 50))]
     pub max_speed_m_s: f64,
     /// Largest acceleration on the ground plane, m/s², in (0, 100].
+    #[schemars(extend("exclusiveMinimum" = 0, "maximum" = 100))]
     pub max_accel_m_s2: f64,
     /// Time from the hit to the first step, s, in [0, 5] (default: a human's 0.3 s).
     #[serde(default)]
+    #[schemars(range(min = 0, max = 5))]
     pub reaction_s: Option<f64>,
 }
 
 /// One scripted ball.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LaunchSpec {
     /// Match time to hit it, s (or `pause_s` after the previous ball is dead, if later).
+    #[schemars(range(min = 0, max = 1_000_000))]
     pub time_s: f64,
     /// Launch speed off the bat, m/s, 1 to 70.
+    #[schemars(range(min = 1, max = 70))]
     pub speed_m_s: f64,
     /// Launch angle above the horizontal, degrees, 1 to 89.
+    #[schemars(range(min = 1, max = 89))]
     pub elevation_deg: f64,
     /// Direction from +x toward +z, degrees, -360 to 360.
+    #[schemars(range(min = -360, max = 360))]
     pub azimuth_deg: f64,
     /// Backspin, rpm, 0 to 6000 (default 0).
     #[serde(default)]
+    #[schemars(range(min = 0, max = 6000))]
     pub spin_rpm: f64,
 }
 
 /// Sport options; each applies to the sports it names.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Options {
     /// Baseball, cricket: launch speed range, m/s.
@@ -129,6 +139,7 @@ pub struct Options {
     pub spin_rpm: Option<[f64; 2]>,
     /// Baseball, cricket: seconds between one ball's end and the next launch.
     #[serde(default)]
+    #[schemars(range(min = 0, max = 60))]
     pub pause_s: Option<f64>,
     /// Baseball, cricket: the balls to hit, in order, instead of drawing them from the
     /// ranges above; the match ends once the last one is dead.
@@ -136,9 +147,11 @@ pub struct Options {
     pub launches: Option<Vec<LaunchSpec>>,
     /// Basketball: possessions to play (the match ends after them).
     #[serde(default)]
+    #[schemars(range(min = 1))]
     pub possessions: Option<u64>,
     /// Basketball: the shot clock, s.
     #[serde(default)]
+    #[schemars(range(min = 1, max = 600))]
     pub shot_clock_s: Option<f64>,
 }
 
@@ -155,9 +168,17 @@ fn default_deadline_ms() -> u64 {
     1000
 }
 
-/// A whole match, as a client or a scenario file describes it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// A match, completely described: the JSON body of `POST /api/matches` (Authorization:
+/// Bearer <admin token>), and a scenario file's structure (scenarios/*.toml, in TOML).
+/// Every field but `sport` has a default. Unknown fields are refused, and so is `null`
+/// for a field that is not nullable; the server answers 422 with code `bad_scenario` and
+/// the path of the field at fault. A few checks cannot be written in JSON Schema and are
+/// only described: frame_hz ≤ tick_hz; agent ids unique; each range's low ≤ high; a
+/// fielder's position within 250 m of the batter; a basketball position on the court;
+/// one offense brain per basketball team and one footwork for all defenders.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
+#[schemars(title = "scenario")]
 pub struct Scenario {
     /// A name for people, shown with the match.
     #[serde(default)]
@@ -169,22 +190,27 @@ pub struct Scenario {
     pub seed: u64,
     /// Simulation ticks per second of match time, Hz, 1 to 1000 (default 60).
     #[serde(default = "default_tick_hz")]
+    #[schemars(extend("exclusiveMinimum" = 0, "maximum" = 1000))]
     pub tick_hz: f64,
     /// Frames sent to spectators per second (a divisor of the tick rate is exact).
     #[serde(default = "default_frame_hz")]
+    #[schemars(extend("exclusiveMinimum" = 0, "maximum" = 1000))]
     pub frame_hz: f64,
     /// How ticks are paced (default `realtime`).
     #[serde(default)]
     pub mode: Mode,
     /// Lockstep: how long a tick waits for bots, ms.
     #[serde(default = "default_deadline_ms")]
+    #[schemars(range(min = 1, max = 60_000))]
     pub lockstep_deadline_ms: u64,
     /// Match length in simulated seconds; none: until deleted (or, in basketball, until
     /// `options.possessions` are played).
     #[serde(default)]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub duration_s: Option<f64>,
     /// The agents; none: the sport's default line-up.
     #[serde(default)]
+    #[schemars(length(max = 32))]
     pub agents: Vec<AgentSpec>,
     /// The sport's options.
     #[serde(default)]

@@ -19,8 +19,8 @@ use crate::sim::scenario::{LaunchSpec, Scenario, ScenarioError, Sport};
 use glam::DVec2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
-use serde_json::{json, Value};
+use crate::protocol::fly::{Event, Score};
+use crate::protocol::Event as AnyEvent;
 use setup::Setup;
 
 /// Longest flight simulated.
@@ -58,14 +58,6 @@ struct Fielding {
 enum Play {
     InPlay { flight: Flight, sample: usize },
     Between { until_tick: u64 },
-}
-
-/// The score of a fly-ball match, in balls.
-#[derive(Debug, Clone, Serialize)]
-pub(crate) struct Score {
-    pub(crate) balls: u64,
-    pub(crate) caught: u64,
-    pub(crate) dropped: u64,
 }
 
 /// A baseball or cricket match: the fielders, the ball in play (or the dead time
@@ -156,6 +148,10 @@ impl FlyWorld {
         self.tick
     }
 
+    pub(crate) fn score(&self) -> Score {
+        self.score
+    }
+
     pub(crate) fn agent_ids(&self) -> impl Iterator<Item = &str> {
         self.fielders.iter().map(|f| f.id.as_str())
     }
@@ -182,7 +178,7 @@ impl FlyWorld {
         Ok(())
     }
 
-    fn new_play(&mut self, events: &mut Vec<Value>) {
+    fn new_play(&mut self, events: &mut Vec<AnyEvent>) {
         let mut uniform = |(lo, hi): (f64, f64)| {
             if hi > lo {
                 self.rng.gen_range(lo..hi)
@@ -225,17 +221,16 @@ impl FlyWorld {
             f.order = None;
         }
         self.score.balls += 1;
-        events.push(json!({
-            "kind": "launch",
-            "ball": self.score.balls,
-            "launch": launch,
-            "landing": [flight.landing.pos.x, flight.landing.pos.z],
+        events.push(AnyEvent::Fly(Event::Launch {
+            ball: self.score.balls,
+            launch,
+            landing: [flight.landing.pos.x, flight.landing.pos.z],
         }));
         self.play = Play::InPlay { flight, sample: 0 };
     }
 
     /// Advances one tick.
-    pub(crate) fn step(&mut self, events: &mut Vec<Value>) {
+    pub(crate) fn step(&mut self, events: &mut Vec<AnyEvent>) {
         self.tick += 1;
         let flight_ended = match &mut self.play {
             Play::Between { until_tick } => {
@@ -281,12 +276,11 @@ impl FlyWorld {
                     {
                         if pass.caught_s.is_some() {
                             self.score.caught += 1;
-                            events.push(json!({
-                                "kind": "caught",
-                                "by": f.id,
-                                "ball": self.score.balls,
-                                "at": f.fielder.body.pos.to_array(),
-                                "flight_time_s": ball.t,
+                            events.push(AnyEvent::Fly(Event::Caught {
+                                by: f.id.clone(),
+                                ball: self.score.balls,
+                                at: f.fielder.body.pos.to_array(),
+                                flight_time_s: ball.t,
                             }));
                             self.play = Play::Between {
                                 until_tick: self.tick + self.pause_ticks,
@@ -316,12 +310,12 @@ impl FlyWorld {
         };
         if let Some((spot, nearest)) = flight_ended {
             self.score.dropped += 1;
-            events.push(json!({
-                "kind": "landed",
-                "ball": self.score.balls,
-                "at": spot.to_array(),
-                "nearest": nearest.as_ref().map(|(id, _)| id),
-                "miss_m": nearest.map(|(_, d)| d),
+            let (nearest, miss_m) = nearest.unzip();
+            events.push(AnyEvent::Fly(Event::Landed {
+                ball: self.score.balls,
+                at: spot.to_array(),
+                nearest,
+                miss_m,
             }));
             self.play = Play::Between {
                 until_tick: self.tick + self.pause_ticks,

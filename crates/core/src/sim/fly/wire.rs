@@ -1,76 +1,99 @@
-//! How a fly-ball world shows itself on the wire: the field a client draws, each
-//! fielder's static description, the state in every frame, and what a bot's fielder
-//! perceives (its own body, and the ball only as optics from its eye). It is apart from
-//! the play loop because these shapes are the protocol's: they change with what clients
-//! and bots read, never with how a ball is played, and the play loop must not change
-//! them (replays are verified byte for byte).
+//! How a fly-ball world shows itself on the wire ([`crate::protocol::fly`]): the field a
+//! client draws, each fielder's static description, the state in every frame, and what
+//! a bot's fielder perceives (its own body, and the ball only as optics from its eye).
+//! It is apart from the play loop because these are the protocol's shapes: they change
+//! with what clients and bots read, never with how a ball is played.
 
 use super::FlyWorld;
 use crate::perception::{PerceptionConfig, Sighting};
-use crate::sim::mark_bot;
+use crate::protocol::fly::{
+    BallState, BaseballField, BodyLimits, CricketField, Fielder, FielderInfo, Optics, Rates,
+    SelfSensed, Sensed,
+};
+use crate::protocol::{fly, Agent, AgentInfo, Ball, Field, Score};
 use crate::sim::scenario::Sport;
-use serde_json::{json, Value};
+use crate::tags;
 
 impl FlyWorld {
-    /// The field as a client draws it.
-    /// `eye_height_m` lets a spectator draw what a fielder sees (tan ψ, the image path)
-    /// from the frames, with the eye the fielders perceive from.
-    pub(crate) fn field(&self) -> Value {
-        let eye = self
+    /// The field as a client draws it, with the eye the fielders perceive from.
+    pub(crate) fn field(&self) -> Field {
+        let eye_height_m = self
             .fielders
             .first()
             .map_or(PerceptionConfig::default().eye_height_m, |f| {
                 f.config.perception.eye_height_m
             });
         match self.sport {
-            Sport::Cricket => {
-                json!({"kind": "cricket", "batter": [0.0, 0.0], "boundary_m": 65.0, "inner_ring_m": 27.4, "pitch_length_m": 20.12, "eye_height_m": eye})
-            }
-            _ => {
-                json!({"kind": "baseball", "home": [0.0, 0.0], "base_path_m": 27.43, "fence_m": 110.0, "foul_lines_deg": [0.0, 90.0], "eye_height_m": eye})
-            }
+            Sport::Cricket => Field::Cricket(CricketField {
+                batter: [0.0, 0.0],
+                boundary_m: 65.0,
+                eye_height_m,
+                inner_ring_m: 27.4,
+                kind: tags::Cricket,
+                pitch_length_m: 20.12,
+            }),
+            _ => Field::Baseball(BaseballField {
+                base_path_m: 27.43,
+                eye_height_m,
+                fence_m: 110.0,
+                foul_lines_deg: [0.0, 90.0],
+                home: [0.0, 0.0],
+                kind: tags::Baseball,
+            }),
         }
     }
 
-    pub(crate) fn agents_info(&self) -> Vec<Value> {
+    pub(crate) fn agents_info(&self) -> Vec<AgentInfo> {
         self.fielders
             .iter()
-            .map(|f| json!({"id": f.id, "team": "fielding", "strategy": f.strategy.name(), "home": f.home.to_array()}))
+            .map(|f| {
+                AgentInfo::Fielder(FielderInfo {
+                    home: f.home.to_array(),
+                    id: f.id.clone(),
+                    strategy: f.strategy.name(),
+                    team: tags::Fielding,
+                })
+            })
             .collect()
     }
 
-    pub(crate) fn state(&self) -> (Value, Vec<Value>, Value) {
+    pub(crate) fn state(&self) -> (Ball<'_>, Vec<Agent<'_>>, Score) {
         let ball = match self.ball_state() {
-            Some(b) => {
-                json!({"state": "flight", "position": b.pos.to_array(), "velocity": b.vel.to_array()})
-            }
-            None => json!({"state": "dead", "position": [0.0, 1.0, 0.0]}),
+            Some(b) => fly::Ball {
+                position: b.pos.to_array(),
+                state: BallState::Flight,
+                velocity: Some(b.vel.to_array()),
+            },
+            None => fly::Ball {
+                position: [0.0, 1.0, 0.0],
+                state: BallState::Dead,
+                velocity: None,
+            },
         };
         let agents = self
             .fielders
             .iter()
             .map(|f| {
                 let b = &f.fielder.body;
-                let mut v = json!({
-                    "id": f.id,
-                    "position": b.pos.to_array(),
-                    "heading": if b.vel.length() > 1e-6 { b.vel.y.atan2(b.vel.x) } else { (-f.home).y.atan2(-f.home.x) },
-                    "speed": b.vel.length(),
-                    "strategy": f.strategy.name(),
-                });
-                mark_bot(&mut v, f.by_bot);
-                v
+                Agent::Fielder(Fielder {
+                    controller: tags::controller(f.by_bot),
+                    heading: if b.vel.length() > 1e-6 {
+                        b.vel.y.atan2(b.vel.x)
+                    } else {
+                        (-f.home).y.atan2(-f.home.x)
+                    },
+                    id: &f.id,
+                    position: b.pos.to_array(),
+                    speed: b.vel.length(),
+                    strategy: f.strategy.name(),
+                })
             })
             .collect();
-        (
-            ball,
-            agents,
-            serde_json::to_value(&self.score).expect("scores serialise"),
-        )
+        (Ball::Fly(ball), agents, Score::Fly(self.score))
     }
 
     /// What fielder `k` can perceive: its own body, and the ball only as an eye sees it.
-    pub(crate) fn perception(&self, k: usize) -> Value {
+    pub(crate) fn perception(&self, k: usize) -> Sensed {
         let f = &self.fielders[k];
         let b = &f.fielder.body;
         let eye = f.config.perception.eye_height_m;
@@ -79,18 +102,32 @@ impl FlyWorld {
             let rates = f.last_seen.map(|prev| {
                 let dt = (now.t - prev.t).max(self.dt);
                 let d_alpha = crate::motion::wrap_angle(now.alpha() - prev.alpha());
-                json!({"d_tan_psi_dt": (now.tan_psi - prev.tan_psi) / dt, "d_alpha_dt": d_alpha / dt})
+                Rates {
+                    d_alpha_dt: d_alpha / dt,
+                    d_tan_psi_dt: (now.tan_psi - prev.tan_psi) / dt,
+                }
             });
-            // The ground distance is what the built-in strategies scale their gains by, so
-            // a bot gets it too.
-            json!({"tan_psi": now.tan_psi, "alpha": now.alpha(), "distance_m": now.distance, "rates": rates, "t": ball.t})
+            Optics {
+                alpha: now.alpha(),
+                distance_m: now.distance,
+                rates,
+                t: ball.t,
+                tan_psi: now.tan_psi,
+            }
         });
         let limits = &f.config.limits;
-        json!({
-            "self": {"position": b.pos.to_array(), "velocity": b.vel.to_array(), "home": f.home.to_array()},
-            "ball_in_play": optics.is_some(),
-            "optics": optics,
-            "limits": {"max_speed_m_s": limits.max_speed, "max_accel_m_s2": limits.max_accel},
-        })
+        Sensed {
+            ball_in_play: optics.is_some(),
+            limits: BodyLimits {
+                max_accel_m_s2: limits.max_accel,
+                max_speed_m_s: limits.max_speed,
+            },
+            optics,
+            body: SelfSensed {
+                home: f.home.to_array(),
+                position: b.pos.to_array(),
+                velocity: b.vel.to_array(),
+            },
+        }
     }
 }
