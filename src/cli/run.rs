@@ -4,9 +4,9 @@
 use super::basketball::CapabilityArgs;
 use anyhow::{bail, Context};
 use clap::Args;
+use fieldhouse::protocol::Score;
 use fieldhouse::replay::{self, Recorder};
 use fieldhouse::session::Session;
-use fieldhouse::protocol::Score;
 use fieldhouse::sim::{Mode, Scenario, Sport, World};
 use fieldhouse::words::{figure, plural};
 use indicatif::{ProgressBar, ProgressStyle};

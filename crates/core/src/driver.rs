@@ -37,10 +37,10 @@
 //!   driver does nothing more. (A server shutdown and a panic are the shell's.)
 
 use crate::protocol::{encode, ErrorMessage, Perception};
-use crate::tags;
 use crate::replay;
 use crate::session::Session;
 use crate::sim::{Action, Mode, Scenario};
+use crate::tags;
 use std::collections::VecDeque;
 use std::time::Duration;
 

@@ -27,16 +27,37 @@ pub fn all() -> Vec<(&'static str, Value)> {
     ]
 }
 
-/// The draft 2020-12 schema of `T`, with its `$id`; numbers that are `f64` say only
-/// `number` (their format, "double", is what JSON numbers are anyway).
+/// The draft 2020-12 schema of `T`, with its `$id`, tidied for people ([`tidy`]).
 fn schema_of<T: JsonSchema>(name: &str) -> Value {
     let mut settings = SchemaSettings::draft2020_12();
     settings.meta_schema = Some("https://json-schema.org/draft/2020-12/schema".into());
     let schema: Schema = settings.into_generator().into_root_schema_for::<T>();
     let mut value = schema.to_value();
+    tidy(&mut value);
     let object = value.as_object_mut().expect("a root schema is an object");
     object.insert("$id".into(), format!("{BASE_ID}{name}.schema.json").into());
     value
+}
+
+/// Descriptions come from doc comments, wrapped at 90 columns: their lines are joined
+/// (a blank line stays a paragraph break). Rust's number formats (`double`, `uint64`)
+/// go: they are not JSON Schema's, and the ranges they imply are stated as `minimum`.
+fn tidy(value: &mut Value) {
+    match value {
+        Value::Object(fields) => {
+            fields.remove("format");
+            if let Some(Value::String(text)) = fields.get_mut("description") {
+                *text = text
+                    .split("\n\n")
+                    .map(|paragraph| paragraph.split('\n').collect::<Vec<_>>().join(" "))
+                    .collect::<Vec<_>>()
+                    .join("\n\n");
+            }
+            fields.values_mut().for_each(tidy);
+        }
+        Value::Array(items) => items.iter_mut().for_each(tidy),
+        _ => {}
+    }
 }
 
 /// A schema as the committed file holds it: pretty JSON with a final newline.
@@ -49,6 +70,7 @@ pub fn to_file_text(schema: &Value) -> String {
 #[cfg(test)]
 mod tests {
     use super::{all, to_file_text};
+    use serde_json::Value;
     use std::path::PathBuf;
 
     fn proto_dir() -> PathBuf {
@@ -75,11 +97,121 @@ mod tests {
         );
     }
 
+    /// The schema called `name`, or one of its definitions (`name#Def`), as a validator.
+    fn validator(name: &str) -> jsonschema::Validator {
+        let (file, def) = name
+            .split_once('#')
+            .map_or((name, None), |(f, d)| (f, Some(d)));
+        let (_, mut schema) = all().into_iter().find(|(n, _)| *n == file).unwrap();
+        if let Some(def) = def {
+            schema["$ref"] = format!("#/$defs/{def}").into();
+            for key in ["properties", "required", "type", "title", "oneOf", "anyOf"] {
+                schema.as_object_mut().unwrap().remove(key);
+            }
+        }
+        jsonschema::draft202012::new(&schema).unwrap()
+    }
+
+    /// What schema an example of PROTOCOL.md is an instance of: a message by its
+    /// `type`, a scenario by its `sport`, a perception's content by its keys; `None` for
+    /// what is not a message (REST answers, fragments).
+    fn schema_for(example: &Value) -> Option<String> {
+        let has = |key: &str| example.get(key).is_some();
+        if let Some(kind) = example["type"].as_str() {
+            Some(kind.to_string())
+        } else if has("sport") {
+            Some("scenario".into())
+        } else if has("self") && has("ball_in_play") {
+            Some("perception#FielderPerception".into())
+        } else if has("self") && has("has_ball") {
+            Some("perception#PlayerPerception".into())
+        } else {
+            None
+        }
+    }
+
+    #[test]
+    fn the_protocol_guide_s_examples_are_valid_messages() {
+        let guide = std::fs::read_to_string(proto_dir().join("../PROTOCOL.md")).unwrap();
+        let mut checked = Vec::new();
+        for block in guide.split("```json").skip(1) {
+            let block = block.split("```").next().unwrap();
+            let examples: Result<Vec<Value>, _> = serde_json::Deserializer::from_str(block)
+                .into_iter()
+                .collect();
+            let Ok(examples) = examples else {
+                // Only an illustration may be cut short, never a message.
+                assert!(
+                    block.contains('…') && !block.contains("\"type\""),
+                    "an example that does not parse: {block}"
+                );
+                continue;
+            };
+            for example in examples {
+                let Some(name) = schema_for(&example) else {
+                    continue;
+                };
+                let errors: Vec<String> = validator(&name)
+                    .iter_errors(&example)
+                    .map(|e| format!("{e} at {}", e.instance_path))
+                    .collect();
+                assert!(errors.is_empty(), "{name}: {errors:?} in {example}");
+                checked.push(name);
+            }
+        }
+        for name in [
+            "hello",
+            "frame",
+            "perception",
+            "end",
+            "error",
+            "command",
+            "control",
+        ] {
+            assert!(
+                checked.iter().any(|c| c == name),
+                "no {name} example: {checked:?}"
+            );
+        }
+        assert!(checked.len() >= 15, "{checked:?}");
+    }
+
+    #[test]
+    fn the_schemas_refuse_what_the_protocol_never_sends() {
+        let frame = validator("frame");
+        let good = serde_json::json!({"type": "frame", "match": "m", "tick": 1, "time_s": 0.017,
+            "ball": {"position": [0.0, 1.0, 0.0], "state": "dead"},
+            "agents": [{"heading": 0.2, "id": "lf", "position": [1.0, 2.0], "speed": 0.0, "strategy": "chapman"}],
+            "score": {"balls": 0, "caught": 0, "dropped": 0}, "events": []});
+        assert!(frame.is_valid(&good));
+        for (pointer, wrong) in [
+            ("/type", Value::from("frames")),
+            ("/ball/state", "flying".into()),
+            ("/agents/0/position", serde_json::json!([1.0])),
+            ("/agents/0/controller", "builtin".into()),
+            ("/tick", (-1).into()),
+        ] {
+            let mut bad = good.clone();
+            match bad.pointer_mut(pointer) {
+                Some(v) => *v = wrong,
+                None => bad["agents"][0]["controller"] = wrong,
+            }
+            assert!(!frame.is_valid(&bad), "{pointer} accepted in {bad}");
+        }
+        let command = validator("command");
+        assert!(command.is_valid(
+            &serde_json::json!({"type": "command", "tick": 3, "action": {"kind": "stand"}})
+        ));
+        assert!(!command.is_valid(&serde_json::json!({"type": "command", "tick": 3, "action": {"kind": "stand"}, "extra": 1})));
+        assert!(!command.is_valid(
+            &serde_json::json!({"type": "command", "tick": 3, "action": {"kind": "fly"}})
+        ));
+    }
+
     #[test]
     fn every_schema_is_a_valid_draft_2020_12_schema() {
         for (name, schema) in all() {
-            jsonschema::draft202012::new(&schema)
-                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            jsonschema::draft202012::new(&schema).unwrap_or_else(|e| panic!("{name}: {e}"));
         }
     }
 }

@@ -17,10 +17,10 @@ use super::slot::Slot;
 use super::state::{AppState, Control, MatchEntry, Published, ToBot};
 use fieldhouse_core::driver::{Event, MatchDriver, Output, Wake};
 use fieldhouse_core::protocol::{encode, End};
-use fieldhouse_core::tags;
 use fieldhouse_core::replay;
 use fieldhouse_core::session::Session;
 use fieldhouse_core::sim::{Mode, Scenario, ScenarioError, World};
+use fieldhouse_core::tags;
 use futures_util::FutureExt;
 use std::panic::AssertUnwindSafe;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
@@ -45,7 +45,12 @@ pub fn spawn(
 ) -> Result<Arc<MatchEntry>, ScenarioError> {
     let world = World::new(&scenario, Some(app.caps.clone()))?;
     let agent_ids = world.agent_ids();
-    let info = world.match_info(id.clone(), &scenario, scenario.mode, app.caps.source.to_string());
+    let info = world.match_info(
+        id.clone(),
+        &scenario,
+        scenario.mode,
+        app.caps.source.to_string(),
+    );
     let tokens = scenario
         .agents
         .iter()

@@ -28,8 +28,8 @@ use axum::Json;
 use fieldhouse_core::protocol::{
     decode_control, encode, Control, End, ErrorMessage, Hello, ReplayInfo, Role, ViewerMessage,
 };
-use fieldhouse_core::tags;
 use fieldhouse_core::replay::{self, Index};
+use fieldhouse_core::tags;
 use futures_util::stream::SplitStream;
 use futures_util::StreamExt;
 use serde_json::{json, Value};

@@ -20,6 +20,7 @@ pub enum Team {
 /// What an agent is doing: the paper's offensive actions, and the defender's one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
+#[schemars(rename = "PlayerAction")]
 pub enum Action {
     /// Between possessions, or a move that has run out.
     Standing,

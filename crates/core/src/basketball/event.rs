@@ -34,6 +34,7 @@ pub enum Outcome {
 /// derived from the declaration below, which is the same set of keys.
 #[derive(Debug, Clone, PartialEq, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
+#[schemars(rename = "HoopsEvent")]
 pub enum Event {
     /// An agent chose a new action (or, with the ball, a new shooting square). `chosen`
     /// is that of `basketball-decide`; `safe` the squares that satisfied the rule, as a
@@ -198,6 +199,7 @@ impl From<Chosen> for ChosenView {
 
 /// A player in a frame: where it is, what it does, and the motion it plays.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(rename = "Player")]
 pub struct PlayerView<'a> {
     /// What it is doing.
     pub action: Action,
@@ -222,6 +224,7 @@ pub struct PlayerView<'a> {
 /// Where the ball is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
+#[schemars(rename = "HoopsBallState")]
 pub enum BallState {
     /// A player has it (`holder`).
     Held,
@@ -233,6 +236,7 @@ pub enum BallState {
 
 /// The ball in a basketball frame.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(rename = "HoopsBall")]
 pub struct BallView<'a> {
     /// The player holding it, if one is.
     pub holder: Option<&'a str>,

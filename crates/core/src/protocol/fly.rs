@@ -62,6 +62,7 @@ pub struct FielderInfo {
 /// Whether a ball is in play.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
+#[schemars(rename = "FlyBallState")]
 pub enum BallState {
     /// In the air: `velocity` is given.
     Flight,
@@ -72,6 +73,7 @@ pub enum BallState {
 
 /// The ball in a fly-ball frame.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(rename = "FlyBall")]
 pub struct Ball {
     /// [x, y, z], m, y up.
     pub position: [f64; 3],
@@ -103,6 +105,7 @@ pub struct Fielder<'a> {
 
 /// The score of a fly-ball match, in balls.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
+#[schemars(rename = "FlyScore")]
 pub struct Score {
     /// Balls hit so far (including the one in play).
     pub balls: u64,
@@ -115,6 +118,7 @@ pub struct Score {
 /// Something that happened in a fly-ball match, as frames carry it (`kind` names it).
 #[derive(Debug, Clone, PartialEq, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
+#[schemars(rename = "FlyEvent")]
 pub enum Event {
     /// A ball is hit.
     Launch {
@@ -199,6 +203,7 @@ impl Serialize for Event {
 
 /// What a bot's fielder perceives: its own body, and the ball only as an eye sees it.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(rename = "FielderPerception")]
 pub struct Sensed {
     /// Whether a ball is in flight (then `optics` is given).
     pub ball_in_play: bool,

@@ -7,8 +7,7 @@
 //! ([`crate::tags`]).
 
 pub use crate::basketball::{
-    Action, BallState, BallView as Ball, ChosenView, Event, Outcome, PlayerView as Player,
-    Team,
+    Action, BallState, BallView as Ball, ChosenView, Event, Outcome, PlayerView as Player, Team,
 };
 use crate::basketball::{Court, DecisionParams};
 use crate::tags;
@@ -17,6 +16,7 @@ use serde::Serialize;
 
 /// The court as a client draws it, and the match's constants of the decision rule.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(rename = "BasketballField")]
 pub struct Field {
     /// The half court and the squares a shooter considers.
     pub court: Court,
@@ -46,6 +46,7 @@ pub struct PlayerInfo {
 
 /// The score of a basketball match.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
+#[schemars(rename = "HoopsScore")]
 pub struct Score {
     /// Points scored so far.
     pub points: u32,
@@ -58,6 +59,7 @@ pub struct Score {
 
 /// What a bot's player perceives: the whole court as a player sees it.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(rename = "PlayerPerception")]
 pub struct Sensed<'a> {
     /// Every player, the perceiving one included.
     pub agents: Vec<Seen<'a>>,
@@ -78,6 +80,7 @@ pub struct Sensed<'a> {
 
 /// Another player (or oneself) as a player sees it.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(rename = "SeenPlayer")]
 pub struct Seen<'a> {
     /// What it is doing.
     pub action: Action,

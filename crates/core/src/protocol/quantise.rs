@@ -60,7 +60,7 @@ mod tests {
         write(&mut out, &v);
         assert_eq!(
             String::from_utf8(out).unwrap(),
-            r#"{"huge":1e306,"n":[1.001,{"h":1.235}],"position":[99.679,-0.0,2.0],"t":0.1,"tick":12}"#
+            r#"{"huge":1e+306,"n":[1.001,{"h":1.235}],"position":[99.679,-0.0,2.0],"t":0.1,"tick":12}"#
         );
     }
 }

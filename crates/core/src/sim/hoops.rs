@@ -1,13 +1,13 @@
 //! Basketball in a live match: the core's [`Game`] with a line-up from the scenario.
 
 use super::scenario::{Scenario, ScenarioError};
+use crate::basketball::event::Snapshot;
 use crate::basketball::{
     Brain, Capabilities, DefenderMotion, Event, Game, GameParams, Order, Team,
 };
+use crate::names::UnknownName;
 use crate::protocol::{hoops, Agent, AgentInfo, Ball, Event as AnyEvent, Field, Score, Sensed};
 use crate::tags;
-use crate::basketball::event::Snapshot;
-use crate::names::UnknownName;
 use std::str::FromStr;
 use std::sync::Arc;
 

@@ -15,12 +15,12 @@ mod wire;
 use crate::fielding::{forecast, Body, CatchZone, Fielder, FielderConfig, Limits, StrategyKind};
 use crate::perception::Sighting;
 use crate::physics::{AirModel, BallSpec, BallState, Flight, Launch, NATHAN_AIR_DENSITY};
+use crate::protocol::fly::{Event, Score};
+use crate::protocol::Event as AnyEvent;
 use crate::sim::scenario::{LaunchSpec, Scenario, ScenarioError, Sport};
 use glam::DVec2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use crate::protocol::fly::{Event, Score};
-use crate::protocol::Event as AnyEvent;
 use setup::Setup;
 
 /// Longest flight simulated.
