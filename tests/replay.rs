@@ -284,3 +284,19 @@ fn a_basketball_scenario_with_bots_runs_with_builtin_brains() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// Replays recorded before the protocol's messages were typed (frames were built as
+/// JSON values and rounded afterwards), kept as they were written: the format they are
+/// in still reads, and this build writes their frames as the same bytes, so they verify.
+#[test]
+fn replays_recorded_by_an_older_release_still_verify_byte_for_byte() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/protocol-2");
+    for sport in ["baseball", "cricket", "basketball"] {
+        let file = dir.join(format!("{sport}.jsonl"));
+        let verified = stdout(&format!("replay verify {}", file.display()));
+        assert!(
+            verified.contains("121 frames over 720 ticks re-simulate identically"),
+            "{sport}: {verified}"
+        );
+    }
+}
