@@ -1,8 +1,8 @@
 //! Basketball on the wire: the court, the players, the ball, the score, the events, and
 //! what a bot's player perceives.
 //!
-//! The game shows itself through views defined beside it ([`PlayerView`],
-//! [`BallView`], [`Event`]), re-exported here; what only the protocol needs is defined
+//! The game shows itself through views defined beside it ([`Player`], [`Ball`],
+//! [`Event`]), re-exported here; what only the protocol needs is defined
 //! here. Objects list their keys in alphabetical order, as protocol 2 always has
 //! ([`crate::tags`]).
 

@@ -474,7 +474,9 @@ fn read_strictly<T: serde::de::DeserializeOwned>(
     serde_json::from_value(value).map_err(|e| ("bad_message", e.to_string()))
 }
 
-/// Reads a bot's message, or says what is wrong with it (see [`read_strictly`]).
+/// Reads a bot's message, or says what is wrong with it: `(code, message)` with code
+/// `malformed_json` (not JSON at all) or `bad_message` (JSON, but not a command,
+/// including one that names a key twice).
 pub fn decode(text: &str) -> Result<ClientMessage, (&'static str, String)> {
     read_strictly(text, Some("action"))
 }

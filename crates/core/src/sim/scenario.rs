@@ -169,7 +169,7 @@ fn default_deadline_ms() -> u64 {
 }
 
 /// A match, completely described: the JSON body of `POST /api/matches` (Authorization:
-/// Bearer <admin token>), and a scenario file's structure (scenarios/*.toml, in TOML).
+/// Bearer `<admin token>`), and a scenario file's structure (scenarios/*.toml, in TOML).
 /// Every field but `sport` has a default. Unknown fields are refused, and so is `null`
 /// for a field that is not nullable; the server answers 422 with code `bad_scenario` and
 /// the path of the field at fault. A few checks cannot be written in JSON Schema and are
