@@ -16,7 +16,7 @@
 
 use super::replay_dir;
 use super::state::AppState;
-use fieldhouse_core::replay::{Durable, Recorder};
+use fieldhouse_core::replay::{Durable, Encoding, Recorder};
 use serde_json::Value;
 use std::io;
 use std::path::PathBuf;
@@ -130,7 +130,7 @@ impl Recording {
         all_queued: Arc<AtomicU64>,
     ) -> io::Result<(Recording, String)> {
         let (out, id) = files.create(0)?;
-        let recorder = match Recorder::new(out, &header) {
+        let recorder = match Recorder::new(out, &header, Encoding::Zstd) {
             Ok(r) => r,
             Err(e) => {
                 files.closed(0);
@@ -333,7 +333,7 @@ impl<F: Files> Writer<F> {
         header["segment"] = self.segment.into();
         header["first_tick"] = tick.into();
         header["previous"] = std::mem::replace(&mut self.segment_id, id).into();
-        match Recorder::new(out, &header) {
+        match Recorder::new(out, &header, Encoding::Zstd) {
             Ok(r) => self.recorder = Some(r),
             Err(e) => {
                 self.files.closed(self.segment);
