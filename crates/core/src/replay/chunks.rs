@@ -453,5 +453,14 @@ mod tests {
         let read = unpack(&big);
         assert!(read.text.is_empty());
         assert!(read.problem.unwrap().contains("longer than 2 MiB"));
+        // Two bytes in a frame that asks for a 128 MiB window: refused, not allocated.
+        let mut encoder = zstd::stream::write::Encoder::new(Vec::new(), 1).unwrap();
+        encoder.window_log(27).unwrap();
+        std::io::Write::write_all(&mut encoder, b"a\n").unwrap();
+        let wide = encoder.finish().unwrap();
+        let read = unpack(&wide);
+        assert!(read.text.is_empty());
+        let problem = read.problem.unwrap();
+        assert!(problem.contains("does not decompress"), "{problem}");
     }
 }
