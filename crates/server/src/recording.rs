@@ -403,8 +403,8 @@ impl<F: Files> Writer<F> {
     }
 }
 
-/// A recording's files in the server's replay directory: `STEM.jsonl`, then
-/// `STEM-s1.jsonl`, `STEM-s2.jsonl`, ... for later segments. Each is marked as being
+/// A recording's files in the server's replay directory: `STEM.jsonl.zst`, then
+/// `STEM-s1.jsonl.zst`, `STEM-s2.jsonl.zst`, ... for later segments. Each is marked as being
 /// written while it is, so retention leaves it alone, and retention is told when one is
 /// done.
 pub struct InDir {
