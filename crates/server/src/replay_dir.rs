@@ -4,7 +4,8 @@
 //! Anyone who can write to the directory can put anything in it, so only a regular file
 //! named `ID.jsonl.zst` (format 2, what the server writes) or `ID.jsonl` (format 1, as
 //! written before), right in it, with no other name, is a replay; if both names of one
-//! id are there, `ID.jsonl.zst` is the one listed and served. What a file holds is told
+//! id are there, `ID.jsonl.zst` is the one listed and served (and the other is left
+//! alone, by retention too). What a file holds is told
 //! by its first bytes, not its name. A symbolic link is never followed (it could name
 //! `/etc/passwd` or `/proc/self/environ`), a device or a FIFO is never read (`/dev/zero`
 //! has no end, a FIFO blocks for ever), and a file with a second name (a hard link)

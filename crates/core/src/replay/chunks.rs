@@ -266,7 +266,8 @@ pub(crate) struct Unpacked {
 /// Decompresses every whole chunk of `bytes`, up to the first piece that does not read.
 pub(crate) fn unpack(bytes: &[u8]) -> Unpacked {
     let mut unpacked = Unpacked {
-        text: Vec::with_capacity(bytes.len() * 8),
+        // Replays compress about 9×; a file of garbage must not reserve 9× its size.
+        text: Vec::with_capacity(bytes.len().saturating_mul(9).min(64 << 20)),
         problem: None,
         trailer: false,
     };

@@ -101,17 +101,8 @@ impl Encoding {
 
     /// The encoding of an opened file, from its first bytes.
     pub fn of_file(file: &std::fs::File) -> Result<Encoding, String> {
-        use std::os::unix::fs::FileExt;
         let mut start = [0; 4];
-        let mut got = 0;
-        while got < start.len() {
-            match file.read_at(&mut start[got..], got as u64) {
-                Ok(0) => break,
-                Ok(n) => got += n,
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(e.to_string()),
-            }
-        }
+        let got = read_at(file, &mut start, 0)?;
         Encoding::of(&start[..got])
     }
 
