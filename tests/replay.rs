@@ -51,8 +51,11 @@ fn run(dir: &Path, scenario: &str, out: &str) -> (PathBuf, Value) {
     (replay, doc)
 }
 
+/// A replay's lines, decompressed if it is in format 2.
 fn lines(path: &Path) -> Vec<String> {
-    std::fs::read_to_string(path)
+    let (text, problem) = fieldhouse::replay::decode(&std::fs::read(path).unwrap()).unwrap();
+    assert_eq!(problem, None);
+    String::from_utf8(text)
         .unwrap()
         .lines()
         .map(str::to_string)
@@ -62,8 +65,8 @@ fn lines(path: &Path) -> Vec<String> {
 #[test]
 fn the_same_scenario_twice_gives_the_same_frames_and_verifies() {
     let dir = scratch("twice");
-    let (a, doc) = run(&dir, FIELDERS, "a.jsonl");
-    let (b, _) = run(&dir, FIELDERS, "b.jsonl");
+    let (a, doc) = run(&dir, FIELDERS, "a.jsonl.zst");
+    let (b, _) = run(&dir, FIELDERS, "b.jsonl.zst");
     assert_eq!(doc["result"]["balls"], 3, "three scripted balls: {doc}");
     // Frames (and the footer's hash over them) are identical; only the header's wall
     // clock differs.
@@ -96,7 +99,7 @@ fn stdout(command_line: &str) -> String {
 #[test]
 fn export_writes_csv_by_default_and_explains_its_formats() {
     let dir = scratch("export");
-    let (file, _) = run(&dir, FIELDERS, "a.jsonl");
+    let (file, _) = run(&dir, FIELDERS, "a.jsonl.zst");
     let frames: Vec<String> = lines(&file)
         .into_iter()
         .filter(|l| l.starts_with("{\"type\":\"frame\""))
@@ -150,7 +153,7 @@ fn run_and_replay_lines_round_their_figures_and_count_in_words() {
             "  { time_s = 16.0, speed_m_s = 40.0, elevation_deg = 35.0, azimuth_deg = 40.0, spin_rpm = 1500.0 },\n",
             "",
         );
-    let (file, doc) = run(&dir, &one_ball, "one.jsonl");
+    let (file, doc) = run(&dir, &one_ball, "one.jsonl.zst");
     assert_eq!(doc["result"]["balls"], 1, "{doc}");
     let simulated = doc["simulated_s"].as_f64().unwrap().to_string();
     assert!(
@@ -161,7 +164,7 @@ fn run_and_replay_lines_round_their_figures_and_count_in_words() {
     let ran = stdout(&format!(
         "run {} --out {}",
         scenario.display(),
-        dir.join("again.jsonl").display()
+        dir.join("again.jsonl.zst").display()
     ));
     assert!(ran.contains("\n1 ball: "), "{ran}");
     let info = stdout(&format!("replay info {}", file.display()));
@@ -176,7 +179,7 @@ fn run_and_replay_lines_round_their_figures_and_count_in_words() {
 #[test]
 fn verify_names_the_tick_of_an_altered_frame() {
     let dir = scratch("altered");
-    let (file, _) = run(&dir, FIELDERS, "a.jsonl");
+    let (file, _) = run(&dir, FIELDERS, "a.jsonl.zst");
     let mut all = lines(&file);
     let k = all.len() / 2;
     let frame: Value = serde_json::from_str(&all[k]).unwrap();
@@ -198,6 +201,7 @@ fn verify_names_the_tick_of_an_altered_frame() {
 #[test]
 fn a_file_cut_mid_record_reads_to_the_cut_and_is_incomplete() {
     let dir = scratch("cut");
+    // Format 1, as `--out` names it.
     let (file, _) = run(&dir, FIELDERS, "a.jsonl");
     let bytes = std::fs::read(&file).unwrap();
     let cut = bytes.len() * 2 / 3;
@@ -268,7 +272,7 @@ fn a_basketball_scenario_with_bots_runs_with_builtin_brains() {
         dir.join("x.jsonl").display()
     ));
     assert!(err.contains("--bots builtin"), "{err}");
-    let replay = dir.join("hoops.jsonl");
+    let replay = dir.join("hoops.jsonl.zst");
     let source = format!("--cache-dir {}", dir.join("cache").display());
     let doc = json(&format!(
         "run {} --bots builtin --out {} --json {source}",
@@ -286,17 +290,250 @@ fn a_basketball_scenario_with_bots_runs_with_builtin_brains() {
 }
 
 /// Replays recorded before the protocol's messages were typed (frames were built as
-/// JSON values and rounded afterwards), kept as they were written: the format they are
-/// in still reads, and this build writes their frames as the same bytes, so they verify.
+/// JSON values and rounded afterwards) and before replays were compressed, kept as they
+/// were written (tests/fixtures/README.md): format 1 still reads, and this build writes
+/// their frames as the same bytes, so they verify.
 #[test]
 fn replays_recorded_by_an_older_release_still_verify_byte_for_byte() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/protocol-2");
-    for sport in ["baseball", "cricket", "basketball"] {
-        let file = dir.join(format!("{sport}.jsonl"));
-        let verified = stdout(&format!("replay verify {}", file.display()));
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    for (file, frames) in [
+        ("protocol-2/baseball.jsonl", "121 frames over 720 ticks"),
+        ("protocol-2/cricket.jsonl", "121 frames over 720 ticks"),
+        ("protocol-2/basketball.jsonl", "121 frames over 720 ticks"),
+        ("replay-format1.jsonl", "91 frames over 180 ticks"),
+    ] {
+        let verified = stdout(&format!("replay verify {}", dir.join(file).display()));
         assert!(
-            verified.contains("121 frames over 720 ticks re-simulate identically"),
-            "{sport}: {verified}"
+            verified.contains(&format!("{frames} re-simulate identically")),
+            "{file}: {verified}"
         );
     }
+}
+
+/// The zstd frames of a format 2 file, as zstd itself finds them: each one's offset and
+/// length (the trailer, a skippable frame, last).
+fn zstd_frames(bytes: &[u8]) -> Vec<(usize, usize)> {
+    let mut frames = Vec::new();
+    let mut at = 0;
+    while at < bytes.len() {
+        let len = zstd::zstd_safe::find_frame_compressed_size(&bytes[at..]).unwrap();
+        frames.push((at, len));
+        at += len;
+    }
+    frames
+}
+
+/// How many frame lines zstd finds in `bytes` (whole zstd frames).
+fn frame_lines(bytes: &[u8]) -> usize {
+    let text = String::from_utf8(zstd::decode_all(bytes).unwrap()).unwrap();
+    text.lines()
+        .filter(|l| l.starts_with("{\"type\":\"frame\""))
+        .count()
+}
+
+#[test]
+fn a_compressed_replay_is_over_six_times_smaller_than_the_plain_one_and_reads_the_same() {
+    let dir = scratch("compressed");
+    let (zst, _) = run(&dir, FIELDERS, "a.jsonl.zst");
+    // A name ending in .jsonl asks for format 1, plain lines.
+    let (plain, _) = run(&dir, FIELDERS, "a.jsonl");
+    let (zb, pb) = (std::fs::read(&zst).unwrap(), std::fs::read(&plain).unwrap());
+    assert_eq!(zb[..4], [0x28, 0xb5, 0x2f, 0xfd], "a zstd frame");
+    assert_eq!(pb[0], b'{');
+    let ratio = pb.len() as f64 / zb.len() as f64;
+    eprintln!(
+        "30 s of two fielders: {} bytes plain, {} compressed ({ratio:.1}×)",
+        pb.len(),
+        zb.len()
+    );
+    assert!(ratio >= 6.0, "only {ratio:.2}× smaller");
+    // zstd itself (zstdcat) reads the lines out of it, skipping the trailer: the same
+    // lines as the plain file's but for the header's format and start time.
+    let text = String::from_utf8(zstd::decode_all(&zb[..]).unwrap()).unwrap();
+    let (zl, pl): (Vec<&str>, Vec<String>) = (text.lines().collect(), lines(&plain));
+    assert_eq!(zl.len(), pl.len());
+    assert_eq!(zl[1..], pl[1..]);
+    let (zh, ph): (Value, Value) = (
+        serde_json::from_str(zl[0]).unwrap(),
+        serde_json::from_str(&pl[0]).unwrap(),
+    );
+    assert_eq!(
+        (zh["format"].as_u64(), ph["format"].as_u64()),
+        (Some(2), Some(1))
+    );
+    assert_eq!(zh["scenario"], ph["scenario"]);
+    // The header and the footer are chunks of their own; the trailer is 20 bytes.
+    let frames = zstd_frames(&zb);
+    let chunk = |k: usize| {
+        let (at, len) = frames[k];
+        String::from_utf8(zstd::decode_all(&zb[at..at + len]).unwrap()).unwrap()
+    };
+    assert_eq!(chunk(0), format!("{}\n", zl[0]));
+    let n = frames.len();
+    assert_eq!(chunk(n - 2), format!("{}\n", zl[zl.len() - 1]));
+    assert_eq!(frames[n - 1].1, 20);
+    assert!(chunk(n - 1).is_empty(), "the trailer is skipped");
+    // Chunks of about 60 lines.
+    assert_eq!(chunk(1).lines().count(), 60);
+    // info, export and verify give the same either way.
+    let info = |f: &Path| {
+        let mut doc = json(&format!("replay info {} --json", f.display()));
+        doc["format"] = Value::Null;
+        doc
+    };
+    assert_eq!(info(&zst), info(&plain));
+    assert_eq!(info(&zst)["complete"], true);
+    for format in ["csv", "jsonl"] {
+        let export = |f: &Path| stdout(&format!("replay export {} --format {format}", f.display()));
+        assert_eq!(export(&zst), export(&plain));
+    }
+    for file in [&zst, &plain] {
+        let verified = stdout(&format!("replay verify {}", file.display()));
+        assert!(verified.contains("re-simulate identically"), "{verified}");
+    }
+    // Without --out: the scenario's name with .jsonl.zst, in format 2.
+    let ran = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args(["run", "scenario.toml"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        ran.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ran.stderr)
+    );
+    let default = std::fs::read(dir.join("scenario.jsonl.zst")).unwrap();
+    assert_eq!(default[..4], zb[..4]);
+    let help = stdout("run --help");
+    assert!(
+        help.contains(".jsonl.zst") && help.contains("format 1"),
+        "{help}"
+    );
+}
+
+#[test]
+fn a_compressed_replay_cut_anywhere_reads_to_its_last_whole_chunk_and_that_verifies() {
+    let dir = scratch("compressed-cut");
+    let (file, _) = run(&dir, FIELDERS, "a.jsonl.zst");
+    let bytes = std::fs::read(&file).unwrap();
+    let frames = zstd_frames(&bytes);
+    let n = frames.len();
+    assert!(n > 10, "{n} chunks");
+    let end = |k: usize| frames[k].0 + frames[k].1;
+    let (footer, trailer) = (frames[n - 2].0, frames[n - 1].0);
+    // (cut at, what the problem says, if anything)
+    let cuts = [
+        (frames[1].0 + frames[1].1 / 2, Some("torn")),
+        (frames[n / 2].0, None),
+        (frames[n / 2].0 + 3, Some("torn")),
+        (frames[n / 2].0 + 7, Some("torn")),
+        (end(n - 3) - 1, Some("torn")),
+        (footer, None),
+        (footer + 5, Some("torn")),
+        (trailer, Some("trailer")),
+        (trailer + 10, Some("torn")),
+        (bytes.len() - 1, Some("torn")),
+    ];
+    let cut_file = dir.join("cut.jsonl.zst");
+    for (cut, problem) in cuts {
+        std::fs::write(&cut_file, &bytes[..cut]).unwrap();
+        let whole = frames
+            .iter()
+            .map(|&(at, len)| at + len)
+            .filter(|&e| e <= cut)
+            .max();
+        let info = json(&format!("replay info {} --json", cut_file.display()));
+        assert_eq!(info["complete"], false, "cut at {cut}: {info}");
+        assert_eq!(
+            info["frames"].as_u64().unwrap() as usize,
+            frame_lines(&bytes[..whole.unwrap()]),
+            "cut at {cut}: {info}"
+        );
+        match problem {
+            None => assert!(info["problem"].is_null(), "cut at {cut}: {info}"),
+            Some(said) => assert!(
+                info["problem"].as_str().unwrap().contains(said),
+                "cut at {cut}: {info}"
+            ),
+        }
+        let verified = stdout(&format!("replay verify {}", cut_file.display()));
+        assert!(
+            verified.contains("the file is incomplete; its readable part was checked"),
+            "cut at {cut}: {verified}"
+        );
+    }
+    // Cut in its header's chunk, it is no replay.
+    std::fs::write(&cut_file, &bytes[..frames[0].1 - 1]).unwrap();
+    let err = failure(&format!("replay info {}", cut_file.display()));
+    assert!(
+        err.contains("not a fieldhouse replay") && err.contains("torn"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_corrupt_chunk_ends_the_readable_part_and_a_file_of_neither_format_is_refused() {
+    let dir = scratch("compressed-corrupt");
+    let (file, _) = run(&dir, FIELDERS, "a.jsonl.zst");
+    let mut bytes = std::fs::read(&file).unwrap();
+    let frames = zstd_frames(&bytes);
+    let k = frames.len() / 2;
+    let (at, len) = frames[k];
+    bytes[at + len / 2] ^= 0xff;
+    let bad = dir.join("bad.jsonl.zst");
+    std::fs::write(&bad, &bytes).unwrap();
+    let info = json(&format!("replay info {} --json", bad.display()));
+    assert_eq!(info["complete"], false);
+    assert_eq!(
+        info["frames"].as_u64().unwrap() as usize,
+        frame_lines(&bytes[..at])
+    );
+    let problem = info["problem"].as_str().unwrap();
+    assert!(
+        problem.starts_with(&format!("chunk {} (byte {at}): ", k + 1)),
+        "{problem}"
+    );
+    let said = stdout(&format!("replay info {}", bad.display()));
+    assert!(said.contains("INCOMPLETE: chunk"), "{said}");
+    let verified = stdout(&format!("replay verify {}", bad.display()));
+    assert!(verified.contains("incomplete"), "{verified}");
+    // Neither JSON lines nor zstd, whatever its name.
+    for (name, content) in [
+        ("binary.jsonl.zst", &b"\x00\x01\x02\x03 not a replay"[..]),
+        ("binary.jsonl", &b"PK\x03\x04 a zip"[..]),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, content).unwrap();
+        let err = failure(&format!("replay info {}", path.display()));
+        assert!(
+            err.contains("not a fieldhouse replay: neither JSON lines (format 1) nor chunked zstd (format 2)"),
+            "{err}"
+        );
+    }
+    let empty = dir.join("empty.jsonl.zst");
+    std::fs::write(&empty, b"").unwrap();
+    assert!(failure(&format!("replay info {}", empty.display())).contains("the file is empty"));
+}
+
+#[test]
+fn a_replay_written_before_format_2_still_reads() {
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/replay-format1.jsonl");
+    let info = json(&format!("replay info {} --json", fixture.display()));
+    assert_eq!(info["format"], 1);
+    assert_eq!(info["frames"], 91);
+    assert_eq!(info["complete"], true);
+    assert_eq!(info["hash_ok"], true);
+    let frames: Vec<String> = std::fs::read_to_string(&fixture)
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("{\"type\":\"frame\""))
+        .map(str::to_string)
+        .collect();
+    let jsonl = stdout(&format!(
+        "replay export {} --format jsonl",
+        fixture.display()
+    ));
+    assert_eq!(jsonl.lines().collect::<Vec<_>>(), frames);
+    let csv = stdout(&format!("replay export {}", fixture.display()));
+    assert_eq!(csv.lines().count(), 1 + 2 * frames.len());
 }

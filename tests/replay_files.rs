@@ -7,9 +7,10 @@
 mod common;
 
 use common::server::*;
+use fieldhouse::replay::{Encoding, Recorder};
 use futures_util::{SinkExt, StreamExt};
 use serde_json::{json, Value};
-use std::io::{Read, Seek, Write};
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -49,31 +50,60 @@ fn cpu_ticks(server: &Server) -> u64 {
     fields[11].parse::<u64>().unwrap() + fields[12].parse::<u64>().unwrap()
 }
 
-/// Writes a replay of `frames` frames (ticks 0, 2, 4, ...), each padded to about
-/// `frame_bytes`, with a footer if `complete`. Quick: a hundred megabytes in a second.
-fn write_replay(path: &Path, frames: u64, frame_bytes: usize, complete: bool) {
-    let mut out = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
-    let header = json!({
+/// The header of the replays tests make.
+fn made_header() -> Value {
+    json!({
         "record": "header", "format": 1, "fieldhouse": "0.1.0",
         "match": {"id": "made", "name": "made by a test", "sport": "baseball"},
         "scenario": {"sport": "baseball", "mode": "fast", "duration_s": 10000.0},
         "seed": 1, "motion": "none", "started_unix_ms": 0,
-    });
-    writeln!(out, "{header}").unwrap();
-    let pad = "x".repeat(frame_bytes.saturating_sub(60));
+    })
+}
+
+/// Frame `k` of the replays tests make: tick `2 k`, padded to about `bytes`.
+fn made_frame(k: u64, bytes: usize) -> String {
+    let pad = "x".repeat(bytes.saturating_sub(60));
+    format!(
+        r#"{{"type":"frame","match":"made","tick":{},"pad":"{pad}"}}"#,
+        2 * k
+    )
+}
+
+/// Writes a format 2 replay (as the server records) of `frames` frames as
+/// [`write_replay`] makes them, with a footer.
+fn write_compressed_replay(path: &Path, frames: u64, frame_bytes: usize) {
+    let mut recorder = Recorder::create(path, &made_header(), Encoding::Zstd).unwrap();
     for k in 0..frames {
-        writeln!(
-            out,
-            r#"{{"type":"frame","match":"made","tick":{},"pad":"{pad}"}}"#,
-            2 * k
-        )
-        .unwrap();
+        recorder.frame(&made_frame(k, frame_bytes)).unwrap();
+    }
+    let last = 2 * frames.saturating_sub(1);
+    recorder.finish(last, "finished", &json!({})).unwrap();
+}
+
+/// Writes a format 1 replay (as written before format 2) of `frames` frames (ticks 0,
+/// 2, 4, ...), each padded to about `frame_bytes`, with a footer if `complete`. Quick:
+/// a hundred megabytes in a second.
+fn write_replay(path: &Path, frames: u64, frame_bytes: usize, complete: bool) {
+    let mut out = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    writeln!(out, "{}", made_header()).unwrap();
+    for k in 0..frames {
+        writeln!(out, "{}", made_frame(k, frame_bytes)).unwrap();
     }
     if complete {
         let footer = json!({"record": "footer", "tick": 2 * frames.saturating_sub(1), "frames": frames, "hash": "-", "reason": "finished", "result": {}});
         writeln!(out, "{footer}").unwrap();
     }
     out.flush().unwrap();
+}
+
+/// The frames in a replay file's whole lines or chunks.
+fn frames_in(file: &Path) -> usize {
+    let bytes = std::fs::read(file).unwrap();
+    let (text, _) = fieldhouse::replay::decode(&bytes).unwrap();
+    String::from_utf8_lossy(&text)
+        .lines()
+        .filter(|l| l.starts_with(r#"{"type":"frame""#))
+        .count()
 }
 
 fn status_of(server: &Server, path: &str) -> u16 {
@@ -455,7 +485,8 @@ async fn retention_deletes_the_oldest_replays_and_never_the_one_being_written() 
         || present().iter().any(|n| n.starts_with(&live)),
     )
     .await;
-    let (fast, _) = server.create(json!({"sport": "cricket", "mode": "fast", "duration_s": 60.0}));
+    // Ten minutes of cricket: 1.5 MB compressed, over the limit by itself.
+    let (fast, _) = server.create(json!({"sport": "cricket", "mode": "fast", "duration_s": 600.0}));
     common::found_within(Duration::from_secs(20), || {
         names = present();
         let only_live = names.len() == 2 && names.iter().any(|n| n.starts_with(&live));
@@ -480,21 +511,15 @@ async fn retention_deletes_the_oldest_replays_and_never_the_one_being_written() 
     .await;
     // Its viewers each see what was written when they came (the later one's index
     // scanned on from the earlier one's).
-    let live_replay = recording.strip_suffix(".jsonl").unwrap();
+    let live_replay = recording.strip_suffix(".jsonl.zst").unwrap();
     let mut early = connect(&server.ws(&format!("/ws/replays/{live_replay}"))).await;
     let seen_early = next(&mut early).await["replay"].clone();
-    // The writer flushes whole records: a frame after what the early viewer could see.
-    let seen = size(&recording);
+    // The writer writes whole chunks: one that lands after the early viewer came.
+    let early_frames = seen_early["frames"].as_u64().unwrap() as usize;
     common::until(
-        Duration::from_secs(5),
-        "no frame was recorded after the early viewer came",
-        || {
-            let mut file = std::fs::File::open(dir.join(&recording)).unwrap();
-            let mut since = Vec::new();
-            file.seek(std::io::SeekFrom::Start(seen)).unwrap();
-            file.read_to_end(&mut since).unwrap();
-            String::from_utf8_lossy(&since).contains(r#""type":"frame""#)
-        },
+        Duration::from_secs(10),
+        "no chunk was written after the early viewer came",
+        || frames_in(&dir.join(&recording)) > early_frames,
     )
     .await;
     let mut late = connect(&server.ws(&format!("/ws/replays/{live_replay}"))).await;
@@ -538,7 +563,9 @@ async fn a_never_ending_match_rotates_its_replay_into_segments_that_verify() {
             segment["bytes"].as_u64().unwrap() < 16_384 + 8_192,
             "{segment}"
         );
-        common::assert_verifies(&dir.join(format!("{}.jsonl", segment["id"].as_str().unwrap())));
+        common::assert_verifies(
+            &dir.join(format!("{}.jsonl.zst", segment["id"].as_str().unwrap())),
+        );
     }
     // A later segment plays from its own first tick.
     let second = segments[1]["id"].as_str().unwrap();
@@ -578,12 +605,13 @@ async fn a_fast_match_stops_recording_at_its_size_limit_and_its_replay_verifies(
     })
     .await
     .unwrap_or_else(|| panic!("the match never showed its size limit: {shown}"));
-    common::assert_verifies(&dir.join(format!("{}.jsonl", replay["id"].as_str().unwrap())));
+    common::assert_verifies(&dir.join(format!("{}.jsonl.zst", replay["id"].as_str().unwrap())));
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn other_matches_keep_ticking_while_a_large_replay_closes() {
-    // A fast match writes 25–60 MB a second: 150 MB is under the default 1 GiB limit.
+    // A fast match writes 25–60 MB of frames a second, 3–7 MB compressed: 20 MB (about
+    // 170 MB of frames) is under the default 1 GiB limit.
     let dir = empty_dir("closing-big-replay");
     let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
     let (live, _) = server.create(json!({"sport": "baseball", "mode": "realtime"}));
@@ -604,8 +632,8 @@ async fn other_matches_keep_ticking_while_a_large_replay_closes() {
     };
     common::until(
         Duration::from_secs(30),
-        "the fast match never wrote 150 MB of replay",
-        || written() >= 150_000_000,
+        "the fast match never wrote 20 MB of replay",
+        || written() >= 20_000_000,
     )
     .await;
     let timing = Arc::new(AtomicBool::new(false));
@@ -654,4 +682,168 @@ async fn other_matches_keep_ticking_while_a_large_replay_closes() {
     );
     drop(server);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// GETs `path`: the response, whatever its status.
+fn get(server: &Server, path: &str) -> ureq::Response {
+    match ureq::get(&server.http(path)).call() {
+        Ok(r) | Err(ureq::Error::Status(_, r)) => r,
+        Err(e) => panic!("{path}: {e}"),
+    }
+}
+
+/// The frame a viewer is sent after it seeks to `tick` (frames sent before the seek
+/// may still be on the way: they are skipped).
+async fn seek(viewer: &mut Socket, tick: u64) -> u64 {
+    let seek = json!({"type": "control", "action": "seek", "tick": tick});
+    viewer
+        .send(Message::Text(seek.to_string().into()))
+        .await
+        .unwrap();
+    loop {
+        let at = next_of(viewer, "frame").await["tick"].as_u64().unwrap();
+        if (tick..tick + 2).contains(&at) {
+            return at;
+        }
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn replays_of_both_formats_are_listed_played_sought_and_downloaded_as_stored() {
+    let dir = empty_dir("both-formats");
+    std::fs::create_dir_all(&dir).unwrap();
+    // Format 2, as the server records, and format 1, written before format 2 existed.
+    write_compressed_replay(&dir.join("new.jsonl.zst"), 5000, 500);
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/replay-format1.jsonl");
+    std::fs::copy(&fixture, dir.join("old.jsonl")).unwrap();
+    // One id with both names: the format 2 file is the replay.
+    write_compressed_replay(&dir.join("both.jsonl.zst"), 10, 200);
+    write_replay(&dir.join("both.jsonl"), 20, 200, true);
+    // A name that says the other format: what the file holds is what counts.
+    write_replay(&dir.join("misnamed.jsonl.zst"), 30, 200, true);
+    let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
+    let listing = listed(&server);
+    assert_eq!(ids(&listing), ["both", "misnamed", "new", "old"]);
+    let cases = [
+        // id, stored as, served as, media type, frames, first tick
+        (
+            "both",
+            "both.jsonl.zst",
+            "both.jsonl.zst",
+            "application/zstd",
+            10,
+            0,
+        ),
+        (
+            "misnamed",
+            "misnamed.jsonl.zst",
+            "misnamed.jsonl",
+            "application/x-ndjson",
+            30,
+            0,
+        ),
+        (
+            "new",
+            "new.jsonl.zst",
+            "new.jsonl.zst",
+            "application/zstd",
+            5000,
+            0,
+        ),
+        (
+            "old",
+            "old.jsonl",
+            "old.jsonl",
+            "application/x-ndjson",
+            91,
+            0,
+        ),
+    ];
+    for (k, (id, stored, served, media, frames, first)) in cases.into_iter().enumerate() {
+        let entry = &listing[k];
+        assert_eq!(entry["file"], served, "{entry}");
+        assert_eq!(entry["complete"], true, "{entry}");
+        let bytes = std::fs::read(dir.join(stored)).unwrap();
+        assert_eq!(entry["bytes"], bytes.len(), "{entry}");
+        // Downloaded as stored, named and typed for what it holds.
+        let response = get(&server, &format!("/api/replays/{id}"));
+        assert_eq!(response.status(), 200);
+        assert_eq!(response.header("content-type"), Some(media), "{id}");
+        assert_eq!(
+            response.header("content-disposition").map(str::to_string),
+            Some(format!("attachment; filename=\"{served}\"")),
+            "{id}"
+        );
+        let mut body = Vec::new();
+        response.into_reader().read_to_end(&mut body).unwrap();
+        assert!(body == bytes, "{id}: the file as stored");
+        // Played from its first frame.
+        let mut viewer = connect(&server.ws(&format!("/ws/replays/{id}"))).await;
+        let hello = next(&mut viewer).await;
+        assert_eq!(hello["replay"]["frames"], frames, "{id}: {hello}");
+        assert_eq!(hello["replay"]["complete"], true, "{id}: {hello}");
+        assert_eq!(next_of(&mut viewer, "frame").await["tick"], first, "{id}");
+    }
+    // Seeking in a compressed replay lands where asked, forwards and back, each frame
+    // read from its chunk.
+    let mut viewer = connect(&server.ws("/ws/replays/new")).await;
+    next(&mut viewer).await;
+    for tick in [6000, 9998, 2, 5000, 120] {
+        assert_eq!(seek(&mut viewer, tick).await, tick);
+    }
+    let mut old = connect(&server.ws("/ws/replays/old")).await;
+    next(&mut old).await;
+    assert_eq!(seek(&mut old, 100).await, 100);
+    // A range of a compressed replay is its bytes, as of any file.
+    let part = ureq::get(&server.http("/api/replays/new"))
+        .set("Range", "bytes=0-3")
+        .call()
+        .unwrap();
+    assert_eq!(part.status(), 206);
+    let mut magic = Vec::new();
+    part.into_reader().read_to_end(&mut magic).unwrap();
+    assert_eq!(magic, [0x28, 0xb5, 0x2f, 0xfd]);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_recording_being_written_is_watched_as_its_chunks_land() {
+    let dir = empty_dir("live-chunks");
+    std::fs::create_dir_all(&dir).unwrap();
+    let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
+    let (live, _) = server.create(json!({"sport": "baseball", "mode": "realtime"}));
+    let replay = until_listed(&server, |listing| {
+        let r = listing.iter().find(|r| r["match"] == live.as_str())?;
+        Some(r["id"].as_str().unwrap().to_string())
+    })
+    .await;
+    // A new viewer sees the frames of the chunks written when it came: none at first
+    // (the first chunk lands when full, 60 frames in 2 s, or when its first frame has
+    // waited 2 s), then more, chunk by chunk.
+    let mut seen: Vec<u64> = Vec::new();
+    let started = Instant::now();
+    while seen.iter().filter(|&&n| n > 0).count() < 2 {
+        assert!(
+            started.elapsed() < Duration::from_secs(20),
+            "frames seen by viewers as the recording went: {seen:?}"
+        );
+        let mut viewer = connect(&server.ws(&format!("/ws/replays/{replay}"))).await;
+        let hello = next(&mut viewer).await;
+        assert_eq!(hello["replay"]["complete"], false);
+        let frames = hello["replay"]["frames"].as_u64().unwrap();
+        if seen.last() != Some(&frames) {
+            assert!(seen.last() < Some(&frames), "{seen:?} then {frames}");
+            seen.push(frames);
+        }
+        if frames > 0 {
+            // It plays what has landed, from the start.
+            let first = next_of(&mut viewer, "frame").await;
+            assert_eq!(first["tick"], 0);
+            assert_eq!(first["match"], live.as_str());
+        }
+        tokio::time::sleep(Duration::from_millis(300)).await;
+    }
+    eprintln!("frames seen by viewers as the recording went: {seen:?}");
+    // Each landing is whole chunks: about 60 frames at 30 a second.
+    let steps: Vec<u64> = seen.windows(2).map(|w| w[1] - w[0]).collect();
+    assert!(steps.iter().all(|&s| s >= 20), "{seen:?}");
 }

@@ -703,19 +703,38 @@ async fn finished_replay(server: &Server, match_id: &str) -> String {
     }
 }
 
+/// A replay file's lines (whole chunks, in format 2), as text.
+fn decoded(file: &std::path::Path) -> String {
+    let (text, _) = fieldhouse::replay::decode(&std::fs::read(file).unwrap()).unwrap();
+    String::from_utf8(text).unwrap()
+}
+
+/// The whole lines in a replay file's bytes (0 if they are no replay yet).
+fn lines_of(bytes: &[u8]) -> usize {
+    fieldhouse::replay::decode(bytes)
+        .map_or(0, |(text, _)| text.iter().filter(|&&b| b == b'\n').count())
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn recorded_matches_are_listed_downloaded_and_played_with_seek() {
     let dir = empty_dir("server-replays");
     let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
     let (id, _) = server.create(json!({"sport": "cricket", "mode": "fast", "duration_s": 20.0}));
     let replay = finished_replay(&server, &id).await;
-    // Downloaded, it is the file itself, and it re-simulates exactly.
-    let body = ureq::get(&server.http(&format!("/api/replays/{replay}")))
+    // Downloaded, it is the file itself (format 2, named and typed so), and it
+    // re-simulates exactly.
+    let response = ureq::get(&server.http(&format!("/api/replays/{replay}")))
         .call()
-        .unwrap()
-        .into_string()
         .unwrap();
-    let file = dir.join("downloaded.jsonl.copy");
+    assert_eq!(response.header("content-type"), Some("application/zstd"));
+    assert_eq!(
+        response.header("content-disposition").map(str::to_string),
+        Some(format!("attachment; filename=\"{replay}.jsonl.zst\""))
+    );
+    let mut body = Vec::new();
+    std::io::Read::read_to_end(&mut response.into_reader(), &mut body).unwrap();
+    assert!(body == std::fs::read(dir.join(format!("{replay}.jsonl.zst"))).unwrap());
+    let file = dir.join("downloaded.copy");
     std::fs::write(&file, &body).unwrap();
     common::assert_verifies(&file);
     // Ids cannot reach outside the replay directory.
@@ -828,8 +847,8 @@ async fn a_recorded_bot_match_verifies_with_its_command_log() {
         .call()
         .unwrap();
     let replay = finished_replay(&server, &id).await;
-    let file = dir.join(format!("{replay}.jsonl"));
-    let text = std::fs::read_to_string(&file).unwrap();
+    let file = dir.join(format!("{replay}.jsonl.zst"));
+    let text = decoded(&file);
     assert!(
         text.contains("\"record\":\"command\""),
         "commands are logged"
@@ -853,9 +872,9 @@ async fn a_server_killed_mid_match_leaves_a_readable_replay() {
             .map(|e| e.path())
             .find(|p| p.to_string_lossy().contains(&id))
     };
-    // Killed once its replay has 30 frames on disk after its header (and a line that
-    // may be partial).
-    let lines = |p: std::path::PathBuf| std::fs::read_to_string(p).map_or(0, |t| t.lines().count());
+    // Killed once its replay has 30 frames on disk after its header, in whole chunks
+    // (and maybe part of the next).
+    let lines = |p: std::path::PathBuf| std::fs::read(p).map_or(0, |b| lines_of(&b));
     until(Duration::from_secs(10), "no 30 frames written", || {
         file().map_or(0, lines) > 31
     })

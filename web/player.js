@@ -30,7 +30,9 @@ export class Player {
     seek.value = this.tick;
     $("speed").value = "1";
     $("download").href = `/api/replays/${encodeURIComponent(replay.id)}`;
-    $("download").setAttribute("download", `${replay.id}.jsonl`);
+    // No name of our own: the server's (Content-Disposition) says what the file is,
+    // `ID.jsonl.zst` (format 2) or `ID.jsonl` (format 1).
+    $("download").setAttribute("download", "");
 
     this.handlers = [
       // A clicked button gives the focus back, so the keys work right after a click.

@@ -17,6 +17,7 @@ mod run;
 mod serve;
 mod soak;
 mod sweep;
+mod writer;
 
 use clap::{Parser, Subcommand};
 use std::io::Write;

@@ -40,7 +40,7 @@ enum ReplayCommand {
         and its heading (radians from +x toward +z). Metres and seconds. --csv is the same.\n  \
         jsonl  the frame messages exactly as the WebSocket protocol sends them (PROTOCOL.md), \
         one a line, with every field: for jq and other JSON tools.\n\
-        Example: fieldhouse replay export papers.jsonl > papers.csv")]
+        Example: fieldhouse replay export papers.jsonl.zst > papers.csv")]
     Export {
         file: PathBuf,
         /// What to write: csv or jsonl (see below).

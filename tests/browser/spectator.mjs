@@ -277,7 +277,11 @@ async function main() {
   check(after - before > 90, `replay: space plays at 2× and pauses (${before} to ${after} in about 2 s)`);
   const download = await page.locator("#download").getAttribute("href");
   const file = await page.request.get(`${base}${download}`);
-  check(file.ok() && (await file.text()).startsWith(`{"fieldhouse":`), `replay: the download link serves the file (${download})`);
+  // The demo's recording is format 2: zstd frames, named so.
+  const zstd = [0x28, 0xb5, 0x2f, 0xfd];
+  const served = file.ok() && (await file.body()).subarray(0, 4).every((b, k) => b === zstd[k]);
+  const named = /filename="[^"]+\.jsonl\.zst"/.test(file.headers()["content-disposition"] ?? "");
+  check(served && named, `replay: the download link serves the file (${download}) as .jsonl.zst`);
   await shot("replay");
 
   // The server goes away: the page says so and reconnects when it is back.

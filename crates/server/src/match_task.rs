@@ -12,7 +12,7 @@
 use super::auth::new_token;
 use super::config::ServerConfig;
 use super::metrics::Metrics;
-use super::recording::{InDir, Limit, Recording};
+use super::recording::{self, InDir, Limit, Recording};
 use super::slot::Slot;
 use super::state::{AppState, Control, MatchEntry, Published, ToBot};
 use fieldhouse_core::driver::{Event, MatchDriver, Output, Wake};
@@ -77,7 +77,8 @@ pub fn spawn(
             stem: format!("{id}-{}", unix_seconds()),
         };
         let limit = recording_limit(&app.config, &scenario);
-        let made = Recording::start(files, header, limit, app.replays.queued.clone())
+        let queued = app.replays.queued.clone();
+        let made = Recording::start(files, header, limit, queued, recording::CUT_AFTER)
             .map_err(|e| e.to_string())
             .and_then(|(r, id)| r.frame(0, first.clone()).map(|()| (r, id)));
         made.map_err(|e| {

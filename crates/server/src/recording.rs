@@ -1,9 +1,14 @@
 //! A match's replay, written on a thread of its own. The thread that ticks every match
-//! only hands each record over (a channel send); writing, flushing, syncing and closing
-//! happen on the recording's writer thread, so a slow or full disk, or the sync of a
-//! file of gigabytes, never holds up a tick. Ending a match waits for its replay's last
-//! sync without blocking a thread: the replay is complete on disk before `end` is
-//! published, and meanwhile the other matches tick.
+//! only hands each record over (a channel send); compressing, writing, flushing, syncing
+//! and closing happen on the recording's writer thread, so a slow or full disk, or the
+//! sync of a file of gigabytes, never holds up a tick. Ending a match waits for its
+//! replay's last sync without blocking a thread: the replay is complete on disk before
+//! `end` is published, and meanwhile the other matches tick.
+//!
+//! Replays are written in format 2 (chunks of 60 lines, each compressed: see
+//! [`fieldhouse_core::replay`]). A chunk is written when it is full, or when its first
+//! line has waited [`CUT_AFTER`] (the core has no clock: the writer cuts it), so a live
+//! viewer sees frames at most that late and a process killed loses at most that much.
 //!
 //! Bounds: what waits to be written is at most [`MAX_QUEUED_BYTES`] per recording and
 //! [`MAX_QUEUED_ALL_BYTES`] for all (past that the disk is not keeping up and the
@@ -12,19 +17,28 @@
 //! `size_limit`; a recording that may never end (a real-time match without bot slots,
 //! like the demos) instead rotates into files of `replay_segment_bytes`, each ended with
 //! the reason `rotated` and the next one's header naming its segment, first tick and
-//! the file before it (see [`fieldhouse_core::replay`]).
+//! the file before it (see [`fieldhouse_core::replay`]). Both limits count the bytes
+//! written (compressed) and the chunk being filled as it is (uncompressed, which it will
+//! not exceed compressed): a file ends within them, but for its footer.
 
 use super::replay_dir;
 use super::state::AppState;
-use fieldhouse_core::replay::{Durable, Recorder};
+use fieldhouse_core::replay::{Durable, Encoding, Recorder};
 use serde_json::Value;
 use std::io;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
-use std::sync::mpsc;
+use std::sync::mpsc::{self, RecvTimeoutError};
 use std::sync::{Arc, OnceLock};
+use std::time::{Duration, Instant};
 use tokio::sync::oneshot;
 use tokio_tungstenite::tungstenite::Utf8Bytes;
+
+/// How long a line may wait in the chunk being filled before the writer cuts the chunk
+/// short and writes it (a chunk of 60 lines otherwise fills in 2 s at 30 frames a
+/// second, and a match with no frames for a while would hold its last ones): what a
+/// live viewer lags by at most, and what a crash loses at most.
+pub const CUT_AFTER: Duration = Duration::from_secs(2);
 
 /// The most a recording may have waiting to be written: a second of the fastest match
 /// is less, so a queue this long means the disk cannot keep up.
@@ -128,9 +142,10 @@ impl Recording {
         header: Value,
         limit: Limit,
         all_queued: Arc<AtomicU64>,
+        cut_after: Duration,
     ) -> io::Result<(Recording, String)> {
         let (out, id) = files.create(0)?;
-        let recorder = match Recorder::new(out, &header) {
+        let recorder = match Recorder::new(out, &header, Encoding::Zstd) {
             Ok(r) => r,
             Err(e) => {
                 files.closed(0);
@@ -150,7 +165,7 @@ impl Recording {
             recorder: Some(recorder),
             segment: 0,
             segment_id: id.clone(),
-            written: 0,
+            cut_after,
             last_tick: 0,
             queued: queued.clone(),
             stopped: stopped.clone(),
@@ -222,8 +237,8 @@ struct Writer<F: Files> {
     recorder: Option<Recorder<F::Out>>,
     segment: u32,
     segment_id: String,
-    /// Bytes of records written, all segments.
-    written: u64,
+    /// How long a line may wait in a chunk being filled (see [`CUT_AFTER`]).
+    cut_after: Duration,
     /// The tick of the last frame written.
     last_tick: u64,
     queued: Queued,
@@ -232,22 +247,59 @@ struct Writer<F: Files> {
 
 impl<F: Files> Writer<F> {
     fn run(mut self, inbox: mpsc::Receiver<Record>) {
-        while let Ok(first) = inbox.recv() {
-            // Everything waiting, then one flush: a frame is on disk (in the page
-            // cache, for a process killed) as soon as the writer has caught up.
-            let mut next = Some(first);
-            while let Some(record) = next {
-                self.take(record);
-                next = inbox.try_recv().ok();
-            }
-            if let Some(r) = &mut self.recorder {
-                if let Err(e) = r.flush() {
-                    self.stop(e.to_string());
+        // When the chunk being filled is to be cut short, and which chunk it is (the
+        // count of chunks written before it).
+        let mut due: Option<(Instant, u64)> = None;
+        loop {
+            let received = match due {
+                None => inbox.recv().map_err(|_| RecvTimeoutError::Disconnected),
+                Some((when, _)) => {
+                    inbox.recv_timeout(when.saturating_duration_since(Instant::now()))
                 }
+            };
+            match received {
+                // Everything waiting, then one flush: a frame is on disk (in the page
+                // cache, for a process killed) once the writer has caught up and its
+                // chunk is written.
+                Ok(first) => {
+                    let mut next = Some(first);
+                    while let Some(record) = next {
+                        self.take(record);
+                        next = inbox.try_recv().ok();
+                    }
+                }
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => break,
+            }
+            let Some(r) = &mut self.recorder else {
+                due = None;
+                continue;
+            };
+            let now = Instant::now();
+            due = match due {
+                _ if r.buffered() == 0 => None,
+                Some((when, chunk)) if chunk == r.chunks() && now < when => due,
+                // Its first line has waited `cut_after`: out it goes, short.
+                Some((_, chunk)) if chunk == r.chunks() => {
+                    if let Err(e) = r.cut() {
+                        self.stop(e.to_string());
+                        continue;
+                    }
+                    None
+                }
+                // A chunk began filling since.
+                _ => Some((now + self.cut_after, r.chunks())),
+            };
+            if let Err(e) = r.flush() {
+                self.stop(e.to_string());
             }
         }
-        // The match let go without finishing: what was written stays, unfinished.
-        if self.recorder.take().is_some() {
+        // The match let go without finishing: what was recorded stays, unfinished, the
+        // chunk being filled included.
+        if let Some(mut r) = self.recorder.take() {
+            if let Err(e) = r.cut().and_then(|()| r.flush()) {
+                tracing::warn!(error = %e, "cannot write the end of an unfinished replay");
+            }
             self.files.closed(self.segment);
         }
     }
@@ -258,7 +310,6 @@ impl<F: Files> Writer<F> {
             Record::Frame { tick, text } => self.frame(tick, &text),
             Record::Log(line) => {
                 if let Some(r) = &mut self.recorder {
-                    self.written += line.len() as u64 + 1;
                     if let Err(e) = r.log(&line) {
                         self.stop(e.to_string());
                     }
@@ -292,7 +343,7 @@ impl<F: Files> Writer<F> {
                     return self.stop(format!("cannot start the next segment: {e}"));
                 }
             }
-            Limit::Total(most) if self.written + bytes > most => {
+            Limit::Total(most) if r.bytes() + bytes > most => {
                 // Said before the footer is written: whoever sees the footer can also
                 // see why the recording stopped.
                 let why = format!(
@@ -314,7 +365,6 @@ impl<F: Files> Writer<F> {
         if let Err(e) = r.frame(text) {
             return self.stop(e.to_string());
         }
-        self.written += bytes;
         self.last_tick = tick;
     }
 
@@ -333,7 +383,7 @@ impl<F: Files> Writer<F> {
         header["segment"] = self.segment.into();
         header["first_tick"] = tick.into();
         header["previous"] = std::mem::replace(&mut self.segment_id, id).into();
-        match Recorder::new(out, &header) {
+        match Recorder::new(out, &header, Encoding::Zstd) {
             Ok(r) => self.recorder = Some(r),
             Err(e) => {
                 self.files.closed(self.segment);
@@ -353,8 +403,8 @@ impl<F: Files> Writer<F> {
     }
 }
 
-/// A recording's files in the server's replay directory: `STEM.jsonl`, then
-/// `STEM-s1.jsonl`, `STEM-s2.jsonl`, ... for later segments. Each is marked as being
+/// A recording's files in the server's replay directory: `STEM.jsonl.zst`, then
+/// `STEM-s1.jsonl.zst`, `STEM-s2.jsonl.zst`, ... for later segments. Each is marked as being
 /// written while it is, so retention leaves it alone, and retention is told when one is
 /// done.
 pub struct InDir {
@@ -408,8 +458,8 @@ impl Files for InDir {
 
 #[cfg(test)]
 mod tests {
-    use super::{Files, Limit, Recording, MAX_QUEUED_ALL_BYTES, MAX_QUEUED_BYTES};
-    use fieldhouse_core::replay::Durable;
+    use super::{Files, Limit, Recording, CUT_AFTER, MAX_QUEUED_ALL_BYTES, MAX_QUEUED_BYTES};
+    use fieldhouse_core::replay::{self, Durable};
     use serde_json::{json, Value};
     use std::io::{self, Write};
     use std::sync::{Arc, Mutex};
@@ -427,7 +477,7 @@ mod tests {
 
     impl Write for Slow {
         fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-            if self.bytes.lock().unwrap().contains(&b'\n') {
+            if !self.bytes.lock().unwrap().is_empty() {
                 std::thread::sleep(self.delay);
             }
             self.bytes.lock().unwrap().extend_from_slice(buf);
@@ -469,12 +519,22 @@ mod tests {
             segments
                 .iter()
                 .map(|(bytes, _)| {
-                    String::from_utf8(bytes.lock().unwrap().clone())
+                    let (text, _) = replay::decode(&bytes.lock().unwrap()).unwrap();
+                    String::from_utf8(text)
                         .unwrap()
                         .lines()
                         .map(|l| serde_json::from_str(l).unwrap())
                         .collect()
                 })
+                .collect()
+        }
+
+        /// Each segment's size.
+        fn sizes(&self) -> Vec<usize> {
+            let segments = self.segments.lock().unwrap();
+            segments
+                .iter()
+                .map(|(b, _)| b.lock().unwrap().len())
                 .collect()
         }
 
@@ -509,13 +569,15 @@ mod tests {
 
     #[tokio::test]
     async fn a_slow_disk_never_holds_up_the_caller_and_finishing_waits_without_blocking() {
-        // 2 ms a write, 40 ms the sync: 200 frames take the writer about half a second.
-        let files = Memory::new(Duration::from_millis(2));
+        // 20 ms a write (of a chunk, 60 frames), 400 ms the sync: 200 frames take the
+        // writer about half a second.
+        let files = Memory::new(Duration::from_millis(20));
         let (recording, id) = Recording::start(
             files.clone(),
             header(),
             Limit::Total(1 << 30),
             Arc::default(),
+            CUT_AFTER,
         )
         .unwrap();
         assert_eq!(id, "m-0");
@@ -558,6 +620,7 @@ mod tests {
             header(),
             Limit::Segments(1000),
             Arc::default(),
+            CUT_AFTER,
         )
         .unwrap();
         for tick in 0..40 {
@@ -577,7 +640,8 @@ mod tests {
             if n > 0 {
                 assert_eq!(first["previous"], format!("m-{}", n - 1));
             }
-            let bytes: usize = lines.iter().map(|l| l.to_string().len() + 1).sum();
+            // On disk, within the limit but for the footer's chunk and the trailer.
+            let bytes = files.sizes()[n];
             assert!(bytes <= 1000 + 200, "segment {n}: {bytes} bytes");
             let last = n == segments.len() - 1;
             assert_eq!(footer["reason"], if last { "shutdown" } else { "rotated" });
@@ -587,11 +651,70 @@ mod tests {
         assert_eq!(files.open(), 0);
     }
 
+    /// Waits (5 s at most) until the first segment reads as `lines` lines.
+    fn until_lines(files: &Memory, lines: usize) {
+        let started = Instant::now();
+        while files.lines()[0].len() != lines {
+            assert!(
+                started.elapsed() < Duration::from_secs(5),
+                "{} lines, not {lines}",
+                files.lines()[0].len()
+            );
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+
+    #[tokio::test]
+    async fn a_chunk_is_written_when_full_when_a_line_waited_long_enough_or_when_let_go() {
+        // Lines wait at most 100 ms: three frames are written without 57 more.
+        let files = Memory::new(Duration::ZERO);
+        let short = Duration::from_millis(100);
+        let (recording, _) = Recording::start(
+            files.clone(),
+            header(),
+            Limit::Total(1 << 30),
+            Arc::default(),
+            short,
+        )
+        .unwrap();
+        for tick in 0..3 {
+            recording.frame(tick, frame(tick)).unwrap();
+        }
+        until_lines(&files, 1 + 3);
+        drop(recording);
+        // Lines wait an hour: a full chunk is written at once, and the rest when the
+        // match lets go of its recording without finishing it.
+        let files = Memory::new(Duration::ZERO);
+        let (recording, _) = Recording::start(
+            files.clone(),
+            header(),
+            Limit::Total(1 << 30),
+            Arc::default(),
+            Duration::from_secs(3600),
+        )
+        .unwrap();
+        for tick in 0..70 {
+            recording.frame(tick, frame(tick)).unwrap();
+        }
+        until_lines(&files, 1 + 60);
+        drop(recording);
+        until_lines(&files, 1 + 70);
+        let lines = files.lines().remove(0);
+        assert_eq!(lines.last().unwrap()["tick"], 69, "no footer: unfinished");
+        assert_eq!(files.open(), 0);
+    }
+
     #[tokio::test]
     async fn a_recording_stops_at_its_size_limit_with_a_footer_that_says_so() {
         let files = Memory::new(Duration::ZERO);
-        let (recording, _) =
-            Recording::start(files.clone(), header(), Limit::Total(1000), Arc::default()).unwrap();
+        let (recording, _) = Recording::start(
+            files.clone(),
+            header(),
+            Limit::Total(1000),
+            Arc::default(),
+            CUT_AFTER,
+        )
+        .unwrap();
         let mut refused = None;
         for tick in 0..100 {
             if let Err(why) = recording.frame(tick, frame(tick)) {
@@ -623,6 +746,7 @@ mod tests {
                 header(),
                 Limit::Total(u64::MAX),
                 Arc::clone(&all),
+                CUT_AFTER,
             )
             .unwrap()
             .0

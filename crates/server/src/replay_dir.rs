@@ -2,14 +2,18 @@
 //! one is opened, which are being written, and the indexes their viewers share.
 //!
 //! Anyone who can write to the directory can put anything in it, so only a regular file
-//! named `ID.jsonl`, right in it, with no other name, is a replay. A symbolic link is
-//! never followed (it could name `/etc/passwd` or `/proc/self/environ`), a device or a
-//! FIFO is never read (`/dev/zero` has no end, a FIFO blocks for ever), and a file with
-//! a second name (a hard link) could be a file from elsewhere, so it is refused too. The
-//! checks are made on the opened handle (`O_NOFOLLOW`, then `fstat`), so nothing can be
-//! swapped in between a check and the open.
+//! named `ID.jsonl.zst` (format 2, what the server writes) or `ID.jsonl` (format 1, as
+//! written before), right in it, with no other name, is a replay; if both names of one
+//! id are there, `ID.jsonl.zst` is the one listed and served (and the other is left
+//! alone, by retention too). What a file holds is told
+//! by its first bytes, not its name. A symbolic link is never followed (it could name
+//! `/etc/passwd` or `/proc/self/environ`), a device or a FIFO is never read (`/dev/zero`
+//! has no end, a FIFO blocks for ever), and a file with a second name (a hard link)
+//! could be a file from elsewhere, so it is refused too. The checks are made on the
+//! opened handle (`O_NOFOLLOW`, then `fstat`), so nothing can be swapped in between a
+//! check and the open.
 
-use fieldhouse_core::replay::Index;
+use fieldhouse_core::replay::{Encoding, Index};
 use std::collections::{HashMap, HashSet};
 use std::fs::{File, Metadata};
 use std::io;
@@ -27,19 +31,56 @@ pub fn valid_id(id: &str) -> bool {
             .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
 }
 
-/// The file of replay `id` in `dir` (`id` must be [`valid_id`]).
+/// The names of a replay file, in the order they are looked for: format 2, then 1.
+const ENCODINGS: [Encoding; 2] = [Encoding::Zstd, Encoding::Plain];
+
+/// The file a recording writes replay `id` to (`id` must be [`valid_id`]): `ID.jsonl.zst`.
 pub fn path_of(dir: &Path, id: &str) -> PathBuf {
-    dir.join(format!("{id}.jsonl"))
+    name_of(dir, id, Encoding::Zstd)
+}
+
+fn name_of(dir: &Path, id: &str, encoding: Encoding) -> PathBuf {
+    dir.join(format!("{id}.{}", encoding.extension()))
+}
+
+/// The replay id a file name gives, with the encoding its name says, if it names one.
+fn id_of(name: &str) -> Option<(&str, Encoding)> {
+    ENCODINGS.iter().find_map(|&e| {
+        let id = name.strip_suffix(e.extension())?.strip_suffix('.')?;
+        valid_id(id).then_some((id, e))
+    })
 }
 
 /// Opens replay `id` for reading, if it is one: a regular file with one name, not a
-/// link. Anything else is `NotFound`, as a missing file is: what else the name is, is
-/// nobody's business. The open never blocks (a FIFO would).
-pub fn open(dir: &Path, id: &str) -> io::Result<(File, Metadata)> {
+/// link, named `ID.jsonl.zst` or else `ID.jsonl`. Anything else is `NotFound`, as a
+/// missing file is: what else the name is, is nobody's business. The open never blocks
+/// (a FIFO would).
+pub fn open(dir: &Path, id: &str) -> io::Result<Found> {
+    for encoding in ENCODINGS {
+        let path = name_of(dir, id, encoding);
+        match open_path(&path) {
+            Ok((file, meta)) => {
+                return Ok(Found {
+                    id: id.to_string(),
+                    path,
+                    named: encoding,
+                    file,
+                    meta,
+                })
+            }
+            Err(e) if e.kind() == io::ErrorKind::NotFound => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Err(io::ErrorKind::NotFound.into())
+}
+
+/// Opens `path` if it is a regular file with one name, not a link (see [`open`]).
+fn open_path(path: &Path) -> io::Result<(File, Metadata)> {
     let file = std::fs::OpenOptions::new()
         .read(true)
         .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK | libc::O_NOCTTY)
-        .open(path_of(dir, id))
+        .open(path)
         .map_err(|e| match e.raw_os_error() {
             // What O_NOFOLLOW answers for a link.
             Some(libc::ELOOP) => io::ErrorKind::NotFound.into(),
@@ -56,12 +97,23 @@ pub fn open(dir: &Path, id: &str) -> io::Result<(File, Metadata)> {
 pub struct Found {
     pub id: String,
     pub path: PathBuf,
+    /// The encoding its name says; its first bytes say which it is.
+    pub named: Encoding,
     pub file: File,
     pub meta: Metadata,
 }
 
-/// Every replay in `dir`, opened as [`open`] opens one; other entries are passed over
-/// without being opened. Blocking: call it on a blocking thread.
+impl Found {
+    /// How the file is stored, told by its first bytes; by its name if they tell
+    /// nothing (it is no replay, or is empty).
+    pub fn encoding(&self) -> Encoding {
+        Encoding::of_file(&self.file).unwrap_or(self.named)
+    }
+}
+
+/// Every replay in `dir`, opened as [`open`] opens one (one per id: the one [`open`]
+/// finds); other entries are passed over without being opened. Blocking: call it on a
+/// blocking thread.
 pub fn scan(dir: &Path) -> Vec<Found> {
     let mut found = Vec::new();
     for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
@@ -70,22 +122,24 @@ pub fn scan(dir: &Path) -> Vec<Found> {
             continue;
         }
         let name = entry.file_name();
-        let Some(id) = name.to_str().and_then(|n| n.strip_suffix(".jsonl")) else {
+        let Some((id, named)) = name.to_str().and_then(id_of) else {
             continue;
         };
-        if !valid_id(id) {
-            continue;
-        }
-        if let Ok((file, meta)) = open(dir, id) {
+        let path = name_of(dir, id, named);
+        if let Ok((file, meta)) = open_path(&path) {
             found.push(Found {
                 id: id.to_string(),
-                path: path_of(dir, id),
+                path,
+                named,
                 file,
                 meta,
             });
         }
     }
-    found.sort_by(|a, b| a.id.cmp(&b.id));
+    // Format 2's name first, so that it is the one kept of an id with both.
+    let rank = |e: Encoding| ENCODINGS.iter().position(|&x| x == e);
+    found.sort_by(|a, b| a.id.cmp(&b.id).then(rank(a.named).cmp(&rank(b.named))));
+    found.dedup_by(|later, first| later.id == first.id);
     found
 }
 

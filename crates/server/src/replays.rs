@@ -28,15 +28,15 @@ use axum::Json;
 use fieldhouse_core::protocol::{
     decode_control, encode, Control, End, ErrorMessage, Hello, ReplayInfo, Role, ViewerMessage,
 };
-use fieldhouse_core::replay::{self, Index};
+use fieldhouse_core::replay::{self, ChunkCache, Index};
 use fieldhouse_core::tags;
 use futures_util::stream::SplitStream;
 use futures_util::StreamExt;
 use serde_json::{json, Value};
 use std::collections::VecDeque;
-use std::fs::{File, Metadata};
+use std::fs::File;
 use std::sync::atomic::Ordering::Relaxed;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncSeekExt};
 use tokio::time::Instant;
@@ -55,7 +55,7 @@ fn dir_of(app: &AppState) -> Result<&std::path::Path, ApiError> {
 
 /// Opens replay `id` as [`replay_dir::open`] does: a link, a device, a FIFO or a
 /// missing file is the same 404, and no answer shows where the server keeps its files.
-async fn open(app: &AppState, id: &str) -> Result<(File, Metadata), ApiError> {
+async fn open(app: &AppState, id: &str) -> Result<replay_dir::Found, ApiError> {
     let dir = dir_of(app)?.to_path_buf();
     if !replay_dir::valid_id(id) {
         return Err(ApiError::new(
@@ -117,6 +117,8 @@ fn describe(found: &replay_dir::Found) -> Value {
         Ok((header, footer)) => json!({
             "id": id,
             "bytes": bytes,
+            // What a download is named: what the file holds, format 2 or 1.
+            "file": format!("{id}.{}", found.encoding().extension()),
             "match": header["match"]["id"],
             "name": header["match"]["name"],
             "sport": header["match"]["sport"],
@@ -138,8 +140,10 @@ pub async fn download(
     headers: HeaderMap,
     State(app): State<Arc<AppState>>,
 ) -> Result<Response, ApiError> {
-    let (file, meta) = open(&app, &id).await?;
-    let len = meta.len();
+    let found = open(&app, &id).await?;
+    // Served as stored, named and typed for what it holds (format 2 or 1).
+    let encoding = found.encoding();
+    let (file, len) = (found.file, found.meta.len());
     let asked = headers.get(RANGE).and_then(|v| v.to_str().ok());
     let (status, start, end) = match range::wanted(asked, len) {
         Wanted::Whole => (StatusCode::OK, 0, len),
@@ -172,10 +176,10 @@ pub async fn download(
     ));
     let mut response = Response::builder()
         .status(status)
-        .header(CONTENT_TYPE, "application/x-ndjson")
+        .header(CONTENT_TYPE, encoding.media_type())
         .header(
             CONTENT_DISPOSITION,
-            format!("attachment; filename=\"{id}.jsonl\""),
+            format!("attachment; filename=\"{id}.{}\"", encoding.extension()),
         )
         .header(ACCEPT_RANGES, "bytes")
         .header(CONTENT_LENGTH, end - start);
@@ -198,7 +202,7 @@ pub async fn watch(
     State(app): State<Arc<AppState>>,
 ) -> Response {
     let (file, meta) = match open(&app, &id).await {
-        Ok(found) => found,
+        Ok(found) => (found.file, found.meta),
         Err(e) => return e.into_response(),
     };
     let index = match app.replays.index(&file, &meta).await {
@@ -213,15 +217,18 @@ pub async fn watch(
     let viewed = Viewed {
         index,
         file: Arc::new(file),
+        cache: Arc::default(),
     };
     let config = app.config.clone();
     ws.on_upgrade(&config, move |socket| play(socket, viewed, id, app))
 }
 
-/// A viewer's replay: the shared index, and the viewer's own handle on the file.
+/// A viewer's replay: the shared index, the viewer's own handle on the file, and (in
+/// format 2) the chunks it read last, decompressed, for the frames after them.
 struct Viewed {
     index: Arc<Index>,
     file: Arc<File>,
+    cache: Arc<Mutex<ChunkCache>>,
 }
 
 /// Frames a viewer reads from the file at once, at most (and 64 KiB at most).
@@ -231,9 +238,12 @@ const BATCH_BYTES: usize = 64 * 1024;
 impl Viewed {
     /// Frames `from..`, a batch of them, read on a blocking thread.
     async fn batch(&self, from: usize) -> Result<VecDeque<String>, String> {
-        let (index, file) = (self.index.clone(), self.file.clone());
-        let read =
-            tokio::task::spawn_blocking(move || index.read(&file, from, BATCH_FRAMES, BATCH_BYTES));
+        let (index, file, cache) = (self.index.clone(), self.file.clone(), self.cache.clone());
+        let read = tokio::task::spawn_blocking(move || {
+            // One batch at a time per viewer: never waited on.
+            let mut cache = cache.lock().expect("not poisoned");
+            index.read(&file, &mut cache, from, BATCH_FRAMES, BATCH_BYTES)
+        });
         match read.await {
             Ok(Ok(frames)) => Ok(frames.into()),
             Ok(Err(e)) => Err(e.to_string()),

@@ -166,7 +166,8 @@ pub struct ReplayInfo<'a> {
     pub first_tick: Option<u64>,
     /// How many frames it holds.
     pub frames: usize,
-    /// The replay's id, as in its URLs.
+    /// The replay's id (its file name without `.jsonl.zst`, or `.jsonl` for a format 1
+    /// file), as in `GET /api/replays`.
     pub id: &'a str,
     /// The tick of its last frame; null without frames.
     pub last_tick: Option<u64>,

@@ -1,8 +1,8 @@
 //! Replay files: what happened in a match, kept so it can be watched and checked later.
 //!
-//! **Encoding**: JSON lines (UTF-8, one record per line, `\n`-terminated), uncompressed:
+//! **Records**: JSON lines (UTF-8, one record per line, `\n`-terminated):
 //!
-//! 1. a header: `{"record": "header", "format": 1, "fieldhouse": "0.1.0", "match": {...},
+//! 1. a header: `{"record": "header", "format": 2, "fieldhouse": "0.1.0", "match": {...},
 //!    "scenario": {...}, "seed": 1, "motion": "<fingerprint>", "started_unix_ms": ...}`;
 //! 2. the `frame` messages of the wire protocol, byte for byte, in order, interleaved
 //!    with the bot log: `{"record": "control", "tick": t, "agent": "cf", "bot": true}`
@@ -16,31 +16,54 @@
 //!    `size_limit` (the server stopped recording at its per-match limit; the match went
 //!    on, `result` is null) or `rotated` (see segments; `result` is null).
 //!
+//! **Encodings** ([`Encoding`]), told apart by a file's first bytes, not its name:
+//!
+//! * **Format 2** (`.jsonl.zst`, what is written unless asked otherwise): the lines in
+//!   chunks of whole lines, each chunk a zstd frame of its own, the header and the footer
+//!   each in a chunk of their own, then a 20-byte trailer (a zstd skippable frame) giving
+//!   the footer chunk's place: see [`chunks`] for the layout. 8–9× smaller than the
+//!   lines; `zstdcat FILE` prints them (the header saying format 2). A file cut anywhere
+//!   reads up to its last whole chunk; one without the trailer is incomplete.
+//! * **Format 1** (`.jsonl`): the lines themselves, uncompressed, as files were written
+//!   before format 2 (and still are on request: `fieldhouse run --out x.jsonl`). A file
+//!   cut anywhere reads up to its last whole line.
+//!
+//! This build reads both, whatever number the header gives (1 or 2: the records are the
+//! same, so a decompressed format 2 file reads as lines too); a build that knew only
+//! format 1 refuses format 2 files by their header's number, and could not read their
+//! chunks anyway.
+//!
 //! **Segments.** A recording that may never end (the server's real-time matches
 //! without bot slots) is rotated into files of bounded size. Every file is a complete
 //! replay by itself; a later one's header adds `"segment": n` (1, 2, ...),
 //! `"first_tick": t` (the tick of its first frame) and `"previous": "<replay id>"`
 //! (the file before it). A file without these fields is segment 0 from tick 0, so files
-//! written before segments existed read as they did (the format stays 1: fields were
-//! added, none changed meaning). Checking a later segment re-simulates from tick 0 and
-//! compares frames from its first tick on, which is exact for matches without bots
-//! (the only ones rotated: a bot log would be split across files).
+//! written before segments existed read as they did. Checking a later segment
+//! re-simulates from tick 0 and compares frames from its first tick on, which is exact
+//! for matches without bots (the only ones rotated: a bot log would be split across
+//! files).
 //!
-//! Records are appended and flushed as they go (the server's writer flushes after each
-//! batch it takes from its queue), so a process killed mid-match leaves complete
-//! records behind and at most one torn line, which reading detects and ignores; a
-//! finished file is flushed and synced before the match is reported ended.
+//! **Writing.** Records are appended as they go. Format 1 writes each line as it comes;
+//! format 2 writes a chunk when it is full (60 lines), or when its writer calls
+//! [`Recorder::cut`] (the server does once a line has waited about 2 s, so a live viewer
+//! sees frames that late at most and a crash loses at most that much; this core keeps
+//! no clock). [`Recorder::flush`] pushes what was written to the file, so a process
+//! killed mid-match leaves whole chunks (or lines) behind and at most one torn, which
+//! reading detects and ignores; a finished file is flushed and synced before the match
+//! is reported ended.
 //!
 //! **Reading.** [`read`] and [`parse`] take a whole file, for tools; the server reads
-//! through an [`Index`] and [`peek`], which bound every line they read.
+//! through an [`Index`] and [`peek`], which bound every line and chunk they read.
 
+pub mod chunks;
 mod index;
 mod verify;
 
-pub use index::{Index, MAX_LINE_BYTES};
+pub use index::{ChunkCache, Index, MAX_LINE_BYTES};
 pub use verify::{verify, Mismatch, Verified};
 
 use crate::sim::{Action, Scenario};
+use chunks::Packer;
 use serde::Serialize;
 use serde_json::{json, Value};
 use sha2::{Digest, Sha256};
@@ -48,8 +71,74 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
-/// Bump when a reader of the old format could not read the new one.
-pub const FORMAT: u32 = 1;
+/// The format written by default (chunked zstd, see the module doc). Bump when a reader
+/// of the old format could not read the new one.
+pub const FORMAT: u32 = 2;
+
+/// How a replay file is stored (see the module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Encoding {
+    /// Format 1: JSON lines, uncompressed.
+    Plain,
+    /// Format 2: the lines in chunks, each a zstd frame.
+    Zstd,
+}
+
+impl Encoding {
+    /// The encoding of a file that starts with `start` (its first 4 bytes suffice): a
+    /// zstd frame's magic number, or the `{` of a header record.
+    pub fn of(start: &[u8]) -> Result<Encoding, String> {
+        if start.starts_with(&chunks::MAGIC) {
+            Ok(Encoding::Zstd)
+        } else if start.first() == Some(&b'{') {
+            Ok(Encoding::Plain)
+        } else if start.is_empty() {
+            Err("the file is empty".into())
+        } else {
+            Err("neither JSON lines (format 1) nor chunked zstd (format 2)".into())
+        }
+    }
+
+    /// The encoding of an opened file, from its first bytes.
+    pub fn of_file(file: &std::fs::File) -> Result<Encoding, String> {
+        let mut start = [0; 4];
+        let got = read_at(file, &mut start, 0)?;
+        Encoding::of(&start[..got])
+    }
+
+    /// The encoding a file named `path` should be written in: format 1 for a name ending
+    /// in `.jsonl` (plain text asked for by name), else format 2.
+    pub fn for_path(path: &Path) -> Encoding {
+        match path.extension() {
+            Some(e) if e == "jsonl" => Encoding::Plain,
+            _ => Encoding::Zstd,
+        }
+    }
+
+    /// The `format` number its header gives.
+    pub fn format(self) -> u32 {
+        match self {
+            Encoding::Plain => 1,
+            Encoding::Zstd => FORMAT,
+        }
+    }
+
+    /// The file name extension, without its first dot: `jsonl` or `jsonl.zst`.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Encoding::Plain => "jsonl",
+            Encoding::Zstd => "jsonl.zst",
+        }
+    }
+
+    /// The media type of a file in this encoding.
+    pub fn media_type(self) -> &'static str {
+        match self {
+            Encoding::Plain => "application/x-ndjson",
+            Encoding::Zstd => "application/zstd",
+        }
+    }
+}
 
 /// Where a recorder's bytes go: written, and made durable when the replay is finished.
 /// A file syncs to disk; a test's sink may do anything (be slow, fail).
@@ -65,14 +154,31 @@ impl Durable for io::BufWriter<std::fs::File> {
     }
 }
 
-/// Writes a replay as the match goes. Frames are buffered: [`Recorder::flush`] pushes
-/// them to the file (the server flushes after each batch it takes from its queue).
+/// Writes a replay as the match goes. Records are buffered: [`Recorder::flush`] pushes
+/// what was written to the file (the server flushes after each batch it takes from its
+/// queue). In format 2 a record is written with its chunk: when the chunk is full, or
+/// [`Recorder::cut`]. Dropping a recorder loses the chunk being filled: cut and flush
+/// first.
 pub struct Recorder<W: Durable = io::BufWriter<std::fs::File>> {
     out: W,
+    /// Format 2's compressor and the chunk being filled; None for format 1.
+    chunked: Option<Chunked>,
     hasher: Sha256,
     frames: u64,
-    /// Bytes written so far, header included.
-    bytes: u64,
+    /// Bytes written to `out`, header included.
+    written: u64,
+}
+
+/// A format 2 recorder's state.
+struct Chunked {
+    packer: Packer,
+    /// The lines of the chunk being filled.
+    text: Vec<u8>,
+    lines: usize,
+    /// Chunks written.
+    count: u64,
+    /// The last chunk written: its offset and length.
+    last: (u64, u32),
 }
 
 /// The header record of a replay: what was played, with what, and when.
@@ -94,32 +200,49 @@ pub fn header(match_info: &impl Serialize, scenario: &Scenario, motion: &str) ->
 
 impl Recorder {
     /// Creates `path` (never overwriting a file) and writes the header.
-    pub fn create(path: &Path, header: &Value) -> io::Result<Recorder> {
+    pub fn create(path: &Path, header: &Value, encoding: Encoding) -> io::Result<Recorder> {
         let file = std::fs::OpenOptions::new()
             .write(true)
             .create_new(true)
             .open(path)?;
-        Recorder::new(io::BufWriter::new(file), header)
+        Recorder::new(io::BufWriter::new(file), header, encoding)
     }
 }
 
 impl<W: Durable> Recorder<W> {
-    /// Writes the header to `out` and flushes it.
-    pub fn new(out: W, header: &Value) -> io::Result<Recorder<W>> {
+    /// Writes the header to `out` (its `format` set to the encoding's) and flushes it.
+    pub fn new(out: W, header: &Value, encoding: Encoding) -> io::Result<Recorder<W>> {
+        let chunked = match encoding {
+            Encoding::Plain => None,
+            Encoding::Zstd => Some(Chunked {
+                packer: Packer::new(chunks::LEVEL)?,
+                text: Vec::with_capacity(chunks::CHUNK_BYTES + 4096),
+                lines: 0,
+                count: 0,
+                last: (0, 0),
+            }),
+        };
         let mut r = Recorder {
             out,
+            chunked,
             hasher: Sha256::new(),
             frames: 0,
-            bytes: 0,
+            written: 0,
         };
+        let mut header = header.clone();
+        header["format"] = encoding.format().into();
         r.line(&header.to_string())?;
+        // The header has a chunk of its own, so it reads without the frames.
+        r.cut()?;
         r.out.flush()?;
         Ok(r)
     }
 
-    /// Bytes written so far.
+    /// About the bytes the file will hold once what it was given is written: the bytes
+    /// written, and those of the chunk being filled uncompressed (at most what it will
+    /// take compressed, but for a few bytes of framing).
     pub fn bytes(&self) -> u64 {
-        self.bytes
+        self.written + self.chunked.as_ref().map_or(0, |c| c.text.len() as u64)
     }
 
     /// Frames written so far.
@@ -127,10 +250,50 @@ impl<W: Durable> Recorder<W> {
         self.frames
     }
 
+    /// Format 2: how many lines wait in the chunk being filled (0 in format 1, where
+    /// each line is written as it comes).
+    pub fn buffered(&self) -> usize {
+        self.chunked.as_ref().map_or(0, |c| c.lines)
+    }
+
+    /// Format 2: chunks written so far (0 in format 1).
+    pub fn chunks(&self) -> u64 {
+        self.chunked.as_ref().map_or(0, |c| c.count)
+    }
+
     fn line(&mut self, text: &str) -> io::Result<()> {
-        self.bytes += text.len() as u64 + 1;
-        self.out.write_all(text.as_bytes())?;
-        self.out.write_all(b"\n")
+        let Some(c) = &mut self.chunked else {
+            self.written += text.len() as u64 + 1;
+            self.out.write_all(text.as_bytes())?;
+            return self.out.write_all(b"\n");
+        };
+        c.text.extend_from_slice(text.as_bytes());
+        c.text.push(b'\n');
+        c.lines += 1;
+        if c.lines >= chunks::CHUNK_LINES || c.text.len() >= chunks::CHUNK_BYTES {
+            self.cut()?;
+        }
+        Ok(())
+    }
+
+    /// Format 2: ends the chunk being filled now, however few lines it has, and writes
+    /// it (then [`Recorder::flush`] pushes it to the file). Nothing to do in format 1 or
+    /// with no line waiting.
+    pub fn cut(&mut self) -> io::Result<()> {
+        let Some(c) = &mut self.chunked else {
+            return Ok(());
+        };
+        if c.lines == 0 {
+            return Ok(());
+        }
+        let packed = c.packer.pack(&c.text)?;
+        self.out.write_all(packed)?;
+        c.last = (self.written, packed.len() as u32);
+        self.written += packed.len() as u64;
+        c.text.clear();
+        c.lines = 0;
+        c.count += 1;
+        Ok(())
     }
 
     /// Appends a frame (exactly the bytes sent on the wire).
@@ -146,12 +309,14 @@ impl<W: Durable> Recorder<W> {
         self.line(record)
     }
 
-    /// Pushes what is buffered to the file, so a process killed after this leaves it.
+    /// Pushes what was written to the file, so a process killed after this leaves it:
+    /// every line in format 1, every whole chunk in format 2 (see [`Recorder::cut`]).
     pub fn flush(&mut self) -> io::Result<()> {
         self.out.flush()
     }
 
-    /// Writes the footer, flushes and syncs: after this the file is complete on disk.
+    /// Writes the footer (in format 2 in a chunk of its own, then the trailer), flushes
+    /// and syncs: after this the file is complete on disk.
     pub fn finish(mut self, tick: u64, reason: &str, result: &Value) -> io::Result<()> {
         let hash = hex(&self.hasher.clone().finalize());
         let footer = json!({
@@ -162,7 +327,14 @@ impl<W: Durable> Recorder<W> {
             "reason": reason,
             "result": result,
         });
+        self.cut()?;
         self.line(&footer.to_string())?;
+        self.cut()?;
+        if let Some(c) = &self.chunked {
+            let (at, len) = c.last;
+            self.out.write_all(&chunks::trailer(at, len))?;
+            self.written += chunks::TRAILER_BYTES as u64;
+        }
         self.out.sync()
     }
 }
@@ -309,10 +481,35 @@ const TAIL_BYTES: u64 = 64 * 1024;
 
 /// The header and (if the file is complete) the footer, without reading the frames
 /// between them: for listing many large files. Reads at most [`MAX_HEADER_BYTES`] from
-/// the start and 64 KiB from the end, whatever the file holds.
-pub fn peek(mut file: &std::fs::File) -> Result<(Value, Option<Value>), String> {
-    use std::io::{BufRead, Read, Seek, SeekFrom};
+/// the start and 64 KiB from the end, whatever the file holds (in format 2: the header
+/// chunk, the trailer and the footer chunk it names).
+pub fn peek(file: &std::fs::File) -> Result<(Value, Option<Value>), String> {
+    match Encoding::of_file(file)? {
+        Encoding::Plain => peek_plain(file),
+        Encoding::Zstd => {
+            let (header, _) = chunked_header(file)?;
+            Ok((header, chunked_footer(file)?))
+        }
+    }
+}
+
+/// Reads `buf.len()` bytes at `at`, or fewer if the file ends first; returns how many.
+fn read_at(file: &std::fs::File, buf: &mut [u8], at: u64) -> Result<usize, String> {
     use std::os::unix::fs::FileExt;
+    let mut filled = 0;
+    while filled < buf.len() {
+        match file.read_at(&mut buf[filled..], at + filled as u64) {
+            Ok(0) => break,
+            Ok(n) => filled += n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e.to_string()),
+        }
+    }
+    Ok(filled)
+}
+
+fn peek_plain(mut file: &std::fs::File) -> Result<(Value, Option<Value>), String> {
+    use std::io::{BufRead, Read, Seek, SeekFrom};
     file.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
     let mut first = Vec::new();
     io::BufReader::new(file.take(MAX_HEADER_BYTES))
@@ -322,14 +519,7 @@ pub fn peek(mut file: &std::fs::File) -> Result<(Value, Option<Value>), String> 
     let len = file.metadata().map_err(|e| e.to_string())?.len();
     let start = len.saturating_sub(TAIL_BYTES);
     let mut tail = vec![0; (len - start) as usize];
-    let mut filled = 0;
-    while filled < tail.len() {
-        match file.read_at(&mut tail[filled..], start + filled as u64) {
-            Ok(0) => break,
-            Ok(n) => filled += n,
-            Err(e) => return Err(e.to_string()),
-        }
-    }
+    let filled = read_at(file, &mut tail, start)?;
     tail.truncate(filled);
     let footer = tail
         .strip_suffix(b"\n")
@@ -339,19 +529,80 @@ pub fn peek(mut file: &std::fs::File) -> Result<(Value, Option<Value>), String> 
     Ok((header, footer))
 }
 
+/// The header of a format 2 file, from its first chunk (read with bounds).
+pub(crate) fn chunked_header(mut file: &std::fs::File) -> Result<(Value, Scenario), String> {
+    use std::io::{Read, Seek, SeekFrom};
+    file.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
+    let mut input = io::BufReader::new(file.take(MAX_HEADER_BYTES));
+    let mut unpacker = chunks::Unpacker::new(0).map_err(|e| e.to_string())?;
+    let mut text = Vec::new();
+    let piece = unpacker
+        .next(&mut input, &mut text)
+        .map_err(|e| e.to_string())?;
+    match piece {
+        chunks::Piece::Chunk { .. } => {}
+        chunks::Piece::Torn { .. } => {
+            return Err("its first chunk is torn (cut, or longer than 1 MiB)".into())
+        }
+        chunks::Piece::Bad { why, .. } => return Err(format!("its first chunk: {why}")),
+        chunks::Piece::End | chunks::Piece::Trailer { .. } => {
+            return Err("it has no header chunk".into())
+        }
+    }
+    let first = text
+        .split_inclusive(|&b| b == b'\n')
+        .next()
+        .unwrap_or_default();
+    parse_header(first)
+}
+
+/// The footer of a format 2 file, found through its trailer; None if the file has no
+/// trailer (it is incomplete) or the trailer does not lead to a footer.
+fn chunked_footer(file: &std::fs::File) -> Result<Option<Value>, String> {
+    let len = file.metadata().map_err(|e| e.to_string())?.len();
+    let trailer_at = len.saturating_sub(chunks::TRAILER_BYTES as u64);
+    let mut trailer = [0; chunks::TRAILER_BYTES];
+    if read_at(file, &mut trailer, trailer_at)? < trailer.len() {
+        return Ok(None);
+    }
+    let Some((at, chunk_len)) = chunks::read_trailer(&trailer) else {
+        return Ok(None);
+    };
+    if at.checked_add(chunk_len) != Some(trailer_at) || chunk_len > TAIL_BYTES {
+        return Ok(None);
+    }
+    let mut chunk = vec![0; chunk_len as usize];
+    if read_at(file, &mut chunk, at)? < chunk.len() {
+        return Ok(None);
+    }
+    let mut unpacker = chunks::Unpacker::new(at).map_err(|e| e.to_string())?;
+    let mut text = Vec::new();
+    let piece = unpacker
+        .next(&mut &chunk[..], &mut text)
+        .map_err(|e| e.to_string())?;
+    if !matches!(piece, chunks::Piece::Chunk { .. }) {
+        return Ok(None);
+    }
+    Ok(text
+        .strip_suffix(b"\n")
+        .and_then(|line| serde_json::from_slice::<Value>(line).ok())
+        .filter(|v| v["record"] == "footer"))
+}
+
 /// Reads a header line (with its newline): the record and the scenario it describes.
-fn parse_header(first: &[u8]) -> Result<(Value, Scenario), String> {
+pub(crate) fn parse_header(first: &[u8]) -> Result<(Value, Scenario), String> {
     let header: Value = std::str::from_utf8(first)
         .ok()
-        .filter(|l| l.ends_with('\n'))
+        .filter(|l| l.ends_with('\n') && l.len() as u64 <= MAX_HEADER_BYTES)
         .and_then(|l| serde_json::from_str(l).ok())
         .ok_or("the first line is not a complete header record")?;
     if header["record"] != "header" {
         return Err("the first record is not a header".into());
     }
-    if header["format"].as_u64() != Some(u64::from(FORMAT)) {
+    // Format 2's records are format 1's: either number reads in either encoding.
+    if !matches!(header["format"].as_u64(), Some(1..=2)) {
         return Err(format!(
-            "format {} (this build reads {FORMAT})",
+            "format {} (this build reads 1 and {FORMAT})",
             header["format"]
         ));
     }
@@ -360,8 +611,51 @@ fn parse_header(first: &[u8]) -> Result<(Value, Scenario), String> {
     Ok((header, scenario))
 }
 
-/// Reads a replay from its bytes (see [`read`]).
+/// The JSON lines a replay file's bytes hold, and why they end before the file does, if
+/// they do: format 1's bytes as they are; format 2's whole chunks decompressed (what
+/// `zstdcat` prints) up to the first that does not read.
+pub fn decode(bytes: &[u8]) -> Result<(Vec<u8>, Option<String>), String> {
+    match Encoding::of(bytes)? {
+        Encoding::Plain => Ok((bytes.to_vec(), None)),
+        Encoding::Zstd => {
+            let unpacked = chunks::unpack(bytes);
+            Ok((unpacked.text, unpacked.problem))
+        }
+    }
+}
+
+/// Reads a replay from its bytes, in either encoding (see [`read`]).
 pub fn parse(bytes: &[u8]) -> Result<Replay, String> {
+    match Encoding::of(bytes)? {
+        Encoding::Plain => parse_lines(bytes),
+        Encoding::Zstd => {
+            let unpacked = chunks::unpack(bytes);
+            if unpacked.text.is_empty() {
+                let why = unpacked.problem.unwrap_or_else(|| "no chunk".into());
+                return Err(format!("its first chunk does not read: {why}"));
+            }
+            let mut replay = parse_lines(&unpacked.text)?;
+            if replay.problem.is_none() {
+                replay.problem =
+                    unpacked
+                        .problem
+                        .or_else(|| match (&replay.footer, unpacked.trailer) {
+                            (Some(_), false) => Some(NO_TRAILER.into()),
+                            (None, true) => Some("the file has a trailer but no footer".into()),
+                            _ => None,
+                        });
+            }
+            Ok(replay)
+        }
+    }
+}
+
+/// The problem of a format 2 file whose footer is not followed by its trailer.
+const NO_TRAILER: &str =
+    "the footer is not followed by the trailer (the file was cut as it was finished)";
+
+/// Reads format 1's lines (or format 2's, decompressed).
+fn parse_lines(bytes: &[u8]) -> Result<Replay, String> {
     let mut lines = bytes.split_inclusive(|&b| b == b'\n');
     let first = lines.next().ok_or("the file is empty")?;
     let (header, scenario) = parse_header(first)?;
