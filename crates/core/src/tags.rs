@@ -63,6 +63,14 @@ tags! {
     Cricket = "cricket";
     /// `"kind": "basketball"`.
     Basketball = "basketball";
+    /// A replay's `"record": "header"`.
+    Header = "header";
+    /// A replay's `"record": "footer"`.
+    Footer = "footer";
+    /// A replay's `"record": "command"`.
+    Command = "command";
+    /// A replay's `"record": "control"`.
+    Control = "control";
 }
 
 /// `Some(Bot)` while a bot controls the agent.

@@ -65,7 +65,7 @@ pub use verify::{verify, Mismatch, Verified};
 use crate::sim::{Action, Scenario};
 use chunks::Packer;
 use serde::Serialize;
-use serde_json::{json, Value};
+use serde_json::Value;
 use sha2::{Digest, Sha256};
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
@@ -181,21 +181,76 @@ struct Chunked {
     last: (u64, u32),
 }
 
-/// The header record of a replay: what was played, with what, and when.
+/// The records of a replay file besides its frames, as written. Keys are in alphabetical
+/// order, as format 1 wrote them; a record is read back as a JSON value, since a file
+/// from an older release may hold shapes this one would not write.
+mod records {
+    use crate::protocol::Action;
+    use crate::sim::Scenario;
+    use crate::tags;
+    use serde::Serialize;
+
+    /// The first line: what was played, with what, and when.
+    #[derive(Serialize)]
+    pub(super) struct Header<'a, M: Serialize> {
+        pub(super) fieldhouse: &'static str,
+        pub(super) format: u32,
+        #[serde(rename = "match")]
+        pub(super) match_info: &'a M,
+        pub(super) motion: &'a str,
+        pub(super) record: tags::Header,
+        pub(super) scenario: &'a Scenario,
+        pub(super) seed: u64,
+        pub(super) started_unix_ms: u64,
+    }
+
+    /// The last line: how the match ended, and a hash over every frame line.
+    #[derive(Serialize)]
+    pub(super) struct Footer<'a, R: Serialize> {
+        pub(super) frames: u64,
+        pub(super) hash: &'a str,
+        pub(super) reason: &'a str,
+        pub(super) record: tags::Footer,
+        pub(super) result: &'a R,
+        pub(super) tick: u64,
+    }
+
+    /// A command a bot's agent was given, applied after `tick`.
+    #[derive(Serialize)]
+    pub(super) struct Command<'a> {
+        pub(super) action: &'a Action,
+        pub(super) agent: &'a str,
+        pub(super) record: tags::Command,
+        pub(super) tick: u64,
+    }
+
+    /// A bot took (`bot: true`) or gave back an agent at `tick`.
+    #[derive(Serialize)]
+    pub(super) struct Control<'a> {
+        pub(super) agent: &'a str,
+        pub(super) bot: bool,
+        pub(super) record: tags::Control,
+        pub(super) tick: u64,
+    }
+}
+
+/// The header record of a replay: what was played, with what, and when. A value, since
+/// a recording of several files adds its segment's fields to it.
 pub fn header(match_info: &impl Serialize, scenario: &Scenario, motion: &str) -> Value {
-    let started = std::time::SystemTime::now()
+    let started_unix_ms = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_millis() as u64);
-    json!({
-        "record": "header",
-        "format": FORMAT,
-        "fieldhouse": env!("CARGO_PKG_VERSION"),
-        "match": match_info,
-        "scenario": scenario,
-        "seed": scenario.seed,
-        "motion": motion,
-        "started_unix_ms": started,
+    serde_json::to_value(records::Header {
+        fieldhouse: env!("CARGO_PKG_VERSION"),
+        format: FORMAT,
+        match_info,
+        motion,
+        record: crate::tags::Header,
+        scenario,
+        seed: scenario.seed,
+        started_unix_ms,
     })
+    .expect("headers serialise")
 }
 
 impl Recorder {
@@ -317,18 +372,18 @@ impl<W: Durable> Recorder<W> {
 
     /// Writes the footer (in format 2 in a chunk of its own, then the trailer), flushes
     /// and syncs: after this the file is complete on disk.
-    pub fn finish(mut self, tick: u64, reason: &str, result: &Value) -> io::Result<()> {
+    pub fn finish(mut self, tick: u64, reason: &str, result: &impl Serialize) -> io::Result<()> {
         let hash = hex(&self.hasher.clone().finalize());
-        let footer = json!({
-            "record": "footer",
-            "tick": tick,
-            "frames": self.frames,
-            "hash": hash,
-            "reason": reason,
-            "result": result,
+        let footer = crate::protocol::encode(&records::Footer {
+            frames: self.frames,
+            hash: &hash,
+            reason,
+            record: crate::tags::Footer,
+            result,
+            tick,
         });
         self.cut()?;
-        self.line(&footer.to_string())?;
+        self.line(&footer)?;
         self.cut()?;
         if let Some(c) = &self.chunked {
             let (at, len) = c.last;
@@ -341,12 +396,22 @@ impl<W: Durable> Recorder<W> {
 
 /// A bot's `command` record: `action`, accepted by the world, applied after `tick`.
 pub fn command_record(tick: u64, agent: &str, action: &Action) -> String {
-    json!({"record": "command", "tick": tick, "agent": agent, "action": action}).to_string()
+    crate::protocol::encode(&records::Command {
+        action,
+        agent,
+        record: crate::tags::Command,
+        tick,
+    })
 }
 
 /// A bot's `control` record: a bot took (`bot: true`) or gave back an agent at `tick`.
 pub fn control_record(tick: u64, agent: &str, bot: bool) -> String {
-    json!({"record": "control", "tick": tick, "agent": agent, "bot": bot}).to_string()
+    crate::protocol::encode(&records::Control {
+        agent,
+        bot,
+        record: crate::tags::Control,
+        tick,
+    })
 }
 
 fn hex(bytes: &[u8]) -> String {
