@@ -107,7 +107,12 @@ pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let write_error = |e: std::io::Error| anyhow::anyhow!("writing {}: {e}", path.display());
     let mut recorder = Background::start(recorder).map_err(write_error)?;
     let mut session = Session::new(world, id, scenario.tick_hz, scenario.frame_hz);
-    recorder.frame(session.frame()).map_err(write_error)?;
+    recorder
+        .frame(|out| {
+            session.frame_into(out);
+            true
+        })
+        .map_err(write_error)?;
     let end_tick = scenario
         .duration_s
         .map(|d| (d * scenario.tick_hz).round() as u64);
@@ -134,8 +139,10 @@ pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let started = Instant::now();
     let mut frames = 1u64;
     while !session.world.finished() {
-        if let Some(frame) = session.step() {
-            recorder.frame(frame).map_err(write_error)?;
+        if recorder
+            .frame(|out| session.step_into(out))
+            .map_err(write_error)?
+        {
             frames += 1;
         }
         if let Some(b) = &bar {
@@ -144,8 +151,13 @@ pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
             }
         }
     }
-    if let Some(frame) = session.last_frame() {
-        recorder.frame(frame).map_err(write_error)?;
+    if session.last_frame_due() {
+        recorder
+            .frame(|out| {
+                session.frame_into(out);
+                true
+            })
+            .map_err(write_error)?;
         frames += 1;
     }
     if let Some(b) = bar {

@@ -3,7 +3,7 @@
 //! match tasks, headless runs and replay verification all drive one, so a replay's
 //! frames and a live match's are the same bytes from the same code.
 
-use crate::protocol::{encode_frame, Event, Frame};
+use crate::protocol::{write_frame, Event, Frame};
 use crate::sim::World;
 use crate::tags;
 
@@ -34,11 +34,19 @@ impl Session {
     }
 
     /// The frame of the world as it is now, with the events since the last one, its
-    /// numbers rounded to a millimetre ([`encode_frame`]).
+    /// numbers rounded to a millimetre ([`write_frame`]).
     pub fn frame(&mut self) -> String {
+        let mut out = Vec::with_capacity(1024);
+        self.frame_into(&mut out);
+        String::from_utf8(out).expect("frames are UTF-8")
+    }
+
+    /// Appends the frame of the world as it is now to `out` (one line, no newline): what
+    /// a headless run does, batching frames without a buffer of their own each.
+    pub fn frame_into(&mut self, out: &mut Vec<u8>) {
         let (ball, agents, score) = self.world.state();
         let tick = self.world.tick();
-        let line = encode_frame(&Frame {
+        write_frame(out, &Frame {
             kind: tags::Frame,
             match_id: &self.id,
             tick,
@@ -50,19 +58,36 @@ impl Session {
         });
         self.events.clear();
         self.framed = Some(tick);
-        line
     }
 
     /// Steps one tick; returns the frame if one is due (every `tick_hz / frame_hz` ticks,
     /// and at the end of the match).
     pub fn step(&mut self) -> Option<String> {
+        self.tick_and_frame_due().then(|| self.frame())
+    }
+
+    /// Steps one tick; appends the frame to `out` if one is due, and says whether it did.
+    pub fn step_into(&mut self, out: &mut Vec<u8>) -> bool {
+        let due = self.tick_and_frame_due();
+        if due {
+            self.frame_into(out);
+        }
+        due
+    }
+
+    /// Steps one tick; whether a frame is due now.
+    fn tick_and_frame_due(&mut self) -> bool {
         self.world.step(&mut self.events);
-        let tick = self.world.tick();
-        (tick.is_multiple_of(self.frame_every) || self.world.finished()).then(|| self.frame())
+        self.world.tick().is_multiple_of(self.frame_every) || self.world.finished()
     }
 
     /// The last frame, when a match stops: only if something happened since the last one.
     pub fn last_frame(&mut self) -> Option<String> {
-        (self.framed != Some(self.world.tick()) || !self.events.is_empty()).then(|| self.frame())
+        self.last_frame_due().then(|| self.frame())
+    }
+
+    /// Whether the match's stop needs a last frame (see [`Session::last_frame`]).
+    pub fn last_frame_due(&self) -> bool {
+        self.framed != Some(self.world.tick()) || !self.events.is_empty()
     }
 }

@@ -9,7 +9,7 @@
 //!
 //! # Layout
 //!
-//! * this file: the messages, and [`decode`] / [`encode`] / [`encode_frame`];
+//! * this file: the messages, and [`decode`] / [`encode`] / [`write_frame`];
 //! * [`fly`] and [`hoops`]: what a message holds for each sport (the sport-specific
 //!   parts are untagged enums of the two: a client tells them apart by `hello`'s
 //!   `match.sport`);
@@ -492,11 +492,10 @@ pub fn encode(message: &impl Serialize) -> String {
     serde_json::to_string(message).expect("protocol messages serialise")
 }
 
-/// Serialises a frame with its numbers rounded to a millimetre (see `quantise`).
-pub fn encode_frame(frame: &Frame<'_>) -> String {
-    let mut out = Vec::with_capacity(1024);
-    quantise::write(&mut out, frame);
-    String::from_utf8(out).expect("serde_json writes UTF-8")
+/// Appends a frame to `out`, its numbers rounded to a millimetre (see `quantise`).
+/// What is appended is UTF-8 JSON on one line.
+pub fn write_frame(out: &mut Vec<u8>, frame: &Frame<'_>) {
+    quantise::write(out, frame);
 }
 
 #[cfg(test)]
