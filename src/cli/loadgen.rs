@@ -48,6 +48,10 @@ pub(super) struct LoadgenArgs {
     /// Where the peer lives (its package.json and server script).
     #[arg(long, value_name = "DIR", default_value = "bench/peers")]
     peer_dir: PathBuf,
+    /// Leave out the bare sender (the floor each count's fieldhouse round is compared
+    /// with; see the help's end).
+    #[arg(long)]
+    no_bare: bool,
     /// Print the rounds as JSON instead of a table.
     #[arg(long)]
     json: bool,
@@ -94,6 +98,7 @@ pub(super) fn run(args: LoadgenArgs, out: &mut impl Write) -> anyhow::Result<()>
             PeerKind::None => None,
             PeerKind::Colyseus => Some(Peer::Colyseus { dir: args.peer_dir }),
         },
+        bare: !args.no_bare,
     };
     if let Some(bots) = args.bots {
         let bots = bots as usize;
