@@ -17,6 +17,9 @@ pub(super) struct BareArgs {
     /// fieldhouse frame's size; loadgen passes the mean of those fieldhouse sent).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65_535))]
     payload_bytes: Option<u32>,
+    /// Sending threads, each with its share of the sockets (default: one per core).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=64))]
+    threads: Option<u32>,
     /// Exit when standard input closes (loadgen holds it open while it runs).
     #[arg(long)]
     exit_with_stdin: bool,
@@ -46,5 +49,9 @@ pub(super) fn run(args: BareArgs) -> anyhow::Result<()> {
         frame_bytes = template.bytes().len(),
         "bare sender listening on ws://{addr}/"
     );
-    bare::serve(listener, template, args.frame_hz)
+    let threads = args.threads.map_or_else(
+        || std::thread::available_parallelism().map_or(2, |n| n.get()),
+        |n| n as usize,
+    );
+    bare::serve(listener, template, args.frame_hz, threads)
 }

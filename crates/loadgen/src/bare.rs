@@ -10,8 +10,9 @@
 //!   (`GET` with `Sec-WebSocket-Key`, any path) with `101 Switching Protocols`; nothing
 //!   else of HTTP. The socket is then set non-blocking with `TCP_NODELAY`, as
 //!   fieldhouse's are, and handed to the sender.
-//! * **Sends**, on one other thread, `frame_hz` times a second: one prebuilt, unmasked
-//!   WebSocket text frame, the same bytes for every socket. Its payload is a real
+//! * **Sends**, on one thread per core (each with its share of the sockets, as a
+//!   server's runtime spreads them over its workers), `frame_hz` times a second: one
+//!   prebuilt, unmasked WebSocket text frame, the same bytes for every socket. Its payload is a real
 //!   fieldhouse baseball frame (`Session::frame` of the default scenario) in which only
 //!   the fields the load generator reads are patched each tick into fixed-width slots:
 //!   `sent_us` (the publish time, as `serve --stamp-frames` writes it) and `tick`. It is
@@ -205,20 +206,32 @@ fn now_us() -> u64 {
 }
 
 /// Serves on `listener` until the process is killed: accepts on this thread, sends on
-/// another, `frame_hz` frames a second (see the module's doc).
-pub fn serve(listener: TcpListener, mut template: Template, frame_hz: f64) -> anyhow::Result<()> {
-    let (joined, arrivals) = mpsc::channel::<TcpStream>();
+/// `threads` others (each its share of the sockets), `frame_hz` frames a second (see
+/// the module's doc).
+pub fn serve(
+    listener: TcpListener,
+    template: Template,
+    frame_hz: f64,
+    threads: usize,
+) -> anyhow::Result<()> {
     let period = Duration::from_secs_f64(1.0 / frame_hz);
     let ticks_per_frame = (TICK_HZ / frame_hz).round().max(1.0) as u64;
-    std::thread::Builder::new()
-        .name("bare-sender".into())
-        .spawn(move || send(&arrivals, &mut template, period, ticks_per_frame))
-        .context("starting the sender thread")?;
-    for stream in listener.incoming() {
+    let start = Instant::now();
+    let mut senders = Vec::new();
+    for k in 0..threads.max(1) {
+        let (joined, arrivals) = mpsc::channel::<TcpStream>();
+        let mut template = template.clone();
+        std::thread::Builder::new()
+            .name(format!("bare-sender-{k}"))
+            .spawn(move || send(&arrivals, &mut template, start, period, ticks_per_frame))
+            .context("starting a sender thread")?;
+        senders.push(joined);
+    }
+    for (k, stream) in listener.incoming().enumerate() {
         let Ok(mut stream) = stream else { continue };
         if upgrade(&mut stream).is_ok()
             && stream.set_nonblocking(true).is_ok()
-            && joined.send(stream).is_err()
+            && senders[k % senders.len()].send(stream).is_err()
         {
             break;
         }
@@ -296,28 +309,29 @@ impl Client {
     }
 }
 
-/// The sender thread: every `period`, the template patched with the tick and the time,
-/// offered to every client.
+/// A sender thread: at `start` and every `period` after, the template patched with the
+/// tick and the time, offered to each of its clients. The tick is the frame's number
+/// since `start` (times `ticks_per_frame`), the same on every thread; a thread that
+/// falls behind skips to the current frame (frames missed are missed, as a late
+/// tick's would be).
 fn send(
     arrivals: &mpsc::Receiver<TcpStream>,
     template: &mut Template,
+    start: Instant,
     period: Duration,
     ticks_per_frame: u64,
 ) {
     let mut clients: Vec<Client> = Vec::new();
-    let mut tick = 0;
-    let mut next = Instant::now();
+    let period_ns = period.as_nanos().max(1);
+    let mut frame = 0u64;
     loop {
+        let due = start + Duration::from_nanos((period_ns * u128::from(frame)) as u64);
         let now = Instant::now();
-        if next > now {
-            std::thread::sleep(next - now);
+        if due > now {
+            std::thread::sleep(due - now);
         }
-        next += period;
-        // A sender that fell more than a frame behind starts again from now (frames
-        // missed are missed, as a late tick's would be).
-        if Instant::now() > next + period {
-            next = Instant::now() + period;
-        }
+        let current = ((Instant::now() - start).as_nanos() / period_ns) as u64;
+        frame = frame.max(current);
         loop {
             match arrivals.try_recv() {
                 Ok(stream) => clients.push(Client {
@@ -328,10 +342,10 @@ fn send(
                 Err(mpsc::TryRecvError::Disconnected) => return,
             }
         }
-        tick += ticks_per_frame;
-        template.patch(tick, now_us());
-        let frame = template.bytes();
-        clients.retain_mut(|c| c.offer(frame));
+        template.patch(frame * ticks_per_frame, now_us());
+        let bytes = template.bytes();
+        clients.retain_mut(|c| c.offer(bytes));
+        frame += 1;
     }
 }
 

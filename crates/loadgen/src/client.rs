@@ -60,6 +60,14 @@ pub(crate) struct Readers {
     inboxes: Vec<(mpsc::Sender<Joined>, Arc<mio::Waker>)>,
     threads: std::sync::Mutex<Vec<std::thread::JoinHandle<Vec<Log>>>>,
     next: AtomicUsize,
+    /// Set when the readers are dropped, so a round that fails leaves no thread behind.
+    stop: Arc<AtomicBool>,
+}
+
+impl Drop for Readers {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+    }
 }
 
 /// How many threads read the spectators' sockets: `FIELDHOUSE_LOADGEN_READERS`, else
@@ -91,6 +99,18 @@ const WAKER: mio::Token = mio::Token(usize::MAX);
 /// How often a reader looks at `stop` when its sockets are quiet.
 const POLL_EVERY: Duration = Duration::from_millis(100);
 
+/// How long a reader sleeps between polls: `FIELDHOUSE_LOADGEN_PACE_US`, else 1 ms.
+/// Zero blocks in the poll instead.
+fn pace() -> Duration {
+    Duration::from_micros(
+        std::env::var("FIELDHOUSE_LOADGEN_PACE_US")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .filter(|&us: &u64| us <= 100_000)
+            .unwrap_or(1000),
+    )
+}
+
 impl Readers {
     /// Starts `threads` readers, which log arrivals while `measuring` and return their
     /// spectators' logs once `stop` is set.
@@ -116,6 +136,7 @@ impl Readers {
             inboxes,
             threads: std::sync::Mutex::new(handles),
             next: AtomicUsize::new(0),
+            stop: stop.clone(),
         })
     }
 
@@ -250,9 +271,15 @@ fn read_loop(
     stop: &AtomicBool,
 ) -> Vec<Log> {
     let mut spectators: Vec<Spectator> = Vec::new();
-    let mut events = mio::Events::with_capacity(1024);
+    let mut events = mio::Events::with_capacity(EVENTS);
+    let pace = pace();
+    let wait = if pace.is_zero() {
+        POLL_EVERY
+    } else {
+        Duration::ZERO
+    };
     while !stop.load(Ordering::Relaxed) {
-        if let Err(e) = poll.poll(&mut events, Some(POLL_EVERY)) {
+        if let Err(e) = poll.poll(&mut events, Some(wait)) {
             if e.kind() != ErrorKind::Interrupted {
                 tracing::warn!(error = %e, "a reader cannot poll its sockets");
                 break;
@@ -279,7 +306,9 @@ fn read_loop(
             s.take_frames(now_us(), measuring);
             spectators.push(s);
         }
+        let mut ready = 0;
         for event in &events {
+            ready += 1;
             if let Some(s) = spectators.get_mut(event.token().0) {
                 if s.open {
                     s.read(measuring);
@@ -289,9 +318,15 @@ fn read_loop(
                 }
             }
         }
+        if !pace.is_zero() && ready < EVENTS {
+            std::thread::sleep(pace);
+        }
     }
     spectators.into_iter().map(|s| s.log).collect()
 }
+
+/// Events taken from one poll.
+const EVENTS: usize = 1024;
 
 /// The buffer a spectator reads into at first; it grows for a larger message.
 const BUFFER_BYTES: usize = 4096;
@@ -458,12 +493,27 @@ fn client_frame(opcode: u8, payload: &[u8]) -> Vec<u8> {
 /// The whole number right after the first `label` in `text` (`"tick":` → 42), read
 /// without decoding the message.
 pub(super) fn number_after(text: &[u8], label: &[u8]) -> Option<u64> {
-    let at = text.windows(label.len()).position(|w| w == label)? + label.len();
+    let at = find(text, label)? + label.len();
     let digits = text[at..].iter().take_while(|b| b.is_ascii_digit()).count();
     std::str::from_utf8(&text[at..at + digits])
         .ok()?
         .parse()
         .ok()
+}
+
+/// Where `needle` (not empty) first occurs in `hay`: a scan for its first byte, then a
+/// comparison there (comparing a window at every position cost a `memcmp` call each).
+fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    let (&first, rest) = needle.split_first()?;
+    let mut from = 0;
+    while let Some(k) = hay.get(from..)?.iter().position(|&b| b == first) {
+        let at = from + k;
+        if hay[at + 1..].starts_with(rest) {
+            return Some(at);
+        }
+        from = at + 1;
+    }
+    None
 }
 
 /// A fieldhouse frame's tick and publish time: `{"type":"frame","sent_us":N,…"tick":T`.
@@ -582,7 +632,10 @@ mod tests {
                 .arrivals
                 .iter()
                 .all(|a| a.key >> super::MATCH_SHIFT == 3));
-            assert_eq!(s.log.bytes, (1..=20).map(|t| frame(t).len() as u64).sum());
+            assert_eq!(
+                s.log.bytes,
+                (1..=20).map(|t| frame(t).len() as u64).sum::<u64>()
+            );
         }
     }
 }

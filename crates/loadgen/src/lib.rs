@@ -63,6 +63,8 @@ pub struct Plan {
     pub fieldhouse: std::path::PathBuf,
     /// The peer to run under the same load, if any.
     pub peer: Option<Peer>,
+    /// Whether to run fieldhouse's spectator rounds (bot rounds always run it).
+    pub fieldhouse_rounds: bool,
     /// Whether to run the bare sender under the same load (see [`bare`]).
     pub bare: bool,
 }
@@ -142,14 +144,18 @@ pub fn run(plan: &Plan) -> anyhow::Result<Vec<Round>> {
         .context("starting the async runtime")?;
     let mut rounds = Vec::new();
     for &n in &plan.spectators {
-        let mut here = Vec::new();
-        let server = servers::Running::fieldhouse(&plan.fieldhouse, plan.matches)?;
-        here.push(runtime.block_on(round(plan, &server, n))?);
-        drop(server);
+        let mut here: Vec<Round> = Vec::new();
+        if plan.fieldhouse_rounds {
+            let server = servers::Running::fieldhouse(&plan.fieldhouse, plan.matches)?;
+            here.push(runtime.block_on(round(plan, &server, n))?);
+        }
         if plan.bare {
             // The same payload size as fieldhouse's frames in this round.
-            let size = (here[0].bytes_per_message.round() as usize).clamp(1, 65_535);
-            let server = servers::Running::bare(&plan.fieldhouse, plan.matches, Some(size))?;
+            let size = here
+                .first()
+                .filter(|r| r.delivered > 0)
+                .map(|r| (r.bytes_per_message.round() as usize).clamp(1, 65_535));
+            let server = servers::Running::bare(&plan.fieldhouse, plan.matches, size)?;
             here.push(runtime.block_on(round(plan, &server, n))?);
         }
         if let Some(peer) = &plan.peer {
