@@ -48,9 +48,19 @@ pub(super) struct LoadgenArgs {
     /// Where the peer lives (its package.json and server script).
     #[arg(long, value_name = "DIR", default_value = "bench/peers")]
     peer_dir: PathBuf,
+    /// Servers to leave out of the spectator rounds, comma-separated: `fieldhouse`,
+    /// `bare` (the bare sender, the floor fieldhouse's CPU per frame is compared with).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "SERVER")]
+    skip: Vec<Skip>,
     /// Print the rounds as JSON instead of a table.
     #[arg(long)]
     json: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Skip {
+    Fieldhouse,
+    Bare,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -94,6 +104,8 @@ pub(super) fn run(args: LoadgenArgs, out: &mut impl Write) -> anyhow::Result<()>
             PeerKind::None => None,
             PeerKind::Colyseus => Some(Peer::Colyseus { dir: args.peer_dir }),
         },
+        fieldhouse_rounds: !args.skip.contains(&Skip::Fieldhouse),
+        bare: !args.skip.contains(&Skip::Bare),
     };
     if let Some(bots) = args.bots {
         let bots = bots as usize;

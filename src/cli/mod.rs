@@ -2,6 +2,7 @@
 //! stdout, logs and progress on stderr.
 
 mod args;
+mod bare;
 mod basketball;
 mod bot;
 mod canvas;
@@ -68,6 +69,10 @@ enum Command {
     /// Churn matches, spectators and bots on a server for a bounded time; report whether
     /// memory, descriptors and threads stay flat.
     Soak(soak::SoakArgs),
+    /// The bare sender `loadgen` measures fieldhouse against: accepts WebSockets and
+    /// writes one prebuilt frame to each, 30 times a second, and nothing else.
+    #[command(hide = true)]
+    BareSender(bare::BareArgs),
 }
 
 pub(crate) fn main() -> ExitCode {
@@ -96,6 +101,7 @@ pub(crate) fn main() -> ExitCode {
         Command::Replay(args) => replay::run(args, &mut out),
         Command::Loadgen(args) => loadgen::run(args, &mut out),
         Command::Soak(args) => soak::run(args, &mut out),
+        Command::BareSender(args) => bare::run(args),
     }
     .and_then(|()| Ok(out.flush()?));
     match result {

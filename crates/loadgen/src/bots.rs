@@ -85,7 +85,7 @@ pub(super) async fn round(
     } = *load;
     let measuring = Arc::new(AtomicBool::new(false));
     let stop = Arc::new(AtomicBool::new(false));
-    let audience = Audience::connect(server, spectators, &measuring, &stop).await;
+    let audience = Audience::connect(server, spectators, &measuring, &stop).await?;
     let tasks: Vec<_> = urls
         .iter()
         .map(|(m, url)| {
@@ -97,7 +97,7 @@ pub(super) async fn round(
     tokio::time::sleep(Duration::from_secs_f64(settle_s.max(1.0))).await;
     let window = Window::measure(server, &measuring, seconds).await?;
     stop.store(true, Ordering::SeqCst);
-    let logs = audience.logs().await;
+    let logs = audience.logs();
     let mut waits = Vec::new();
     let mut commands = 0;
     // Per match and tick: the first perception's arrival, the last command's sending.
@@ -183,7 +183,7 @@ async fn play(
             continue;
         }
         let arrived = Instant::now();
-        let Some(tick) = number_after(text.as_str(), r#""tick":"#) else {
+        let Some(tick) = number_after(text.as_bytes(), br#""tick":"#) else {
             continue;
         };
         if !think.is_zero() {

@@ -1,26 +1,31 @@
-//! `fieldhouse loadgen`: spectator load against fieldhouse and, in the same run, against
-//! a peer (a Colyseus 0.18 server holding an equivalent state), both started here on
-//! loopback, so a team choosing a game server can compare them on one machine.
+//! `fieldhouse loadgen`: spectator load against fieldhouse, against the bare sender (the
+//! least any server must do to send the same frames: see [`bare`]) and against a peer (a
+//! Colyseus 0.18 server holding an equivalent state), all started here on loopback, so
+//! a team choosing a game server can compare them on one machine, and fieldhouse's cost
+//! can be read against the floor.
 //!
-//! For each spectator count, each server in turn: start it, connect the spectators (at
-//! most [`CONNECTING_AT_ONCE`] handshakes at a time), let them settle, then measure a
-//! window of `seconds`. Reported per server:
+//! For each spectator count, each server in turn (fieldhouse, the bare sender, the
+//! peer): start it, connect the spectators (at most [`CONNECTING_AT_ONCE`] handshakes at
+//! a time), let them settle, then measure a window of `seconds`. Reported per server:
 //!
 //! * delivered share: messages received ÷ (spectators × messages published in the
 //!   window), a message counting as published when any spectator received it (a
 //!   fieldhouse frame is known by its tick, a Colyseus patch by its bytes);
 //! * the frame rate held: the median and lowest per-spectator rate in the window;
-//! * latency: fieldhouse frames carry their publish time (`serve --stamp-frames`), so
-//!   its latency is arrival − publish on the same clock. Colyseus patches carry none, so
-//!   for both servers the *fan-out spread* is reported as well: a message's arrival at
-//!   each spectator minus its first arrival at any, which is what a large audience adds;
+//! * latency: fieldhouse's frames carry their publish time (`serve --stamp-frames`; the
+//!   bare sender's too), so their latency is arrival − publish on the same clock.
+//!   Colyseus patches carry none, so for every server the *fan-out spread* is reported
+//!   as well: a message's arrival at each spectator minus its first arrival at any,
+//!   which is what a large audience adds;
 //! * bytes per message; the server's CPU time (utime + stime from /proc) per delivered
-//!   message and its resident memory (VmRSS, VmHWM), which are the load generator's
-//!   own costs excluded; fieldhouse's tick overruns (from /metrics).
+//!   message, and its ratio to the bare sender's in the same round; the server's
+//!   resident memory (VmRSS, VmHWM); the load generator's own CPU is excluded, and
+//!   reported; fieldhouse's tick overruns (from /metrics).
 //!
 //! Everything is bounded: the counts and the window are arguments, each phase has a
 //! deadline, and the servers started here are killed at the end.
 
+pub mod bare;
 mod bots;
 mod client;
 mod procfs;
@@ -58,6 +63,10 @@ pub struct Plan {
     pub fieldhouse: std::path::PathBuf,
     /// The peer to run under the same load, if any.
     pub peer: Option<Peer>,
+    /// Whether to run fieldhouse's spectator rounds (bot rounds always run it).
+    pub fieldhouse_rounds: bool,
+    /// Whether to run the bare sender under the same load (see [`bare`]).
+    pub bare: bool,
 }
 
 /// One server under one load.
@@ -85,6 +94,9 @@ pub struct Round {
     /// includes delivering to the receiving socket).
     pub server_kernel_share: f64,
     pub server_cpu_us_per_message: f64,
+    /// `server_cpu_us_per_message` ÷ the bare sender's at the same count in the same
+    /// run (1 for the bare sender itself; None when it did not run).
+    pub cpu_vs_bare: Option<f64>,
     pub server_rss_mb: f64,
     pub server_peak_rss_mb: f64,
     pub loadgen_cpu_s: f64,
@@ -119,7 +131,8 @@ impl Percentiles {
     }
 }
 
-/// Runs every round of the plan, fieldhouse then the peer at each count.
+/// Runs every round of the plan: at each count fieldhouse, then the bare sender, then
+/// the peer.
 pub fn run(plan: &Plan) -> anyhow::Result<Vec<Round>> {
     // A peer that cannot start would otherwise fail only after fieldhouse's first round.
     if let Some(peer) = &plan.peer {
@@ -131,13 +144,32 @@ pub fn run(plan: &Plan) -> anyhow::Result<Vec<Round>> {
         .context("starting the async runtime")?;
     let mut rounds = Vec::new();
     for &n in &plan.spectators {
-        let server = servers::Running::fieldhouse(&plan.fieldhouse, plan.matches)?;
-        rounds.push(runtime.block_on(round(plan, &server, n))?);
-        drop(server);
+        let mut here: Vec<Round> = Vec::new();
+        if plan.fieldhouse_rounds {
+            let server = servers::Running::fieldhouse(&plan.fieldhouse, plan.matches)?;
+            here.push(runtime.block_on(round(plan, &server, n))?);
+        }
+        if plan.bare {
+            // The same payload size as fieldhouse's frames in this round.
+            let size = here
+                .first()
+                .filter(|r| r.delivered > 0)
+                .map(|r| (r.bytes_per_message.round() as usize).clamp(1, 65_535));
+            let server = servers::Running::bare(&plan.fieldhouse, plan.matches, size)?;
+            here.push(runtime.block_on(round(plan, &server, n))?);
+        }
         if let Some(peer) = &plan.peer {
             let server = servers::Running::peer(peer)?;
-            rounds.push(runtime.block_on(round(plan, &server, n))?);
+            here.push(runtime.block_on(round(plan, &server, n))?);
         }
+        let floor = here
+            .iter()
+            .find(|r| r.server == servers::BARE)
+            .map(|r| r.server_cpu_us_per_message);
+        for r in &mut here {
+            r.cpu_vs_bare = floor.map(|f| r.server_cpu_us_per_message / f);
+        }
+        rounds.extend(here);
     }
     Ok(rounds)
 }
@@ -164,11 +196,11 @@ async fn round(plan: &Plan, server: &servers::Running, n: usize) -> anyhow::Resu
     tracing::info!(server = server.name, spectators = n, "connecting");
     let measuring = Arc::new(AtomicBool::new(false));
     let stop = Arc::new(AtomicBool::new(false));
-    let audience = Audience::connect(server, n, &measuring, &stop).await;
+    let audience = Audience::connect(server, n, &measuring, &stop).await?;
     tokio::time::sleep(Duration::from_secs_f64(plan.settle_s)).await;
     let window = Window::measure(server, &measuring, plan.seconds).await?;
     stop.store(true, Ordering::SeqCst);
-    let seen = audience.logs().await;
+    let seen = audience.logs();
     Ok(summarise(
         server.name,
         server.targets.len(),
@@ -179,9 +211,10 @@ async fn round(plan: &Plan, server: &servers::Running, n: usize) -> anyhow::Resu
 }
 
 /// Spectators of a server's targets (spectator i watches `targets[i % len]`), logging
-/// what arrives while `measuring` is set, until `stop`.
+/// what arrives while `measuring` is set, until `stop`: connected by tasks, read by a
+/// few threads (see `client`).
 struct Audience {
-    tasks: Vec<tokio::task::JoinHandle<Option<client::Log>>>,
+    readers: Arc<client::Readers>,
 }
 
 impl Audience {
@@ -192,35 +225,31 @@ impl Audience {
         n: usize,
         measuring: &Arc<AtomicBool>,
         stop: &Arc<AtomicBool>,
-    ) -> Audience {
+    ) -> anyhow::Result<Audience> {
+        let readers = Arc::new(client::Readers::start(
+            client::reader_threads(),
+            measuring,
+            stop,
+        )?);
         let shared = client::Shared {
             gate: Arc::new(tokio::sync::Semaphore::new(CONNECTING_AT_ONCE)),
             settled: Arc::new(AtomicUsize::new(0)),
-            measuring: measuring.clone(),
-            stop: stop.clone(),
         };
-        let tasks = (0..n)
-            .map(|i| {
-                let target = server.targets[i % server.targets.len()].clone();
-                tokio::spawn(client::spectate(target, shared.clone()))
-            })
-            .collect();
+        for i in 0..n {
+            let target = server.targets[i % server.targets.len()].clone();
+            tokio::spawn(client::spectate(target, shared.clone(), readers.clone()));
+        }
         let deadline = std::time::Instant::now() + CONNECT_WITHIN;
         while shared.settled.load(Ordering::SeqCst) < n && std::time::Instant::now() < deadline {
             tokio::time::sleep(Duration::from_millis(50)).await;
         }
-        Audience { tasks }
+        Ok(Audience { readers })
     }
 
-    /// The logs of those that connected, once `stop` is set.
-    async fn logs(self) -> Vec<client::Log> {
-        let mut logs = Vec::with_capacity(self.tasks.len());
-        for task in self.tasks {
-            if let Ok(Some(log)) = task.await {
-                logs.push(log);
-            }
-        }
-        logs
+    /// The logs of those that connected, once `stop` is set (the readers see it within
+    /// a tenth of a second).
+    fn logs(self) -> Vec<client::Log> {
+        tokio::task::block_in_place(|| self.readers.logs())
     }
 }
 
@@ -333,6 +362,7 @@ fn summarise(
         server_cpu_s: server_cpu.total_s(),
         server_kernel_share: server_cpu.system_s / server_cpu.total_s().max(1e-9),
         server_cpu_us_per_message: server_cpu.total_s() * 1e6 / delivered.max(1) as f64,
+        cpu_vs_bare: None,
         server_rss_mb: memory.rss_mb,
         server_peak_rss_mb: memory.peak_rss_mb,
         loadgen_cpu_s,
@@ -340,13 +370,14 @@ fn summarise(
     }
 }
 
-/// The rounds as a table, each peer round followed by its ratio to fieldhouse's.
+/// The rounds as a table, then per spectator count fieldhouse's ratios to the bare
+/// sender's and the peer's figures.
 pub fn table(rounds: &[Round]) -> String {
     use std::fmt::Write;
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{:<11} {:>7} {:>6} {:>6} {:>9} {:>7} {:>7} {:>24} {:>24} {:>7} {:>9} {:>7} {:>8} {:>8} {:>8}",
+        "{:<11} {:>7} {:>6} {:>6} {:>9} {:>7} {:>7} {:>24} {:>24} {:>7} {:>9} {:>7} {:>7} {:>8} {:>8} {:>8}",
         "server",
         "matches",
         "specs",
@@ -358,6 +389,7 @@ pub fn table(rounds: &[Round]) -> String {
         "spread p50/p99/max ms",
         "B/msg",
         "µs/msg",
+        "×bare",
         "kernel",
         "RSS MB",
         "peak MB",
@@ -367,7 +399,7 @@ pub fn table(rounds: &[Round]) -> String {
     for r in rounds {
         let _ = writeln!(
             out,
-            "{:<11} {:>7} {:>6} {:>6} {:>8.2}% {:>7.1} {:>7.1} {:>24} {:>24} {:>7.0} {:>9.2} {:>6.0}% {:>8.1} {:>8.1} {:>8}",
+            "{:<11} {:>7} {:>6} {:>6} {:>8.2}% {:>7.1} {:>7.1} {:>24} {:>24} {:>7.0} {:>9.2} {:>7} {:>6.0}% {:>8.1} {:>8.1} {:>8}",
             r.server,
             r.matches,
             r.spectators,
@@ -379,26 +411,40 @@ pub fn table(rounds: &[Round]) -> String {
             ms(&r.spread_ms),
             r.bytes_per_message,
             r.server_cpu_us_per_message,
+            r.cpu_vs_bare.map_or("-".into(), |x| format!("{x:.2}")),
             100.0 * r.server_kernel_share,
             r.server_rss_mb,
             r.server_peak_rss_mb,
             r.tick_overruns.map_or("-".into(), |o| o.to_string()),
         );
     }
-    for pair in rounds.windows(2) {
-        if let [ours, peer] = pair {
-            if ours.server == "fieldhouse" && peer.server != "fieldhouse" {
-                let _ = writeln!(
-                    out,
-                    "at {}, fieldhouse ÷ {}: server CPU per message {:.2}, delivered share {:.3}, RSS {:.2}, bytes per message {:.2}",
-                    fieldhouse_core::words::plural(ours.spectators as u64, "spectator"),
-                    peer.server,
-                    ours.server_cpu_us_per_message / peer.server_cpu_us_per_message,
-                    ours.delivered_share / peer.delivered_share,
-                    ours.server_rss_mb / peer.server_rss_mb,
-                    ours.bytes_per_message / peer.bytes_per_message,
-                );
-            }
+    let mut counts: Vec<usize> = rounds.iter().map(|r| r.spectators).collect();
+    counts.dedup();
+    for n in counts {
+        let at_n = || rounds.iter().filter(move |r| r.spectators == n);
+        let Some(ours) = at_n().find(|r| r.server == servers::FIELDHOUSE) else {
+            continue;
+        };
+        let spectators = fieldhouse_core::words::plural(n as u64, "spectator");
+        if let Some(bare) = at_n().find(|r| r.server == servers::BARE) {
+            let _ = writeln!(
+                out,
+                "at {spectators}, fieldhouse ÷ bare sender: server CPU per message {:.2}, delivered share {:.3}",
+                ours.server_cpu_us_per_message / bare.server_cpu_us_per_message,
+                ours.delivered_share / bare.delivered_share,
+            );
+        }
+        for peer in at_n().filter(|r| r.server != servers::FIELDHOUSE && r.server != servers::BARE)
+        {
+            let _ = writeln!(
+                out,
+                "at {spectators}, fieldhouse ÷ {}: server CPU per message {:.2}, delivered share {:.3}, RSS {:.2}, bytes per message {:.2}",
+                peer.server,
+                ours.server_cpu_us_per_message / peer.server_cpu_us_per_message,
+                ours.delivered_share / peer.delivered_share,
+                ours.server_rss_mb / peer.server_rss_mb,
+                ours.bytes_per_message / peer.bytes_per_message,
+            );
         }
     }
     out

@@ -91,6 +91,10 @@ fn which(program: &str) -> bool {
         .is_some_and(|path| std::env::split_paths(&path).any(|dir| dir.join(program).is_file()))
 }
 
+/// The servers' names in reports.
+pub(crate) const FIELDHOUSE: &str = "fieldhouse";
+pub(crate) const BARE: &str = "bare";
+
 /// The admin token of the servers started here.
 const ADMIN: &str = "loadgen-admin-token-0123456789";
 
@@ -104,6 +108,9 @@ pub(crate) struct Running {
     child: Child,
     /// fieldhouse's HTTP base, for /metrics.
     http: Option<String>,
+    /// The bare sender's standard input: it exits when this closes, so it never
+    /// outlives the load generator, however that ends.
+    _stdin: Option<std::process::ChildStdin>,
 }
 
 impl Running {
@@ -164,10 +171,11 @@ impl Running {
         let addr: String = line[at..].chars().take_while(|c| *c != '/').collect();
         let _ = std::fs::remove_file(&config);
         Ok(Running {
-            name: "fieldhouse",
+            name: FIELDHOUSE,
             targets: Vec::new(),
             child,
             http: Some(format!("http://{addr}")),
+            _stdin: None,
         })
     }
 
@@ -193,6 +201,50 @@ impl Running {
             }],
             child,
             http: None,
+            _stdin: None,
+        })
+    }
+
+    /// The bare sender (`fieldhouse bare-sender`, see [`crate::bare`]) on a free port,
+    /// 30 frames a second; its spectators are spread over `matches` paths as
+    /// fieldhouse's are over its matches (every path gets the same frames), each frame's
+    /// payload `payload_bytes` long if given.
+    pub(crate) fn bare(
+        binary: &std::path::Path,
+        matches: usize,
+        payload_bytes: Option<usize>,
+    ) -> anyhow::Result<Running> {
+        let mut command = Command::new(binary);
+        command.args(["bare-sender", "--addr", "127.0.0.1:0", "--exit-with-stdin"]);
+        if let Some(n) = payload_bytes {
+            command.arg(format!("--payload-bytes={n}"));
+        }
+        let mut child = command
+            .env("FIELDHOUSE_LOG", "info")
+            .stdin(Stdio::piped())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .with_context(|| format!("starting {} bare-sender", binary.display()))?;
+        let stdin = child.stdin.take();
+        let line = first_line_with(&mut child, "ws://", Stream::Stderr)?;
+        let at = line.find("ws://").expect("found");
+        let base: String = line[at..]
+            .chars()
+            .take_while(|c| !c.is_whitespace())
+            .collect();
+        let base = base.trim_end_matches('/');
+        Ok(Running {
+            name: BARE,
+            targets: (0..matches as u64)
+                .map(|index| Target::Fieldhouse {
+                    url: format!("{base}/bare/{index}"),
+                    index,
+                })
+                .collect(),
+            child,
+            http: None,
+            _stdin: stdin,
         })
     }
 
