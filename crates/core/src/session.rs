@@ -46,16 +46,19 @@ impl Session {
     pub fn frame_into(&mut self, out: &mut Vec<u8>) {
         let (ball, agents, score) = self.world.state();
         let tick = self.world.tick();
-        write_frame(out, &Frame {
-            kind: tags::Frame,
-            match_id: &self.id,
-            tick,
-            time_s: self.world.time_s(),
-            ball,
-            agents,
-            score,
-            events: &self.events,
-        });
+        write_frame(
+            out,
+            &Frame {
+                kind: tags::Frame,
+                match_id: &self.id,
+                tick,
+                time_s: self.world.time_s(),
+                ball,
+                agents,
+                score,
+                events: &self.events,
+            },
+        );
         self.events.clear();
         self.framed = Some(tick);
     }
