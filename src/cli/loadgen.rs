@@ -1,5 +1,5 @@
-//! `fieldhouse loadgen`: spectator load on fieldhouse, the bare sender and a peer, side by
-//! side; bots in lock-step, with spectators of their matches.
+//! `fieldhouse loadgen`: spectator load on fieldhouse and a peer, side by side; bots in
+//! lock-step, with spectators of their matches.
 
 use clap::{Args, ValueEnum};
 use fieldhouse::loadgen::{self, Peer, Plan};
@@ -8,16 +8,13 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 #[command(
-    after_help = "At each spectator count, starts `fieldhouse serve --no-demo --stamp-frames` (this binary), \
-    then the bare sender (this binary's hidden `bare-sender`: accepts WebSockets and writes one prebuilt \
-    frame of fieldhouse's size to each, 30 times a second, and nothing else: the floor fieldhouse's CPU \
-    per frame is reported against, as ×bare), then with --peer colyseus the Colyseus server in \
-    bench/peers (run `npm ci --prefix bench/peers` once; it installs exactly what \
-    bench/peers/package-lock.json lists, and loadgen checks it before the first round), each alone on a \
-    free loopback port; spreads the spectators over --matches 60 Hz matches (30 frames a second; the \
-    peer has one room); measures a window; stops everything. One spectator in --timed-every reads \
-    frames as they arrive (latency, spread); the others read in batches every 100 ms (delivery, rate). \
-    Needs a file-descriptor limit above the spectator count (`ulimit -n`).\n\
+    after_help = "Starts `fieldhouse serve --no-demo --stamp-frames` (this binary) and, with \
+    --peer colyseus, the Colyseus server in bench/peers (run `npm ci --prefix bench/peers` once; it \
+    installs exactly what bench/peers/package-lock.json lists, and loadgen checks it before the first round), \
+    each on a free loopback port; spreads the spectators over --matches 60 Hz matches (30 frames a \
+    second; the peer has one room); \
+    measures a window; stops everything. Needs a file-descriptor limit above the spectator count \
+    (`ulimit -n`).\n\
     Example: fieldhouse loadgen --spectators 1000,5000 --seconds 10 --peer colyseus"
 )]
 pub(super) struct LoadgenArgs {
@@ -55,12 +52,6 @@ pub(super) struct LoadgenArgs {
     /// `bare` (the bare sender, the floor fieldhouse's CPU per frame is compared with).
     #[arg(long, value_enum, value_delimiter = ',', value_name = "SERVER")]
     skip: Vec<Skip>,
-    /// One spectator in N is timed: read as its frames arrive, for the latency and the
-    /// spread; the others are read in batches every 100 ms, which costs the load
-    /// generator (on the same cores as the server) far less per frame. 1: every
-    /// spectator reads every frame as it arrives (1 to 1000).
-    #[arg(long, value_name = "N", default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=1000))]
-    timed_every: u32,
     /// Print the rounds as JSON instead of a table.
     #[arg(long)]
     json: bool,
@@ -115,7 +106,6 @@ pub(super) fn run(args: LoadgenArgs, out: &mut impl Write) -> anyhow::Result<()>
         },
         fieldhouse_rounds: !args.skip.contains(&Skip::Fieldhouse),
         bare: !args.skip.contains(&Skip::Bare),
-        timed_every: args.timed_every as usize,
     };
     if let Some(bots) = args.bots {
         let bots = bots as usize;

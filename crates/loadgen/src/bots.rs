@@ -69,8 +69,6 @@ pub(super) struct BotLoad {
     pub spectators: usize,
     pub seconds: f64,
     pub settle_s: f64,
-    /// One spectator in this many is timed (see `client`).
-    pub timed_every: usize,
 }
 
 pub(super) async fn round(
@@ -84,12 +82,11 @@ pub(super) async fn round(
         spectators,
         seconds,
         settle_s,
-        timed_every,
     } = *load;
     let measuring = Arc::new(AtomicBool::new(false));
     let recording = Arc::new(AtomicBool::new(false));
     let stop = Arc::new(AtomicBool::new(false));
-    let audience = Audience::connect(server, spectators, timed_every, &recording, &stop).await?;
+    let audience = Audience::connect(server, spectators, &recording, &stop).await?;
     let tasks: Vec<_> = urls
         .iter()
         .map(|(m, url)| {

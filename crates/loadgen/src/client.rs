@@ -1,15 +1,6 @@
 //! Spectators: each connects on a task of its own (the HTTP upgrade, written here), and
 //! is then read by one of a few threads that poll their share of the sockets (epoll,
-//! through mio) and note each message's arrival while the round records.
-//!
-//! Timed spectators (one in `timed_every`, spread evenly over the audience) are read as
-//! their frames arrive, by threads that block in the poll: their arrival times give the
-//! latency and the spread. The others are read in batches, every [`BATCH_EVERY`], by a
-//! thread that sleeps in between: their frames count towards delivery and rate (which
-//! do not depend on when a frame is read), and each of their reads takes the few frames
-//! that came since the last. On loopback a read and its TCP work cost about as much as
-//! the server's write, so reading every frame of 5,000 spectators as it arrives took
-//! as much CPU as the server it measured on the same two cores.
+//! through mio) and note each message's arrival while the window is open.
 //!
 //! The load generator shares the machine with the server it measures, so what it spends
 //! per received frame is taken from the server: at 5,000 spectators the WebSocket
@@ -53,8 +44,6 @@ pub(crate) struct Arrival {
 pub(crate) struct Log {
     pub arrivals: Vec<Arrival>,
     pub bytes: u64,
-    /// Read as frames arrive: its arrival times are the frames'.
-    pub timed: bool,
 }
 
 /// What a round's spectators share while connecting.
@@ -68,20 +57,11 @@ pub(crate) struct Shared {
 
 /// Threads reading the spectators' sockets; see [`Readers::start`].
 pub(crate) struct Readers {
-    /// Threads that read their sockets as frames arrive, and threads that read in
-    /// batches (none when every spectator is timed).
-    timed: Vec<Inbox>,
-    batched: Vec<Inbox>,
-    next: AtomicUsize,
+    inboxes: Vec<(mpsc::Sender<Joined>, Arc<mio::Waker>)>,
     threads: std::sync::Mutex<Vec<std::thread::JoinHandle<Vec<Log>>>>,
+    next: AtomicUsize,
     /// Set when the readers are dropped, so a round that fails leaves no thread behind.
     stop: Arc<AtomicBool>,
-}
-
-/// Where a reader thread takes new sockets, and how to wake it for them.
-struct Inbox {
-    tx: mpsc::Sender<Joined>,
-    waker: Arc<mio::Waker>,
 }
 
 impl Drop for Readers {
@@ -90,8 +70,15 @@ impl Drop for Readers {
     }
 }
 
-/// How often the batched spectators are read.
-pub(crate) const BATCH_EVERY: Duration = Duration::from_millis(100);
+/// How many threads read the spectators' sockets: `FIELDHOUSE_LOADGEN_READERS`, else
+/// one per core.
+pub(crate) fn reader_threads() -> usize {
+    std::env::var("FIELDHOUSE_LOADGEN_READERS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .filter(|&n: &usize| (1..=64).contains(&n))
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(2, |n| n.get()))
+}
 
 /// A connected spectator on its way to a reader: its socket, what the handshake read
 /// past the response's headers, and how to read its messages.
@@ -99,7 +86,6 @@ struct Joined {
     stream: std::net::TcpStream,
     leftover: Vec<u8>,
     kind: Kind,
-    timed: bool,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -114,68 +100,47 @@ const WAKER: mio::Token = mio::Token(usize::MAX);
 const POLL_EVERY: Duration = Duration::from_millis(100);
 
 impl Readers {
-    /// Starts the readers: if `timed_every` is 1, one per core, each reading as frames
-    /// arrive; else one of those (for the timed spectators) and one reading in batches.
-    /// They log arrivals while `recording` and return their spectators' logs once `stop`
-    /// is set.
+    /// Starts `threads` readers, which log arrivals while `recording` and return their
+    /// spectators' logs once `stop` is set.
     pub(crate) fn start(
-        timed_every: usize,
+        threads: usize,
         recording: &Arc<AtomicBool>,
         stop: &Arc<AtomicBool>,
     ) -> anyhow::Result<Readers> {
-        let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
-        let (timed_threads, batch_threads) = if timed_every <= 1 { (cores, 0) } else { (1, 1) };
+        let mut inboxes = Vec::new();
         let mut handles = Vec::new();
-        let mut start = |k: usize, batch: Option<Duration>| -> anyhow::Result<Inbox> {
+        for k in 0..threads {
             let poll = mio::Poll::new()?;
             let waker = Arc::new(mio::Waker::new(poll.registry(), WAKER)?);
             let (tx, rx) = mpsc::channel();
             let (recording, stop) = (recording.clone(), stop.clone());
-            let name = match batch {
-                None => format!("loadgen-timed-{k}"),
-                Some(_) => format!("loadgen-batch-{k}"),
-            };
             let thread = std::thread::Builder::new()
-                .name(name)
-                .spawn(move || read_loop(poll, &rx, &recording, &stop, batch))?;
+                .name(format!("loadgen-reader-{k}"))
+                .spawn(move || read_loop(poll, &rx, &recording, &stop))?;
+            inboxes.push((tx, waker));
             handles.push(thread);
-            Ok(Inbox { tx, waker })
-        };
-        let timed = (0..timed_threads)
-            .map(|k| start(k, None))
-            .collect::<anyhow::Result<_>>()?;
-        let batched = (0..batch_threads)
-            .map(|k| start(k, Some(BATCH_EVERY)))
-            .collect::<anyhow::Result<_>>()?;
+        }
         Ok(Readers {
-            timed,
-            batched,
-            next: AtomicUsize::new(0),
+            inboxes,
             threads: std::sync::Mutex::new(handles),
+            next: AtomicUsize::new(0),
             stop: stop.clone(),
         })
     }
 
-    /// Hands a connected spectator to a reader: a timed one, or one that reads in
-    /// batches.
-    fn hand_over(&self, mut joined: Joined, timed: bool) {
-        let group = if timed || self.batched.is_empty() {
-            joined.timed = true;
-            &self.timed
-        } else {
-            &self.batched
-        };
-        let inbox = &group[self.next.fetch_add(1, Ordering::Relaxed) % group.len()];
-        if inbox.tx.send(joined).is_ok() {
-            let _ = inbox.waker.wake();
+    fn hand_over(&self, joined: Joined) {
+        let k = self.next.fetch_add(1, Ordering::Relaxed) % self.inboxes.len();
+        let (tx, waker) = &self.inboxes[k];
+        if tx.send(joined).is_ok() {
+            let _ = waker.wake();
         }
     }
 
     /// The logs of every spectator handed over, once `stop` (given to
     /// [`Readers::start`]) is set.
     pub(crate) fn logs(&self) -> Vec<Log> {
-        for inbox in self.timed.iter().chain(&self.batched) {
-            let _ = inbox.waker.wake();
+        for (_, waker) in &self.inboxes {
+            let _ = waker.wake();
         }
         let threads = std::mem::take(&mut *self.threads.lock().expect("not poisoned"));
         threads
@@ -193,8 +158,8 @@ pub(crate) fn now_us() -> u64 {
 }
 
 /// Connects one spectator (at most `round.gate` at a time) and hands its socket to a
-/// reader, a timed one if `timed`; counts it as settled either way.
-pub(crate) async fn spectate(target: Target, round: Shared, readers: Arc<Readers>, timed: bool) {
+/// reader; counts it as settled either way.
+pub(crate) async fn spectate(target: Target, round: Shared, readers: Arc<Readers>) {
     let connected = {
         let Ok(_permit) = round.gate.acquire().await else {
             round.settled.fetch_add(1, Ordering::SeqCst);
@@ -203,7 +168,7 @@ pub(crate) async fn spectate(target: Target, round: Shared, readers: Arc<Readers
         connect(&target).await
     };
     match connected {
-        Ok(joined) => readers.hand_over(joined, timed),
+        Ok(joined) => readers.hand_over(joined),
         Err(e) => tracing::warn!(error = %e, "a spectator could not connect"),
     }
     round.settled.fetch_add(1, Ordering::SeqCst);
@@ -242,7 +207,6 @@ async fn connect(target: &Target) -> anyhow::Result<Joined> {
         stream,
         leftover,
         kind,
-        timed: false,
     })
 }
 
@@ -286,26 +250,18 @@ async fn upgrade(url: &str) -> anyhow::Result<(std::net::TcpStream, Vec<u8>)> {
     Ok((stream.into_std()?, leftover))
 }
 
-/// One reader thread: registers the sockets handed to it, reads whichever are ready
-/// (as they become ready, or every `batch` if given), and returns their logs once `stop`
-/// is set.
+/// One reader thread: registers the sockets handed to it, reads whichever are ready, and
+/// returns their logs once `stop` is set.
 fn read_loop(
     mut poll: mio::Poll,
     inbox: &mpsc::Receiver<Joined>,
     recording: &AtomicBool,
     stop: &AtomicBool,
-    batch: Option<Duration>,
 ) -> Vec<Log> {
     let mut spectators: Vec<Spectator> = Vec::new();
     let mut events = mio::Events::with_capacity(EVENTS);
-    let wait = if batch.is_some() {
-        Duration::ZERO
-    } else {
-        POLL_EVERY
-    };
-    let mut next_batch = std::time::Instant::now();
     while !stop.load(Ordering::Relaxed) {
-        if let Err(e) = poll.poll(&mut events, Some(wait)) {
+        if let Err(e) = poll.poll(&mut events, Some(POLL_EVERY)) {
             if e.kind() != ErrorKind::Interrupted {
                 tracing::warn!(error = %e, "a reader cannot poll its sockets");
                 break;
@@ -323,7 +279,6 @@ fn read_loop(
                 continue;
             }
             let mut s = Spectator::new(stream, joined.kind);
-            s.log.timed = joined.timed;
             let had = joined.leftover.len();
             if had > s.buf.len() {
                 s.buf.resize(had.next_power_of_two(), 0);
@@ -333,9 +288,7 @@ fn read_loop(
             s.take_frames(now_us(), recording);
             spectators.push(s);
         }
-        let mut ready = 0;
         for event in &events {
-            ready += 1;
             if let Some(s) = spectators.get_mut(event.token().0) {
                 if s.open {
                     s.read(recording);
@@ -343,16 +296,6 @@ fn read_loop(
                         let _ = poll.registry().deregister(&mut s.stream);
                     }
                 }
-            }
-        }
-        // A batch reader polls again at once while the poll comes back full, then
-        // sleeps until its next batch.
-        if let (Some(every), true) = (batch, ready < EVENTS) {
-            next_batch += every;
-            let now = std::time::Instant::now();
-            match next_batch.checked_duration_since(now) {
-                Some(sleep) => std::thread::sleep(sleep.min(POLL_EVERY)),
-                None => next_batch = now,
             }
         }
     }

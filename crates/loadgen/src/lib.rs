@@ -74,9 +74,6 @@ pub struct Plan {
     pub fieldhouse_rounds: bool,
     /// Whether to run the bare sender under the same load (see [`bare`]).
     pub bare: bool,
-    /// One spectator in this many is timed: read as frames arrive, for the latency and
-    /// the spread; the others are read in batches (see `client`). 1: all are timed.
-    pub timed_every: usize,
 }
 
 /// One server under one load.
@@ -86,8 +83,6 @@ pub struct Round {
     pub matches: usize,
     pub spectators: usize,
     pub connected: usize,
-    /// Spectators read as frames arrived, whose arrivals give the latency and spread.
-    pub timed: usize,
     pub window_s: f64,
     /// Messages the server published in the window, per spectator (on average over
     /// their matches).
@@ -200,7 +195,6 @@ pub fn run_bots(plan: &Plan, bots: usize, think: Duration) -> anyhow::Result<Bot
         spectators: plan.spectators.first().copied().unwrap_or(0),
         seconds: plan.seconds,
         settle_s: plan.settle_s,
-        timed_every: plan.timed_every,
     };
     runtime.block_on(bots::round(&server, &urls, plan.matches, &load))
 }
@@ -209,12 +203,9 @@ async fn round(plan: &Plan, server: &servers::Running, n: usize) -> anyhow::Resu
     tracing::info!(server = server.name, spectators = n, "connecting");
     let recording = Arc::new(AtomicBool::new(false));
     let stop = Arc::new(AtomicBool::new(false));
-    let audience = Audience::connect(server, n, plan.timed_every, &recording, &stop).await?;
+    let audience = Audience::connect(server, n, &recording, &stop).await?;
     tokio::time::sleep(Duration::from_secs_f64(plan.settle_s)).await;
-    // Recording starts a little before the window: an unstamped message's time is its
-    // first timed arrival, which must be seen to place it before the window.
     recording.store(true, Ordering::SeqCst);
-    tokio::time::sleep(RECORD_AFTER).await;
     let window = Window::measure(server, &AtomicBool::new(false), plan.seconds).await?;
     tokio::time::sleep(RECORD_AFTER).await;
     recording.store(false, Ordering::SeqCst);
@@ -242,24 +233,21 @@ impl Audience {
     async fn connect(
         server: &servers::Running,
         n: usize,
-        timed_every: usize,
         recording: &Arc<AtomicBool>,
         stop: &Arc<AtomicBool>,
     ) -> anyhow::Result<Audience> {
-        let readers = Arc::new(client::Readers::start(timed_every, recording, stop)?);
+        let readers = Arc::new(client::Readers::start(
+            client::reader_threads(),
+            recording,
+            stop,
+        )?);
         let shared = client::Shared {
             gate: Arc::new(tokio::sync::Semaphore::new(CONNECTING_AT_ONCE)),
             settled: Arc::new(AtomicUsize::new(0)),
         };
         for i in 0..n {
             let target = server.targets[i % server.targets.len()].clone();
-            let timed = i % timed_every.max(1) == 0;
-            tokio::spawn(client::spectate(
-                target,
-                shared.clone(),
-                readers.clone(),
-                timed,
-            ));
+            tokio::spawn(client::spectate(target, shared.clone(), readers.clone()));
         }
         let deadline = std::time::Instant::now() + CONNECT_WITHIN;
         while shared.settled.load(Ordering::SeqCst) < n && std::time::Instant::now() < deadline {
@@ -339,60 +327,51 @@ fn summarise(
         memory,
         tick_overruns,
     } = *window;
-    // The first timed arrival of each message anywhere, by its key: when it was
-    // published, as near as the load generator sees it.
-    let mut first_timed = std::collections::HashMap::<u64, u64>::new();
-    for a in logs.iter().filter(|l| l.timed).flat_map(|l| &l.arrivals) {
-        first_timed
+    // A message belongs to the window if it was published in it (a stamped frame, by
+    // its `sent_us`: one published late in the window counts even if it arrives after,
+    // within the grace the spectators go on recording), else if it arrived in it.
+    let in_window = |a: &&client::Arrival| {
+        let at = a.sent_us.unwrap_or(a.at_us);
+        (from_us..=to_us).contains(&at)
+    };
+    let seen: Vec<Vec<client::Arrival>> = logs
+        .iter()
+        .map(|l| l.arrivals.iter().filter(in_window).copied().collect())
+        .collect();
+    let recorded: u64 = logs.iter().map(|l| l.arrivals.len() as u64).sum();
+    let bytes: u64 = logs.iter().map(|l| l.bytes).sum();
+    let delivered: u64 = seen.iter().map(|l| l.len() as u64).sum();
+    let mut rates: Vec<f64> = seen.iter().map(|l| l.len() as f64 / window_s).collect();
+    rates.sort_by(f64::total_cmp);
+    // The first arrival of each message anywhere, by its key.
+    let mut first = std::collections::HashMap::<u64, u64>::new();
+    for a in seen.iter().flatten() {
+        first
             .entry(a.key)
             .and_modify(|t| *t = (*t).min(a.at_us))
             .or_insert(a.at_us);
     }
-    // A message belongs to the window if it was published in it: a stamped frame by its
-    // `sent_us`, another message by its first timed arrival (so that every spectator's
-    // copy of a message is in or out together, however late it was read); one published
-    // late in the window counts even if it arrives after, within `RECORD_AFTER`.
-    let published_at = |a: &client::Arrival| {
-        a.sent_us
-            .or_else(|| first_timed.get(&a.key).copied())
-            .unwrap_or(a.at_us)
-    };
-    let seen: Vec<(bool, Vec<client::Arrival>)> = logs
-        .iter()
-        .map(|l| {
-            let kept = l
-                .arrivals
-                .iter()
-                .filter(|a| (from_us..=to_us).contains(&published_at(a)))
-                .copied()
-                .collect();
-            (l.timed, kept)
-        })
-        .collect();
-    let recorded: u64 = logs.iter().map(|l| l.arrivals.len() as u64).sum();
-    let bytes: u64 = logs.iter().map(|l| l.bytes).sum();
-    let delivered: u64 = seen.iter().map(|(_, l)| l.len() as u64).sum();
-    let mut rates: Vec<f64> = seen.iter().map(|(_, l)| l.len() as f64 / window_s).collect();
-    rates.sort_by(f64::total_cmp);
     // Published in the window, per match: every message some spectator received. (With
     // thousands of spectators a message none of them got is not a realistic gap to
     // miss.) Matches publish at different rates when they are lock-step, so each
     // spectator is owed its own match's messages: spectator i watches match i % matches,
     // named by the top bits of a message's key (see `client::MATCH_SHIFT`).
-    let keys: std::collections::HashSet<u64> =
-        seen.iter().flat_map(|(_, l)| l).map(|a| a.key).collect();
     let mut per_match = vec![0u64; matches];
-    for key in keys {
+    for key in first.keys() {
         if let Some(count) = per_match.get_mut((key >> client::MATCH_SHIFT) as usize) {
             *count += 1;
         }
     }
     let owed: u64 = (0..n).map(|i| per_match[i % matches]).sum();
     let published = owed / n.max(1) as u64;
-    // Latency and spread come from the timed spectators, read as frames arrived.
-    let timed = || seen.iter().filter(|(t, _)| *t).flat_map(|(_, l)| l);
-    let spread = timed().map(|a| a.at_us - first_timed[&a.key]).collect();
-    let latencies: Vec<u64> = timed()
+    let spread = seen
+        .iter()
+        .flatten()
+        .map(|a| a.at_us - first[&a.key])
+        .collect();
+    let latencies: Vec<u64> = seen
+        .iter()
+        .flatten()
         .filter_map(|a| a.sent_us.map(|s| a.at_us.saturating_sub(s)))
         .collect();
     Round {
@@ -400,7 +379,6 @@ fn summarise(
         matches,
         spectators: n,
         connected: seen.len(),
-        timed: seen.iter().filter(|(t, _)| *t).count(),
         window_s,
         published,
         delivered,
@@ -516,7 +494,6 @@ mod tests {
             matches: 1,
             spectators: 1000,
             connected: 1000,
-            timed: 100,
             window_s: 10.0,
             published: 300,
             delivered: 300_000,
