@@ -129,7 +129,10 @@ fn the_bare_sender_answers_a_handshake_and_sends_stamped_frames() {
         let ticks = (pair[0]["tick"].as_u64(), pair[1]["tick"].as_u64());
         assert!(ticks.1 > ticks.0, "{ticks:?}");
         let sent = (pair[0]["sent_us"].as_u64(), pair[1]["sent_us"].as_u64());
-        assert!(sent.1 > sent.0 && sent.0 > Some(1_700_000_000_000_000), "{sent:?}");
+        assert!(
+            sent.1 > sent.0 && sent.0 > Some(1_700_000_000_000_000),
+            "{sent:?}"
+        );
     }
     drop(child.stdin.take());
     let started = std::time::Instant::now();

@@ -99,7 +99,7 @@ pub(super) async fn round(
     recording.store(true, Ordering::SeqCst);
     let window = Window::measure(server, &measuring, seconds).await?;
     if spectators > 0 {
-        tokio::time::sleep(super::RECORD_AFTER).await;
+        tokio::time::sleep(super::RECORD_AROUND).await;
     }
     recording.store(false, Ordering::SeqCst);
     stop.store(true, Ordering::SeqCst);

@@ -12,8 +12,9 @@
 //!   window), a message counting as published when any spectator received it (a
 //!   fieldhouse frame is known by its tick, a Colyseus patch by its bytes). A stamped
 //!   frame (fieldhouse's, the bare sender's) is in the window if its `sent_us` is, and
-//!   counts as delivered if it arrives within [`RECORD_AFTER`] of the window's end; an
-//!   unstamped message (Colyseus's) is in the window if it arrives in it;
+//!   counts as delivered if it arrives within [`RECORD_AROUND`] of the window's end; an
+//!   unstamped message (Colyseus's) is placed by its first arrival at any spectator, so
+//!   every copy of a message is in the window or out of it together;
 //! * the frame rate held: the median and lowest per-spectator rate in the window;
 //! * latency: fieldhouse's frames carry their publish time (`serve --stamp-frames`; the
 //!   bare sender's too), so their latency is arrival − publish on the same clock.
@@ -48,9 +49,10 @@ use std::time::Duration;
 /// in a few seconds, few enough that neither side's accept queue overflows.
 pub const CONNECTING_AT_ONCE: usize = 100;
 
-/// How long spectators go on recording after the window, for frames published in it
-/// that arrive after it (a frame later than this counts as not delivered).
-const RECORD_AFTER: Duration = Duration::from_secs(1);
+/// How long spectators record before the window and after it: a message is placed in the
+/// window by when it was published (see `summarise`), and one published in the window
+/// but arriving more than this after it counts as not delivered.
+const RECORD_AROUND: Duration = Duration::from_secs(1);
 
 /// The longest a round waits for its spectators to connect.
 const CONNECT_WITHIN: Duration = Duration::from_secs(120);
@@ -205,9 +207,12 @@ async fn round(plan: &Plan, server: &servers::Running, n: usize) -> anyhow::Resu
     let stop = Arc::new(AtomicBool::new(false));
     let audience = Audience::connect(server, n, &recording, &stop).await?;
     tokio::time::sleep(Duration::from_secs_f64(plan.settle_s)).await;
+    // Recording starts a little before the window: an unstamped message is placed by its
+    // first arrival anywhere, which must be seen to place it before the window.
     recording.store(true, Ordering::SeqCst);
+    tokio::time::sleep(RECORD_AROUND).await;
     let window = Window::measure(server, &AtomicBool::new(false), plan.seconds).await?;
-    tokio::time::sleep(RECORD_AFTER).await;
+    tokio::time::sleep(RECORD_AROUND).await;
     recording.store(false, Ordering::SeqCst);
     stop.store(true, Ordering::SeqCst);
     let seen = audience.logs();
@@ -327,11 +332,21 @@ fn summarise(
         memory,
         tick_overruns,
     } = *window;
-    // A message belongs to the window if it was published in it (a stamped frame, by
-    // its `sent_us`: one published late in the window counts even if it arrives after,
-    // within the grace the spectators go on recording), else if it arrived in it.
+    // The first arrival of each message anywhere, by its key: when it was published, as
+    // near as the load generator sees it.
+    let mut first = std::collections::HashMap::<u64, u64>::new();
+    for a in logs.iter().flat_map(|l| &l.arrivals) {
+        first
+            .entry(a.key)
+            .and_modify(|t| *t = (*t).min(a.at_us))
+            .or_insert(a.at_us);
+    }
+    // A message belongs to the window if it was published in it: a stamped frame by its
+    // `sent_us`, another message by its first arrival anywhere (so that every copy of a
+    // message is in or out together); one published late in the window counts even if
+    // it arrives after, within `RECORD_AROUND`.
     let in_window = |a: &&client::Arrival| {
-        let at = a.sent_us.unwrap_or(a.at_us);
+        let at = a.sent_us.unwrap_or(first[&a.key]);
         (from_us..=to_us).contains(&at)
     };
     let seen: Vec<Vec<client::Arrival>> = logs
@@ -343,21 +358,15 @@ fn summarise(
     let delivered: u64 = seen.iter().map(|l| l.len() as u64).sum();
     let mut rates: Vec<f64> = seen.iter().map(|l| l.len() as f64 / window_s).collect();
     rates.sort_by(f64::total_cmp);
-    // The first arrival of each message anywhere, by its key.
-    let mut first = std::collections::HashMap::<u64, u64>::new();
-    for a in seen.iter().flatten() {
-        first
-            .entry(a.key)
-            .and_modify(|t| *t = (*t).min(a.at_us))
-            .or_insert(a.at_us);
-    }
+    let published_keys: std::collections::HashSet<u64> =
+        seen.iter().flatten().map(|a| a.key).collect();
     // Published in the window, per match: every message some spectator received. (With
     // thousands of spectators a message none of them got is not a realistic gap to
     // miss.) Matches publish at different rates when they are lock-step, so each
     // spectator is owed its own match's messages: spectator i watches match i % matches,
     // named by the top bits of a message's key (see `client::MATCH_SHIFT`).
     let mut per_match = vec![0u64; matches];
-    for key in first.keys() {
+    for key in published_keys {
         if let Some(count) = per_match.get_mut((key >> client::MATCH_SHIFT) as usize) {
             *count += 1;
         }
@@ -524,7 +533,9 @@ mod tests {
         let text = table(&rounds);
         assert!(text.lines().next().unwrap().contains("×bare"), "{text}");
         assert!(
-            text.contains("at 1000 spectators, fieldhouse ÷ bare sender: server CPU per message 1.20"),
+            text.contains(
+                "at 1000 spectators, fieldhouse ÷ bare sender: server CPU per message 1.20"
+            ),
             "{text}"
         );
         assert!(

@@ -326,7 +326,11 @@ async fn run(
         let over = changed.is_err() || p.end.is_some();
         {
             let mut arrived = newcomers.lock().expect("not poisoned");
-            let list = if over { arrived.take() } else { arrived.as_mut().map(std::mem::take) };
+            let list = if over {
+                arrived.take()
+            } else {
+                arrived.as_mut().map(std::mem::take)
+            };
             members.extend(list.into_iter().flatten());
         }
         let frame = text_frame(p.frame.as_bytes());
@@ -340,7 +344,15 @@ async fn run(
                 since_yield = 0;
                 tokio::task::yield_now().await;
             }
-            match offer(&mut members[k], p.seq, &frame, p.frame.len(), now, send_timeout, &mut tally) {
+            match offer(
+                &mut members[k],
+                p.seq,
+                &frame,
+                p.frame.len(),
+                now,
+                send_timeout,
+                &mut tally,
+            ) {
                 Fate::Keep => k += 1,
                 Fate::Out(why) => {
                     let _ = members.swap_remove(k).out.send(why);
@@ -404,7 +416,10 @@ fn offer(
 
 #[cfg(test)]
 mod tests {
-    use super::text_frame;
+    use super::{offer, text_frame, Fate, Member, Out, Tally, Wire};
+    use crate::listener::Connections;
+    use std::sync::Arc;
+    use std::time::{Duration, Instant};
 
     #[test]
     fn text_frames_have_the_length_in_the_header_the_rfc_gives_it() {
@@ -414,9 +429,128 @@ mod tests {
         assert_eq!(mid.len(), 304);
         let big = text_frame(&vec![b'x'; 70_000]);
         assert_eq!(&big[..2], &[0x81, 127]);
-        assert_eq!(
-            u64::from_be_bytes(big[2..10].try_into().unwrap()),
-            70_000
+        assert_eq!(u64::from_be_bytes(big[2..10].try_into().unwrap()), 70_000);
+    }
+
+    /// A server-side socket whose client reads nothing (a small receive buffer, so it
+    /// fills soon), as a wire, and the client.
+    async fn stalled_pair() -> (Arc<Wire>, tokio::net::TcpStream) {
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let client = tokio::net::TcpSocket::new_v4().unwrap();
+        client.set_recv_buffer_size(2048).unwrap();
+        let client = client
+            .connect(listener.local_addr().unwrap())
+            .await
+            .unwrap();
+        let (server, peer) = listener.accept().await.unwrap();
+        // As a spectator's socket is once its handshake is written.
+        server.writable().await.unwrap();
+        let connections = Arc::new(Connections::new(8, 8));
+        let place = Arc::new(connections.open(peer.ip()).unwrap());
+        (Arc::new(Wire::new(server, place)), client)
+    }
+
+    #[tokio::test]
+    async fn a_full_socket_skips_frames_keeps_the_stream_whole_and_is_let_go_at_the_timeout() {
+        let (wire, client) = stalled_pair().await;
+        let (out, _told) = tokio::sync::oneshot::channel();
+        let mut member = Member::new(wire.clone(), 0, out);
+        let payload = [b'x'; 1000];
+        let frame = text_frame(&payload);
+        let timeout = Duration::from_secs(5);
+        let mut tally = Tally::default();
+        let mut seq = 0;
+        while tally.dropped == 0 {
+            seq += 1;
+            assert!(seq < 100_000, "the socket never filled");
+            let fate = offer(
+                &mut member,
+                seq,
+                &frame,
+                1000,
+                Instant::now(),
+                timeout,
+                &mut tally,
+            );
+            assert!(matches!(fate, Fate::Keep));
+        }
+        assert_eq!(tally.sent, seq - 1);
+        // At most the tail of one frame waits: nothing queues behind a full socket.
+        assert!(wire.pending.lock().unwrap().len() < frame.len());
+        // Skipping until the timeout, then let go, counted as slow.
+        let later = Instant::now() + timeout;
+        let fate = offer(
+            &mut member,
+            seq + 2,
+            &frame,
+            1000,
+            later,
+            timeout,
+            &mut tally,
         );
+        assert!(matches!(fate, Fate::Out(Out::TimedOut)));
+        assert_eq!((tally.dropped, tally.slow), (3, 1));
+        // What reached the client is whole frames, then at most the start of one.
+        let mut client = client.into_std().unwrap();
+        client.set_nonblocking(true).unwrap();
+        let mut got = Vec::new();
+        let mut chunk = [0u8; 65536];
+        while let Ok(n) = std::io::Read::read(&mut client, &mut chunk) {
+            if n == 0 {
+                break;
+            }
+            got.extend_from_slice(&chunk[..n]);
+        }
+        let whole = got.len() / frame.len();
+        assert!(whole > 0);
+        for k in 0..whole {
+            assert_eq!(&got[k * frame.len()..(k + 1) * frame.len()], &frame[..]);
+        }
+        assert_eq!(
+            &got[whole * frame.len()..],
+            &frame[..got.len() % frame.len()]
+        );
+    }
+
+    #[tokio::test]
+    async fn a_spectator_that_left_or_a_client_that_closed_is_let_go() {
+        let (wire, client) = stalled_pair().await;
+        let frame = text_frame(b"{}");
+        let mut tally = Tally::default();
+        let (out, told) = tokio::sync::oneshot::channel();
+        let mut member = Member::new(wire.clone(), 0, out);
+        drop(told);
+        let fate = offer(
+            &mut member,
+            1,
+            &frame,
+            2,
+            Instant::now(),
+            Duration::from_secs(5),
+            &mut tally,
+        );
+        assert!(matches!(fate, Fate::Out(Out::Gone)));
+        let (out, _told) = tokio::sync::oneshot::channel();
+        let mut member = Member::new(wire, 0, out);
+        drop(client);
+        let mut seq = 0;
+        let gone = loop {
+            seq += 1;
+            let fate = offer(
+                &mut member,
+                seq,
+                &frame,
+                2,
+                Instant::now(),
+                Duration::from_secs(5),
+                &mut tally,
+            );
+            if let Fate::Out(why) = fate {
+                break why;
+            }
+            assert!(seq < 1000, "writes to a closed connection kept succeeding");
+            tokio::time::sleep(Duration::from_millis(5)).await;
+        };
+        assert!(matches!(gone, Out::Gone), "{gone:?}");
     }
 }
