@@ -57,19 +57,27 @@ fn loadgen_reports_a_small_round_and_the_bare_senders_beside_it() {
             "{round}"
         );
         assert!(round["server_rss_mb"].as_f64().unwrap() > 1.0);
-        // Each server's CPU per frame is reported against the bare sender's.
-        assert!(round["cpu_vs_bare"].as_f64().unwrap() > 0.0, "{round}");
     }
     let (ours, bare) = (&rounds[0], &rounds[1]);
     assert!(ours["tick_overruns"].as_u64().is_some(), "{ours}");
     assert!(bare["tick_overruns"].is_null(), "{bare}");
-    assert_eq!(bare["cpu_vs_bare"].as_f64(), Some(1.0), "{bare}");
-    let ratio = ours["server_cpu_us_per_message"].as_f64().unwrap()
-        / bare["server_cpu_us_per_message"].as_f64().unwrap();
-    assert!(
-        (ours["cpu_vs_bare"].as_f64().unwrap() - ratio).abs() < 1e-9,
-        "{rounds}"
-    );
+    // fieldhouse's CPU per frame is reported against the bare sender's; 20 spectators
+    // for a second may cost the bare sender less than /proc's 10 ms tick, and then
+    // there is no ratio to give.
+    let floor = bare["server_cpu_us_per_message"].as_f64().unwrap();
+    if floor > 0.0 {
+        assert_eq!(bare["cpu_vs_bare"].as_f64(), Some(1.0), "{bare}");
+        let ratio = ours["server_cpu_us_per_message"].as_f64().unwrap() / floor;
+        assert!(
+            (ours["cpu_vs_bare"].as_f64().unwrap() - ratio).abs() < 1e-9,
+            "{rounds}"
+        );
+    } else {
+        assert!(
+            ours["cpu_vs_bare"].is_null() && bare["cpu_vs_bare"].is_null(),
+            "{rounds}"
+        );
+    }
     // The bare sender's frames are the size of fieldhouse's in the same run.
     let (a, b) = (
         ours["bytes_per_message"].as_f64().unwrap(),

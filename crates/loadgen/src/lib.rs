@@ -104,7 +104,8 @@ pub struct Round {
     pub server_kernel_share: f64,
     pub server_cpu_us_per_message: f64,
     /// `server_cpu_us_per_message` ÷ the bare sender's at the same count in the same
-    /// run (1 for the bare sender itself; None when it did not run).
+    /// run (1 for the bare sender itself; None when it did not run, or its CPU time in
+    /// the window was under the 10 ms /proc counts in).
     pub cpu_vs_bare: Option<f64>,
     pub server_rss_mb: f64,
     pub server_peak_rss_mb: f64,
@@ -171,10 +172,12 @@ pub fn run(plan: &Plan) -> anyhow::Result<Vec<Round>> {
             let server = servers::Running::peer(peer)?;
             here.push(runtime.block_on(round(plan, &server, n))?);
         }
+        // (None if the bare sender's CPU was too little to see: /proc counts 10 ms ticks.)
         let floor = here
             .iter()
             .find(|r| r.server == servers::BARE)
-            .map(|r| r.server_cpu_us_per_message);
+            .map(|r| r.server_cpu_us_per_message)
+            .filter(|&us| us > 0.0);
         for r in &mut here {
             r.cpu_vs_bare = floor.map(|f| r.server_cpu_us_per_message / f);
         }
@@ -464,7 +467,10 @@ pub fn table(rounds: &[Round]) -> String {
             continue;
         };
         let spectators = fieldhouse_core::words::plural(n as u64, "spectator");
-        if let Some(bare) = at_n().find(|r| r.server == servers::BARE) {
+        if let Some(bare) = at_n()
+            .find(|r| r.server == servers::BARE)
+            .filter(|b| b.server_cpu_us_per_message > 0.0)
+        {
             let _ = writeln!(
                 out,
                 "at {spectators}, fieldhouse ÷ bare sender: server CPU per message {:.2}, delivered share {:.3}",

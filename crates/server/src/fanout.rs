@@ -25,7 +25,7 @@ use super::metrics::Metrics;
 use super::state::Published;
 use std::io;
 use std::pin::Pin;
-use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering::Relaxed};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::task::{ready, Context, Poll};
 use std::time::{Duration, Instant};
@@ -43,12 +43,18 @@ pub struct Wire {
     stream: TcpStream,
     /// Bytes of whole frames the socket has not taken yet; they go before anything else.
     pending: Mutex<Vec<u8>>,
+    /// Set when its spectator task ends: the fan-out lets it go at the next frame. (A
+    /// flag beside what the fan-out touches anyway: asking the member's channel whether
+    /// its receiver is gone was a cache miss per spectator per frame, 3 % of the CPU.)
+    left: AtomicBool,
     /// The connection's place among the server's connections, held while it is open.
     _place: Arc<Conn>,
 }
 
 /// What offering a frame to a socket did.
 enum Offered {
+    /// Nothing: its spectator has left.
+    Left,
     /// Written (perhaps partly: its tail is pending and goes first next time).
     Sent,
     /// Not written: the socket is full. `progress`: it took some pending bytes.
@@ -60,8 +66,17 @@ impl Wire {
         Wire {
             stream,
             pending: Mutex::new(Vec::new()),
+            left: AtomicBool::new(false),
             _place: place,
         }
+    }
+
+    /// Its spectator is done with it: the fan-out writes it no more frames (set under
+    /// the lock the fan-out writes under, so a close written after this is the last
+    /// thing on the wire) and lets it go at the next frame.
+    pub fn leave(&self) {
+        let _writing = self.pending.lock().expect("not poisoned");
+        self.left.store(true, Relaxed);
     }
 
     /// Writes what is pending as far as the socket takes it; whether it took any.
@@ -105,6 +120,9 @@ impl Wire {
     /// part of the frame; else skipped.
     fn offer(&self, frame: &[u8]) -> io::Result<Offered> {
         let mut pending = self.pending.lock().expect("not poisoned");
+        if self.left.load(Relaxed) {
+            return Ok(Offered::Left);
+        }
         let mut progress = false;
         if !pending.is_empty() {
             progress = self.drain(&mut pending)?;
@@ -382,7 +400,7 @@ fn offer(
     send_timeout: Duration,
     tally: &mut Tally,
 ) -> Fate {
-    if m.out.is_closed() {
+    if m.wire.left.load(Relaxed) {
         // Its spectator task has gone (the client closed, or broke the rules).
         return Fate::Out(Out::Gone);
     }
@@ -392,6 +410,7 @@ fn offer(
     tally.dropped += seq - m.last_seq - 1;
     m.last_seq = seq;
     match m.wire.offer(frame) {
+        Ok(Offered::Left) => Fate::Out(Out::Gone),
         Ok(Offered::Sent) => {
             m.progress = now;
             tally.sent += 1;
@@ -514,12 +533,12 @@ mod tests {
 
     #[tokio::test]
     async fn a_spectator_that_left_or_a_client_that_closed_is_let_go() {
-        let (wire, client) = stalled_pair().await;
+        let (wire, _client) = stalled_pair().await;
         let frame = text_frame(b"{}");
         let mut tally = Tally::default();
-        let (out, told) = tokio::sync::oneshot::channel();
+        let (out, _told) = tokio::sync::oneshot::channel();
         let mut member = Member::new(wire.clone(), 0, out);
-        drop(told);
+        wire.leave();
         let fate = offer(
             &mut member,
             1,
@@ -530,6 +549,7 @@ mod tests {
             &mut tally,
         );
         assert!(matches!(fate, Fate::Out(Out::Gone)));
+        let (wire, client) = stalled_pair().await;
         let (out, _told) = tokio::sync::oneshot::channel();
         let mut member = Member::new(wire, 0, out);
         drop(client);

@@ -61,6 +61,7 @@ async fn spectator(socket: RawSocket, entry: Arc<MatchEntry>, app: Arc<AppState>
     let (close_tx, close_rx) = tokio::sync::oneshot::channel();
     let mut listener = tokio::spawn(listen(
         reader,
+        wire.clone(),
         budget(&app),
         metrics.clone(),
         said_tx,
@@ -98,6 +99,8 @@ async fn spectator(socket: RawSocket, entry: Arc<MatchEntry>, app: Arc<AppState>
                 read = &mut said => closing = read.ok().flatten(),
             },
         }
+        // No frame after this: what follows is the end and the close.
+        wire.leave();
         if let Some(end) = &end {
             let _ = wire.write_text(end.as_str());
             closing = Some(ending(&shutdown));
@@ -123,6 +126,7 @@ async fn spectator(socket: RawSocket, entry: Arc<MatchEntry>, app: Arc<AppState>
 /// spectator task says so (`close_rx`); reading goes on until the client's answer.
 async fn listen(
     mut socket: Reader,
+    wire: Arc<Wire>,
     mut budget: MessageBudget,
     metrics: Arc<super::metrics::Metrics>,
     said: tokio::sync::oneshot::Sender<Option<(u16, &'static str)>>,
@@ -164,6 +168,8 @@ async fn listen(
             let Some(said) = said.take() else { return };
             if let (Some((code, reason)), false) = (ending, closing) {
                 closing = true;
+                // No frame after the close.
+                wire.leave();
                 let _ = socket.send(close(code, reason)).await;
             }
             let _ = said.send(ending);
