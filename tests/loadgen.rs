@@ -8,7 +8,7 @@ mod common;
 use common::fieldhouse;
 
 #[test]
-fn loadgen_reports_a_small_round() {
+fn loadgen_reports_a_small_round_and_the_bare_senders_beside_it() {
     // The server loadgen starts inherits the cost-map cache the server tests use, so it
     // starts without building maps.
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
@@ -27,30 +27,130 @@ fn loadgen_reports_a_small_round() {
         String::from_utf8_lossy(&out.stderr)
     );
     let rounds: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let round = &rounds[0];
-    assert_eq!(round["server"], "fieldhouse");
-    assert_eq!(round["matches"], 2);
-    assert_eq!(round["connected"], 20);
-    // About 30 frames a second reach each of them in the one-second window.
-    let delivered = round["delivered"].as_u64().unwrap();
-    assert!(delivered >= 20 * 10, "{round}");
-    let share = round["delivered_share"].as_f64().unwrap();
-    assert!(share > 0.5 && share <= 1.1, "{round}");
-    // Frames are stamped, so latency is measured; a fly-ball frame is small.
-    // Latencies come from differences that saturate at zero: a real one on loopback is
-    // above zero and well under a second, and the median is at most the 99th percentile.
-    let latency = &round["latency_ms"];
-    let (p50, p99) = (
-        latency["p50"].as_f64().unwrap(),
-        latency["p99"].as_f64().unwrap(),
+    let servers: Vec<_> = rounds
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["server"].as_str().unwrap())
+        .collect();
+    assert_eq!(servers, ["fieldhouse", "bare"], "{rounds}");
+    for round in rounds.as_array().unwrap() {
+        assert_eq!(round["matches"], 2);
+        assert_eq!(round["connected"], 20);
+        // About 30 frames a second reach each of them in the one-second window.
+        let delivered = round["delivered"].as_u64().unwrap();
+        assert!(delivered >= 20 * 10, "{round}");
+        let share = round["delivered_share"].as_f64().unwrap();
+        assert!(share > 0.5 && share <= 1.1, "{round}");
+        // Frames are stamped, so latency is measured; a fly-ball frame is small.
+        // Latencies come from differences that saturate at zero: a real one on loopback
+        // is above zero and well under a second, and the median is at most the 99th
+        // percentile.
+        let latency = &round["latency_ms"];
+        let (p50, p99) = (
+            latency["p50"].as_f64().unwrap(),
+            latency["p99"].as_f64().unwrap(),
+        );
+        assert!(p50 > 0.0 && p50 <= p99 && p99 < 1000.0, "{round}");
+        assert!(
+            round["bytes_per_message"].as_f64().unwrap() < 1024.0,
+            "{round}"
+        );
+        assert!(round["server_rss_mb"].as_f64().unwrap() > 1.0);
+    }
+    let (ours, bare) = (&rounds[0], &rounds[1]);
+    assert!(ours["tick_overruns"].as_u64().is_some(), "{ours}");
+    assert!(bare["tick_overruns"].is_null(), "{bare}");
+    // fieldhouse's CPU per frame is reported against the bare sender's; 20 spectators
+    // for a second may cost the bare sender less than /proc's 10 ms tick, and then
+    // there is no ratio to give.
+    let floor = bare["server_cpu_us_per_message"].as_f64().unwrap();
+    if floor > 0.0 {
+        assert_eq!(bare["cpu_vs_bare"].as_f64(), Some(1.0), "{bare}");
+        let ratio = ours["server_cpu_us_per_message"].as_f64().unwrap() / floor;
+        assert!(
+            (ours["cpu_vs_bare"].as_f64().unwrap() - ratio).abs() < 1e-9,
+            "{rounds}"
+        );
+    } else {
+        assert!(
+            ours["cpu_vs_bare"].is_null() && bare["cpu_vs_bare"].is_null(),
+            "{rounds}"
+        );
+    }
+    // The bare sender's frames are the size of fieldhouse's in the same run.
+    let (a, b) = (
+        ours["bytes_per_message"].as_f64().unwrap(),
+        bare["bytes_per_message"].as_f64().unwrap(),
     );
-    assert!(p50 > 0.0 && p50 <= p99 && p99 < 1000.0, "{round}");
-    assert!(
-        round["bytes_per_message"].as_f64().unwrap() < 1024.0,
-        "{round}"
-    );
-    assert!(round["server_rss_mb"].as_f64().unwrap() > 1.0);
-    assert!(round["tick_overruns"].as_u64().is_some(), "{round}");
+    assert!((a - b).abs() <= 1.0, "{a} against {b}");
+}
+
+/// The bare sender on its own, as loadgen starts it: it says where it listens, answers
+/// a WebSocket handshake, sends stamped frames with a rising tick 30 times a second, and
+/// exits when its standard input closes.
+#[test]
+fn the_bare_sender_answers_a_handshake_and_sends_stamped_frames() {
+    use futures_util::StreamExt;
+    use std::io::BufRead;
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
+        .args(["bare-sender", "--addr", "127.0.0.1:0", "--exit-with-stdin"])
+        .args(["--payload-bytes", "600"])
+        .env("FIELDHOUSE_LOG", "info")
+        .stdin(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    let stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+    let url = stderr
+        .lines()
+        .map_while(Result::ok)
+        .find_map(|line| {
+            let at = line.find("ws://")?;
+            Some(line[at..].split_whitespace().next()?.to_string())
+        })
+        .expect("it says where it listens");
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap();
+    let frames: Vec<serde_json::Value> = runtime.block_on(async {
+        let (mut socket, response) = tokio_tungstenite::connect_async(format!("{url}bare/0"))
+            .await
+            .expect("a WebSocket handshake");
+        assert_eq!(response.status(), 101);
+        let mut frames = Vec::new();
+        while frames.len() < 5 {
+            let message = tokio::time::timeout(std::time::Duration::from_secs(5), socket.next())
+                .await
+                .expect("a frame within 5 s")
+                .expect("the socket is open")
+                .expect("a message");
+            let text = message.into_text().expect("a text message");
+            assert_eq!(text.len(), 600, "padded to the size asked for");
+            frames.push(serde_json::from_str(text.as_str()).expect("JSON"));
+        }
+        frames
+    });
+    for pair in frames.windows(2) {
+        assert_eq!(pair[0]["type"], "frame");
+        let ticks = (pair[0]["tick"].as_u64(), pair[1]["tick"].as_u64());
+        assert!(ticks.1 > ticks.0, "{ticks:?}");
+        let sent = (pair[0]["sent_us"].as_u64(), pair[1]["sent_us"].as_u64());
+        assert!(
+            sent.1 > sent.0 && sent.0 > Some(1_700_000_000_000_000),
+            "{sent:?}"
+        );
+    }
+    drop(child.stdin.take());
+    let started = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        assert!(
+            started.elapsed() < std::time::Duration::from_secs(10),
+            "the bare sender outlived its standard input"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
 }
 
 #[test]

@@ -1,5 +1,5 @@
-//! `fieldhouse loadgen`: spectator load on fieldhouse and a peer, side by side; bots in
-//! lock-step, with spectators of their matches.
+//! `fieldhouse loadgen`: spectator load on fieldhouse, the bare sender and a peer, side by
+//! side; bots in lock-step, with spectators of their matches.
 
 use clap::{Args, ValueEnum};
 use fieldhouse::loadgen::{self, Peer, Plan};
@@ -8,13 +8,15 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 #[command(
-    after_help = "Starts `fieldhouse serve --no-demo --stamp-frames` (this binary) and, with \
-    --peer colyseus, the Colyseus server in bench/peers (run `npm ci --prefix bench/peers` once; it \
-    installs exactly what bench/peers/package-lock.json lists, and loadgen checks it before the first round), \
-    each on a free loopback port; spreads the spectators over --matches 60 Hz matches (30 frames a \
-    second; the peer has one room); \
-    measures a window; stops everything. Needs a file-descriptor limit above the spectator count \
-    (`ulimit -n`).\n\
+    after_help = "At each spectator count, starts `fieldhouse serve --no-demo --stamp-frames` (this binary), \
+    then the bare sender (this binary's hidden `bare-sender`: accepts WebSockets and writes one prebuilt \
+    frame of fieldhouse's size to each, 30 times a second, and nothing else: the floor fieldhouse's CPU \
+    per frame is reported against, as ×bare), then with --peer colyseus the Colyseus server in \
+    bench/peers (run `npm ci --prefix bench/peers` once; it installs exactly what \
+    bench/peers/package-lock.json lists, and loadgen checks it before the first round), each alone on a \
+    free loopback port; spreads the spectators over --matches 60 Hz matches (30 frames a second; the \
+    peer has one room); measures a window; stops everything. Needs a file-descriptor limit above the \
+    spectator count (`ulimit -n`).\n\
     Example: fieldhouse loadgen --spectators 1000,5000 --seconds 10 --peer colyseus"
 )]
 pub(super) struct LoadgenArgs {

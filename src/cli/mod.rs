@@ -64,7 +64,7 @@ enum Command {
     Run(run::RunArgs),
     /// Inspect, verify or export a replay file.
     Replay(replay::ReplayArgs),
-    /// Spectator load on fieldhouse (and a peer, e.g. Colyseus) on loopback: delivery, latency, CPU, memory.
+    /// Spectator load on fieldhouse, a bare sender (the floor) and a peer (e.g. Colyseus) on loopback: delivery, latency, CPU, memory.
     Loadgen(loadgen::LoadgenArgs),
     /// Churn matches, spectators and bots on a server for a bounded time; report whether
     /// memory, descriptors and threads stay flat.

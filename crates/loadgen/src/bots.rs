@@ -84,8 +84,9 @@ pub(super) async fn round(
         settle_s,
     } = *load;
     let measuring = Arc::new(AtomicBool::new(false));
+    let recording = Arc::new(AtomicBool::new(false));
     let stop = Arc::new(AtomicBool::new(false));
-    let audience = Audience::connect(server, spectators, &measuring, &stop).await?;
+    let audience = Audience::connect(server, spectators, &recording, &stop).await?;
     let tasks: Vec<_> = urls
         .iter()
         .map(|(m, url)| {
@@ -95,7 +96,12 @@ pub(super) async fn round(
         })
         .collect();
     tokio::time::sleep(Duration::from_secs_f64(settle_s.max(1.0))).await;
+    recording.store(true, Ordering::SeqCst);
     let window = Window::measure(server, &measuring, seconds).await?;
+    if spectators > 0 {
+        tokio::time::sleep(super::RECORD_AROUND).await;
+    }
+    recording.store(false, Ordering::SeqCst);
     stop.store(true, Ordering::SeqCst);
     let logs = audience.logs();
     let mut waits = Vec::new();

@@ -99,24 +99,12 @@ const WAKER: mio::Token = mio::Token(usize::MAX);
 /// How often a reader looks at `stop` when its sockets are quiet.
 const POLL_EVERY: Duration = Duration::from_millis(100);
 
-/// How long a reader sleeps between polls: `FIELDHOUSE_LOADGEN_PACE_US`, else 1 ms.
-/// Zero blocks in the poll instead.
-fn pace() -> Duration {
-    Duration::from_micros(
-        std::env::var("FIELDHOUSE_LOADGEN_PACE_US")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .filter(|&us: &u64| us <= 100_000)
-            .unwrap_or(1000),
-    )
-}
-
 impl Readers {
-    /// Starts `threads` readers, which log arrivals while `measuring` and return their
+    /// Starts `threads` readers, which log arrivals while `recording` and return their
     /// spectators' logs once `stop` is set.
     pub(crate) fn start(
         threads: usize,
-        measuring: &Arc<AtomicBool>,
+        recording: &Arc<AtomicBool>,
         stop: &Arc<AtomicBool>,
     ) -> anyhow::Result<Readers> {
         let mut inboxes = Vec::new();
@@ -125,10 +113,10 @@ impl Readers {
             let poll = mio::Poll::new()?;
             let waker = Arc::new(mio::Waker::new(poll.registry(), WAKER)?);
             let (tx, rx) = mpsc::channel();
-            let (measuring, stop) = (measuring.clone(), stop.clone());
+            let (recording, stop) = (recording.clone(), stop.clone());
             let thread = std::thread::Builder::new()
                 .name(format!("loadgen-reader-{k}"))
-                .spawn(move || read_loop(poll, &rx, &measuring, &stop))?;
+                .spawn(move || read_loop(poll, &rx, &recording, &stop))?;
             inboxes.push((tx, waker));
             handles.push(thread);
         }
@@ -163,7 +151,7 @@ impl Readers {
     }
 }
 
-fn now_us() -> u64 {
+pub(crate) fn now_us() -> u64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_micros() as u64)
@@ -267,25 +255,19 @@ async fn upgrade(url: &str) -> anyhow::Result<(std::net::TcpStream, Vec<u8>)> {
 fn read_loop(
     mut poll: mio::Poll,
     inbox: &mpsc::Receiver<Joined>,
-    measuring: &AtomicBool,
+    recording: &AtomicBool,
     stop: &AtomicBool,
 ) -> Vec<Log> {
     let mut spectators: Vec<Spectator> = Vec::new();
     let mut events = mio::Events::with_capacity(EVENTS);
-    let pace = pace();
-    let wait = if pace.is_zero() {
-        POLL_EVERY
-    } else {
-        Duration::ZERO
-    };
     while !stop.load(Ordering::Relaxed) {
-        if let Err(e) = poll.poll(&mut events, Some(wait)) {
+        if let Err(e) = poll.poll(&mut events, Some(POLL_EVERY)) {
             if e.kind() != ErrorKind::Interrupted {
                 tracing::warn!(error = %e, "a reader cannot poll its sockets");
                 break;
             }
         }
-        let measuring = measuring.load(Ordering::Relaxed);
+        let recording = recording.load(Ordering::Relaxed);
         while let Ok(joined) = inbox.try_recv() {
             let token = mio::Token(spectators.len());
             let mut stream = mio::net::TcpStream::from_std(joined.stream);
@@ -303,23 +285,18 @@ fn read_loop(
             }
             s.buf[..had].copy_from_slice(&joined.leftover);
             s.filled = had;
-            s.take_frames(now_us(), measuring);
+            s.take_frames(now_us(), recording);
             spectators.push(s);
         }
-        let mut ready = 0;
         for event in &events {
-            ready += 1;
             if let Some(s) = spectators.get_mut(event.token().0) {
                 if s.open {
-                    s.read(measuring);
+                    s.read(recording);
                     if !s.open {
                         let _ = poll.registry().deregister(&mut s.stream);
                     }
                 }
             }
-        }
-        if !pace.is_zero() && ready < EVENTS {
-            std::thread::sleep(pace);
         }
     }
     spectators.into_iter().map(|s| s.log).collect()
@@ -358,7 +335,7 @@ impl Spectator {
 
     /// Reads what the socket holds (edge-triggered: until a read comes back short, which
     /// means it was emptied; new data wakes the poll again) and takes the whole frames.
-    fn read(&mut self, measuring: bool) {
+    fn read(&mut self, recording: bool) {
         let mut at_us = None;
         loop {
             if self.filled == self.buf.len() {
@@ -373,7 +350,7 @@ impl Spectator {
                 Ok(n) => {
                     self.filled += n;
                     let at = *at_us.get_or_insert_with(now_us);
-                    self.take_frames(at, measuring);
+                    self.take_frames(at, recording);
                     if n < room || !self.open {
                         return;
                     }
@@ -390,7 +367,7 @@ impl Spectator {
 
     /// Takes every whole frame at the front of the buffer, logging the messages that
     /// count, and keeps the rest for the next read.
-    fn take_frames(&mut self, at_us: u64, measuring: bool) {
+    fn take_frames(&mut self, at_us: u64, recording: bool) {
         let mut start = 0;
         while let Some((header, len)) = frame_at(&self.buf[start..self.filled]) {
             if header + len > MAX_MESSAGE_BYTES {
@@ -407,7 +384,7 @@ impl Spectator {
             }
             let b0 = self.buf[start];
             let payload = start + header..start + header + len;
-            self.message(b0 & 0x0f, payload.clone(), at_us, measuring);
+            self.message(b0 & 0x0f, payload.clone(), at_us, recording);
             start = payload.end;
         }
         self.buf.copy_within(start..self.filled, 0);
@@ -420,7 +397,7 @@ impl Spectator {
         opcode: u8,
         payload: std::ops::Range<usize>,
         at_us: u64,
-        measuring: bool,
+        recording: bool,
     ) {
         const TEXT: u8 = 0x1;
         const BINARY: u8 = 0x2;
@@ -450,7 +427,7 @@ impl Spectator {
             }
             _ => None,
         };
-        if let (Some((key, sent_us)), true) = (seen, measuring) {
+        if let (Some((key, sent_us)), true) = (seen, recording) {
             self.log.bytes += bytes.len() as u64;
             self.log.arrivals.push(Arrival {
                 key,

@@ -10,7 +10,11 @@
 //!
 //! * delivered share: messages received ÷ (spectators × messages published in the
 //!   window), a message counting as published when any spectator received it (a
-//!   fieldhouse frame is known by its tick, a Colyseus patch by its bytes);
+//!   fieldhouse frame is known by its tick, a Colyseus patch by its bytes). A stamped
+//!   frame (fieldhouse's, the bare sender's) is in the window if its `sent_us` is, and
+//!   counts as delivered if it arrives within [`RECORD_AROUND`] of the window's end; an
+//!   unstamped message (Colyseus's) is placed by its first arrival at any spectator, so
+//!   every copy of a message is in the window or out of it together;
 //! * the frame rate held: the median and lowest per-spectator rate in the window;
 //! * latency: fieldhouse's frames carry their publish time (`serve --stamp-frames`; the
 //!   bare sender's too), so their latency is arrival − publish on the same clock.
@@ -44,6 +48,11 @@ use std::time::Duration;
 /// Handshakes in flight at once while connecting spectators: enough to connect 5,000
 /// in a few seconds, few enough that neither side's accept queue overflows.
 pub const CONNECTING_AT_ONCE: usize = 100;
+
+/// How long spectators record before the window and after it: a message is placed in the
+/// window by when it was published (see `summarise`), and one published in the window
+/// but arriving more than this after it counts as not delivered.
+const RECORD_AROUND: Duration = Duration::from_secs(1);
 
 /// The longest a round waits for its spectators to connect.
 const CONNECT_WITHIN: Duration = Duration::from_secs(120);
@@ -95,7 +104,8 @@ pub struct Round {
     pub server_kernel_share: f64,
     pub server_cpu_us_per_message: f64,
     /// `server_cpu_us_per_message` ÷ the bare sender's at the same count in the same
-    /// run (1 for the bare sender itself; None when it did not run).
+    /// run (1 for the bare sender itself; None when it did not run, or its CPU time in
+    /// the window was under the 10 ms /proc counts in).
     pub cpu_vs_bare: Option<f64>,
     pub server_rss_mb: f64,
     pub server_peak_rss_mb: f64,
@@ -162,10 +172,12 @@ pub fn run(plan: &Plan) -> anyhow::Result<Vec<Round>> {
             let server = servers::Running::peer(peer)?;
             here.push(runtime.block_on(round(plan, &server, n))?);
         }
+        // (None if the bare sender's CPU was too little to see: /proc counts 10 ms ticks.)
         let floor = here
             .iter()
             .find(|r| r.server == servers::BARE)
-            .map(|r| r.server_cpu_us_per_message);
+            .map(|r| r.server_cpu_us_per_message)
+            .filter(|&us| us > 0.0);
         for r in &mut here {
             r.cpu_vs_bare = floor.map(|f| r.server_cpu_us_per_message / f);
         }
@@ -194,11 +206,17 @@ pub fn run_bots(plan: &Plan, bots: usize, think: Duration) -> anyhow::Result<Bot
 
 async fn round(plan: &Plan, server: &servers::Running, n: usize) -> anyhow::Result<Round> {
     tracing::info!(server = server.name, spectators = n, "connecting");
-    let measuring = Arc::new(AtomicBool::new(false));
+    let recording = Arc::new(AtomicBool::new(false));
     let stop = Arc::new(AtomicBool::new(false));
-    let audience = Audience::connect(server, n, &measuring, &stop).await?;
+    let audience = Audience::connect(server, n, &recording, &stop).await?;
     tokio::time::sleep(Duration::from_secs_f64(plan.settle_s)).await;
-    let window = Window::measure(server, &measuring, plan.seconds).await?;
+    // Recording starts a little before the window: an unstamped message is placed by its
+    // first arrival anywhere, which must be seen to place it before the window.
+    recording.store(true, Ordering::SeqCst);
+    tokio::time::sleep(RECORD_AROUND).await;
+    let window = Window::measure(server, &AtomicBool::new(false), plan.seconds).await?;
+    tokio::time::sleep(RECORD_AROUND).await;
+    recording.store(false, Ordering::SeqCst);
     stop.store(true, Ordering::SeqCst);
     let seen = audience.logs();
     Ok(summarise(
@@ -211,7 +229,7 @@ async fn round(plan: &Plan, server: &servers::Running, n: usize) -> anyhow::Resu
 }
 
 /// Spectators of a server's targets (spectator i watches `targets[i % len]`), logging
-/// what arrives while `measuring` is set, until `stop`: connected by tasks, read by a
+/// what arrives while `recording` is set, until `stop`: connected by tasks, read by a
 /// few threads (see `client`).
 struct Audience {
     readers: Arc<client::Readers>,
@@ -223,12 +241,12 @@ impl Audience {
     async fn connect(
         server: &servers::Running,
         n: usize,
-        measuring: &Arc<AtomicBool>,
+        recording: &Arc<AtomicBool>,
         stop: &Arc<AtomicBool>,
     ) -> anyhow::Result<Audience> {
         let readers = Arc::new(client::Readers::start(
             client::reader_threads(),
-            measuring,
+            recording,
             stop,
         )?);
         let shared = client::Shared {
@@ -257,6 +275,10 @@ impl Audience {
 /// generator's own CPU, and fieldhouse's tick overruns (None for the peer).
 struct Window {
     seconds: f64,
+    /// The window on the wall clock, µs since the Unix epoch (the clock the servers
+    /// stamp their frames with).
+    from_us: u64,
+    to_us: u64,
     server_cpu: procfs::Cpu,
     loadgen_cpu_s: f64,
     memory: procfs::Memory,
@@ -274,14 +296,18 @@ impl Window {
         let cpu_before = procfs::cpu(server.pid())?;
         let self_before = procfs::cpu(std::process::id())?;
         measuring.store(true, Ordering::SeqCst);
+        let from_us = client::now_us();
         let started = std::time::Instant::now();
         tokio::time::sleep(Duration::from_secs_f64(seconds)).await;
         measuring.store(false, Ordering::SeqCst);
+        let to_us = client::now_us();
         let seconds = started.elapsed().as_secs_f64();
         let server_cpu = procfs::cpu(server.pid())? - cpu_before;
         let loadgen_cpu_s = (procfs::cpu(std::process::id())? - self_before).total_s();
         Ok(Window {
             seconds,
+            from_us,
+            to_us,
             server_cpu,
             loadgen_cpu_s,
             memory: procfs::memory(server.pid())?,
@@ -297,38 +323,53 @@ fn summarise(
     server: &'static str,
     matches: usize,
     n: usize,
-    seen: &[client::Log],
+    logs: &[client::Log],
     window: &Window,
 ) -> Round {
     let Window {
         seconds: window_s,
+        from_us,
+        to_us,
         server_cpu,
         loadgen_cpu_s,
         memory,
         tick_overruns,
     } = *window;
-    let delivered: u64 = seen.iter().map(|l| l.arrivals.len() as u64).sum();
-    let bytes: u64 = seen.iter().map(|l| l.bytes).sum();
-    let mut rates: Vec<f64> = seen
-        .iter()
-        .map(|l| l.arrivals.len() as f64 / window_s)
-        .collect();
-    rates.sort_by(f64::total_cmp);
-    // The first arrival of each message anywhere, by its key.
+    // The first arrival of each message anywhere, by its key: when it was published, as
+    // near as the load generator sees it.
     let mut first = std::collections::HashMap::<u64, u64>::new();
-    for a in seen.iter().flat_map(|l| &l.arrivals) {
+    for a in logs.iter().flat_map(|l| &l.arrivals) {
         first
             .entry(a.key)
             .and_modify(|t| *t = (*t).min(a.at_us))
             .or_insert(a.at_us);
     }
+    // A message belongs to the window if it was published in it: a stamped frame by its
+    // `sent_us`, another message by its first arrival anywhere (so that every copy of a
+    // message is in or out together); one published late in the window counts even if
+    // it arrives after, within `RECORD_AROUND`.
+    let in_window = |a: &&client::Arrival| {
+        let at = a.sent_us.unwrap_or(first[&a.key]);
+        (from_us..=to_us).contains(&at)
+    };
+    let seen: Vec<Vec<client::Arrival>> = logs
+        .iter()
+        .map(|l| l.arrivals.iter().filter(in_window).copied().collect())
+        .collect();
+    let recorded: u64 = logs.iter().map(|l| l.arrivals.len() as u64).sum();
+    let bytes: u64 = logs.iter().map(|l| l.bytes).sum();
+    let delivered: u64 = seen.iter().map(|l| l.len() as u64).sum();
+    let mut rates: Vec<f64> = seen.iter().map(|l| l.len() as f64 / window_s).collect();
+    rates.sort_by(f64::total_cmp);
+    let published_keys: std::collections::HashSet<u64> =
+        seen.iter().flatten().map(|a| a.key).collect();
     // Published in the window, per match: every message some spectator received. (With
     // thousands of spectators a message none of them got is not a realistic gap to
     // miss.) Matches publish at different rates when they are lock-step, so each
     // spectator is owed its own match's messages: spectator i watches match i % matches,
     // named by the top bits of a message's key (see `client::MATCH_SHIFT`).
     let mut per_match = vec![0u64; matches];
-    for key in first.keys() {
+    for key in published_keys {
         if let Some(count) = per_match.get_mut((key >> client::MATCH_SHIFT) as usize) {
             *count += 1;
         }
@@ -337,12 +378,12 @@ fn summarise(
     let published = owed / n.max(1) as u64;
     let spread = seen
         .iter()
-        .flat_map(|l| &l.arrivals)
+        .flatten()
         .map(|a| a.at_us - first[&a.key])
         .collect();
     let latencies: Vec<u64> = seen
         .iter()
-        .flat_map(|l| &l.arrivals)
+        .flatten()
         .filter_map(|a| a.sent_us.map(|s| a.at_us.saturating_sub(s)))
         .collect();
     Round {
@@ -358,7 +399,7 @@ fn summarise(
         rate_min_hz: rates.first().copied().unwrap_or(0.0),
         latency_ms: (!latencies.is_empty()).then(|| Percentiles::of(latencies)),
         spread_ms: Percentiles::of(spread),
-        bytes_per_message: bytes as f64 / delivered.max(1) as f64,
+        bytes_per_message: bytes as f64 / recorded.max(1) as f64,
         server_cpu_s: server_cpu.total_s(),
         server_kernel_share: server_cpu.system_s / server_cpu.total_s().max(1e-9),
         server_cpu_us_per_message: server_cpu.total_s() * 1e6 / delivered.max(1) as f64,
@@ -426,7 +467,10 @@ pub fn table(rounds: &[Round]) -> String {
             continue;
         };
         let spectators = fieldhouse_core::words::plural(n as u64, "spectator");
-        if let Some(bare) = at_n().find(|r| r.server == servers::BARE) {
+        if let Some(bare) = at_n()
+            .find(|r| r.server == servers::BARE)
+            .filter(|b| b.server_cpu_us_per_message > 0.0)
+        {
             let _ = writeln!(
                 out,
                 "at {spectators}, fieldhouse ÷ bare sender: server CPU per message {:.2}, delivered share {:.3}",
@@ -448,4 +492,62 @@ pub fn table(rounds: &[Round]) -> String {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{table, Percentiles, Round};
+
+    fn round(server: &'static str, us: f64, vs_bare: f64) -> Round {
+        let ms = Percentiles {
+            p50: 1.0,
+            p99: 2.0,
+            max: 3.0,
+        };
+        Round {
+            server,
+            matches: 1,
+            spectators: 1000,
+            connected: 1000,
+            window_s: 10.0,
+            published: 300,
+            delivered: 300_000,
+            delivered_share: 1.0,
+            rate_median_hz: 30.0,
+            rate_min_hz: 30.0,
+            latency_ms: Some(ms),
+            spread_ms: ms,
+            bytes_per_message: 511.0,
+            server_cpu_s: us * 0.3,
+            server_kernel_share: 0.7,
+            server_cpu_us_per_message: us,
+            cpu_vs_bare: Some(vs_bare),
+            server_rss_mb: 60.0,
+            server_peak_rss_mb: 70.0,
+            loadgen_cpu_s: 2.0,
+            tick_overruns: None,
+        }
+    }
+
+    #[test]
+    fn the_table_shows_each_servers_cpu_against_the_bare_senders() {
+        let rounds = [
+            round("fieldhouse", 9.0, 1.2),
+            round("bare", 7.5, 1.0),
+            round("colyseus", 12.0, 1.6),
+        ];
+        let text = table(&rounds);
+        assert!(text.lines().next().unwrap().contains("×bare"), "{text}");
+        assert!(
+            text.contains(
+                "at 1000 spectators, fieldhouse ÷ bare sender: server CPU per message 1.20"
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains("at 1000 spectators, fieldhouse ÷ colyseus: server CPU per message 0.75"),
+            "{text}"
+        );
+        assert!(!text.contains("fieldhouse ÷ bare:"), "{text}");
+    }
 }

@@ -9,6 +9,8 @@
 //! * [`slot`]: a match's place among the `max_matches`, taken atomically.
 //! * [`sweep`]: ended matches leave the table after a while.
 //! * [`spectator`]: the spectator WebSocket: a match's frames, newest first.
+//! * [`fanout`]: a match's frames written straight to its spectators' sockets, by a few
+//!   tasks, one write per socket per frame.
 //! * [`bot`]: the bot WebSocket: an agent's perceptions out, commands in.
 //! * [`socket`]: what every WebSocket shares: close codes, reading, writing under a
 //!   timeout, closing.
@@ -39,6 +41,7 @@ pub mod budget;
 pub mod config;
 pub mod demo;
 pub mod error;
+pub mod fanout;
 pub mod hosts;
 pub mod listener;
 pub mod match_task;

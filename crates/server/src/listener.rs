@@ -200,15 +200,21 @@ impl Drop for Conn {
 /// fails a write that makes no progress for `write_timeout`: a client that stops
 /// reading a download (or any response) gives its descriptor back instead of holding
 /// it for as long as it likes.
-struct Counted {
+pub(crate) struct Counted {
     stream: TcpStream,
-    _place: Arc<Conn>,
+    place: Arc<Conn>,
     write_timeout: Duration,
     /// Set while a write waits for room in the socket.
     stalled: Option<Pin<Box<tokio::time::Sleep>>>,
 }
 
 impl Counted {
+    /// The stream and its place, for a socket that does its own writing with its own
+    /// timeout (a spectator's: see `fanout`).
+    pub(crate) fn into_parts(self) -> (TcpStream, Arc<Conn>) {
+        (self.stream, self.place)
+    }
+
     /// `polled`, unless writes have waited longer than the timeout.
     fn bounded<T>(
         &mut self,
@@ -381,7 +387,7 @@ fn accept(
     let close = place.close.clone();
     let io = TokioIo::new(Counted {
         stream,
-        _place: place.clone(),
+        place: place.clone(),
         write_timeout: settings.write_timeout,
         stalled: None,
     });

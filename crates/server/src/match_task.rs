@@ -109,6 +109,7 @@ pub fn spawn(
         controlled: Mutex::new(controlled),
         replay,
         replay_error: creation_error,
+        fanout: Default::default(),
     });
     app.metrics.matches_created.fetch_add(1, Relaxed);
     let task = Ticker {

@@ -1,26 +1,35 @@
 //! The spectator socket (`/ws/matches/{id}`): watches a match's frames. It says `hello`,
-//! sends the newest frame at once and then each new one. A spectator that falls behind
+//! sends the newest frame at once, and then joins the match's [`Fanout`], which writes
+//! each new frame to its socket (see [`super::fanout`]). A spectator that falls behind
 //! skips to the newest (counted as dropped), and one whose socket stops accepting data
 //! is disconnected, so it never holds up a tick or anyone else. Spectators only listen:
 //! what they send is charged to their budget and otherwise ignored, and an oversized
 //! message closes the socket with 1009, flooding with 1008.
+//!
+//! [`Fanout`]: super::fanout::Fanout
 
 use super::admission::AdmittedSpectator;
 use super::api::ApiError;
 use super::budget::{MessageBudget, Verdict};
-use super::socket::{
-    budget, classify, close, ending, limits, refusal, Read, Sender, Sent, NORMAL, POLICY,
-};
+use super::fanout::{Member, Out, Wire, WireIo};
+use super::socket::{budget, classify, close, ending, limits, refusal, Read, NORMAL, POLICY};
 use super::state::{AppState, MatchEntry};
-use super::upgrade::{Socket, Upgrade};
+use super::upgrade::{FrameMeter, RawSocket, Upgrade};
 use axum::extract::{Path, State};
 use axum::response::{IntoResponse, Response};
 use fieldhouse_core::protocol::{encode, Hello, Role};
-use futures_util::stream::SplitStream;
 use futures_util::{SinkExt, StreamExt};
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
 use std::time::Duration;
+use tokio_tungstenite::tungstenite::protocol::Role as WsRole;
+use tokio_tungstenite::WebSocketStream;
+
+/// A spectator's socket as its reader sees it.
+type Reader = WebSocketStream<FrameMeter<WireIo>>;
+
+/// How long a closing spectator waits for its client's answer to the close.
+const CLOSE_WITHIN: Duration = Duration::from_secs(2);
 
 pub async fn spectate(
     ws: Upgrade,
@@ -32,78 +41,77 @@ pub async fn spectate(
         return ApiError::not_found(&id).into_response();
     };
     let config = app.config.clone();
-    ws.on_upgrade(&config, move |socket| spectator(socket, entry, app))
+    ws.on_upgrade_raw(&config, move |socket| spectator(socket, entry, app))
 }
 
-async fn spectator(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>) {
+async fn spectator(socket: RawSocket, entry: Arc<MatchEntry>, app: Arc<AppState>) {
     let metrics = app.metrics.clone();
     metrics.spectators.fetch_add(1, Relaxed);
     entry.spectators.fetch_add(1, Relaxed);
-    let (mut sink, stream) = socket.split();
-    // The read side has a task of its own, woken only when the client sends something.
-    // Reading in the frame loop's `select!` polled the socket for every frame, and
-    // each poll cleared a read buffer: a profile at 1,000 spectators showed 12 % of the
-    // server's CPU in memset.
+    let wire = Arc::new(Wire::new(socket.stream, socket.place));
+    let reader = WebSocketStream::from_raw_socket(
+        FrameMeter::new(WireIo::new(wire.clone(), socket.read_first)),
+        WsRole::Server,
+        Some(socket.settings),
+    )
+    .await;
+    // The reader has a task of its own, woken only when the client sends something; it
+    // also writes the close handshake when told to.
     let (said_tx, mut said) = tokio::sync::oneshot::channel();
-    let mut listener = tokio::spawn(listen(stream, budget(&app), metrics.clone(), said_tx));
+    let (close_tx, close_rx) = tokio::sync::oneshot::channel();
+    let mut listener = tokio::spawn(listen(
+        reader,
+        wire.clone(),
+        budget(&app),
+        metrics.clone(),
+        said_tx,
+        close_rx,
+    ));
     let timeout = Duration::from_millis(app.config.send_timeout_ms);
     let shutdown = app.shutdown.clone();
-    let mut published = entry.published.clone();
+    let published = entry.published.clone();
     let hello = encode(&Hello::new(Role::Spectator, &entry.info, limits(&app)));
-    let first = published.borrow_and_update().clone();
-    let mut last_seq = first.seq;
-    let mut send = Sender {
-        sink: &mut sink,
-        timeout,
-        metrics: &metrics,
-    };
-    let ok = send.text(hello.into()).await == Sent::Ok && send.text(first.frame).await == Sent::Ok;
+    let first = published.borrow().clone();
+    let ok = wire.write_text(&hello).is_ok() && wire.write_text(first.frame.as_str()).is_ok();
     if ok {
         metrics.frames_sent.fetch_add(1, Relaxed);
+        metrics
+            .bytes_out
+            .fetch_add((hello.len() + first.frame.len()) as u64, Relaxed);
     }
     // How the server ends the conversation, if it does: a close frame, then the
-    // client's answer, which the listener reads (for at most a second).
+    // client's answer, which the reader reads.
     let mut closing: Option<(u16, &str)> = None;
-    if let (true, Some(end)) = (ok, &first.end) {
-        send.text(end.clone()).await;
+    let mut end = first.end.clone();
+    if ok && end.is_none() {
+        let (out_tx, out) = tokio::sync::oneshot::channel();
+        let member = Member::new(wire.clone(), first.seq, out_tx);
+        match entry.fanout.join(member, &published, &metrics, timeout) {
+            Err(_) => end = published.borrow().end.clone(),
+            Ok(()) => tokio::select! {
+                out = out => match out {
+                    Ok(Out::Ended(last)) => end = last,
+                    Ok(Out::TimedOut) => {
+                        tracing::info!(id = %entry.info.id, "dropping a spectator that stopped reading");
+                    }
+                    Ok(Out::Gone) | Err(_) => {}
+                },
+                read = &mut said => closing = read.ok().flatten(),
+            },
+        }
+        // No frame after this: what follows is the end and the close.
+        wire.leave();
+        if let Some(end) = &end {
+            let _ = wire.write_text(end.as_str());
+            closing = Some(ending(&shutdown));
+        }
+    } else if let (true, Some(end)) = (ok, &end) {
+        let _ = wire.write_text(end.as_str());
         closing = Some((NORMAL, "match ended"));
     }
-    if ok && closing.is_none() {
-        loop {
-            tokio::select! {
-                changed = published.changed() => {
-                    if changed.is_err() {
-                        break;
-                    }
-                    let p = published.borrow_and_update().clone();
-                    if p.seq > last_seq {
-                        app.metrics.frames_dropped.fetch_add(p.seq - last_seq - 1, Relaxed);
-                        last_seq = p.seq;
-                        match send.text(p.frame).await {
-                            Sent::Ok => { metrics.frames_sent.fetch_add(1, Relaxed); }
-                            Sent::Failed => break,
-                            Sent::TimedOut => {
-                                tracing::info!(id = %entry.info.id, "dropping a spectator that stopped reading");
-                                break;
-                            }
-                        }
-                    }
-                    if let Some(end) = p.end {
-                        send.text(end).await;
-                        closing = Some(ending(&shutdown));
-                        break;
-                    }
-                }
-                read = &mut said => {
-                    closing = read.ok().flatten();
-                    break;
-                }
-            }
-        }
-    }
-    if let Some((code, reason)) = closing {
-        let _ = tokio::time::timeout(Duration::from_secs(1), sink.send(close(code, reason))).await;
-        let _ = tokio::time::timeout(Duration::from_secs(1), &mut listener).await;
+    if let Some(close) = closing {
+        let _ = close_tx.send(close);
+        let _ = tokio::time::timeout(CLOSE_WITHIN, &mut listener).await;
     }
     listener.abort();
     entry.spectators.fetch_sub(1, Relaxed);
@@ -113,17 +121,35 @@ async fn spectator(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>) {
 /// Reads a spectator's socket until it closes. Spectators only listen, so what they say
 /// is not handled, only charged to their budget; the first thing that ends the
 /// conversation (a close, a message over the size limit, flooding) is told through
-/// `said` (with the close to send, if the server closes), and reading goes on until
-/// the close, so the client's answer to the server's close frame is taken.
+/// `said` (with the close sent, if the server closes). Closes are written here, as the
+/// reader owns the socket's WebSocket state: on the client's misbehaviour, or when the
+/// spectator task says so (`close_rx`); reading goes on until the client's answer.
 async fn listen(
-    mut stream: SplitStream<Socket>,
+    mut socket: Reader,
+    wire: Arc<Wire>,
     mut budget: MessageBudget,
     metrics: Arc<super::metrics::Metrics>,
     said: tokio::sync::oneshot::Sender<Option<(u16, &'static str)>>,
+    mut close_rx: tokio::sync::oneshot::Receiver<(u16, &'static str)>,
 ) {
     let mut said = Some(said);
+    let mut closing = false;
     loop {
-        let read = classify(stream.next().await);
+        let incoming = tokio::select! {
+            order = &mut close_rx, if !closing => {
+                closing = true;
+                match order {
+                    Ok((code, reason)) => {
+                        let _ = socket.send(close(code, reason)).await;
+                        continue;
+                    }
+                    // The spectator task ends without closing: nothing more to read for.
+                    Err(_) => return,
+                }
+            }
+            incoming = socket.next() => incoming,
+        };
+        let read = classify(incoming);
         let verdict = match &read {
             Read::Text(_) | Read::Binary => budget.charge(),
             _ => Verdict::Take,
@@ -136,15 +162,17 @@ async fn listen(
             }
             _ => refusal(&read, &metrics).map(Some),
         };
-        if let Some(close) = ends {
+        if let Some(ending) = ends {
             // A second reason to stop after the first: the client goes on misbehaving
             // after being told, and is read no more.
-            match said.take() {
-                Some(said) => {
-                    let _ = said.send(close);
-                }
-                None => return,
+            let Some(said) = said.take() else { return };
+            if let (Some((code, reason)), false) = (ending, closing) {
+                closing = true;
+                // No frame after the close.
+                wire.leave();
+                let _ = socket.send(close(code, reason)).await;
             }
+            let _ = said.send(ending);
         }
         if matches!(read, Read::Closed) {
             return;

@@ -93,6 +93,8 @@ pub struct MatchEntry {
     pub replay: Option<String>,
     /// Why recording stopped, if it did.
     pub replay_error: Mutex<Option<String>>,
+    /// Its spectators, to whom its frames are written.
+    pub fanout: super::fanout::Fanout,
 }
 
 pub struct AppState {

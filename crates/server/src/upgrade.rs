@@ -26,6 +26,16 @@ use tokio_tungstenite::WebSocketStream;
 /// A server-side WebSocket over a metered connection.
 pub type Socket = WebSocketStream<FrameMeter<TokioIo<hyper::upgrade::Upgraded>>>;
 
+/// A spectator's connection once upgraded, for a socket that does its own writing (see
+/// [`super::fanout`]): its TCP stream, what the HTTP server had read past the request,
+/// its place among the connections, and the WebSocket settings its reader uses.
+pub struct RawSocket {
+    pub stream: tokio::net::TcpStream,
+    pub read_first: Vec<u8>,
+    pub place: std::sync::Arc<super::listener::Conn>,
+    pub settings: WebSocketConfig,
+}
+
 /// Sockets buffer little: frames are small and a slow reader should skip, not queue.
 const SOCKET_BUFFER_BYTES: usize = 8 * 1024;
 
@@ -91,11 +101,7 @@ impl Upgrade {
         F: FnOnce(Socket) -> Fut + Send + 'static,
         Fut: Future<Output = ()> + Send + 'static,
     {
-        let settings = WebSocketConfig::default()
-            .max_message_size(Some(config.max_message_bytes))
-            .max_frame_size(Some(config.max_message_bytes))
-            .read_buffer_size(SOCKET_BUFFER_BYTES)
-            .write_buffer_size(SOCKET_BUFFER_BYTES);
+        let settings = socket_settings(config);
         let accept = derive_accept_key(self.key.as_bytes());
         let on_upgrade = self.on_upgrade;
         tokio::spawn(async move {
@@ -105,16 +111,66 @@ impl Upgrade {
             let io = FrameMeter::new(TokioIo::new(upgraded));
             serve(WebSocketStream::from_raw_socket(io, Role::Server, Some(settings)).await).await;
         });
-        (
-            StatusCode::SWITCHING_PROTOCOLS,
-            [
-                (header::CONNECTION, "upgrade".to_string()),
-                (header::UPGRADE, "websocket".to_string()),
-                (header::SEC_WEBSOCKET_ACCEPT, accept),
-            ],
-        )
-            .into_response()
+        switching(accept)
     }
+}
+
+impl Upgrade {
+    /// Answers 101 and, once the client has switched protocols, runs `serve` with the
+    /// connection's TCP stream itself (a [`RawSocket`]).
+    pub fn on_upgrade_raw<F, Fut>(self, config: &ServerConfig, serve: F) -> Response
+    where
+        F: FnOnce(RawSocket) -> Fut + Send + 'static,
+        Fut: Future<Output = ()> + Send + 'static,
+    {
+        let settings = socket_settings(config);
+        let accept = derive_accept_key(self.key.as_bytes());
+        let on_upgrade = self.on_upgrade;
+        tokio::spawn(async move {
+            let Ok(upgraded) = on_upgrade.await else {
+                return;
+            };
+            // Every connection comes through the accept loop, which serves it as this.
+            let parts = match upgraded.downcast::<TokioIo<super::listener::Counted>>() {
+                Ok(parts) => parts,
+                Err(_) => {
+                    tracing::error!("an upgraded connection is not the accept loop's; closing it");
+                    return;
+                }
+            };
+            let (stream, place) = parts.io.into_inner().into_parts();
+            serve(RawSocket {
+                stream,
+                read_first: parts.read_buf.to_vec(),
+                place,
+                settings,
+            })
+            .await;
+        });
+        switching(accept)
+    }
+}
+
+/// The settings of every WebSocket the server holds.
+fn socket_settings(config: &ServerConfig) -> WebSocketConfig {
+    WebSocketConfig::default()
+        .max_message_size(Some(config.max_message_bytes))
+        .max_frame_size(Some(config.max_message_bytes))
+        .read_buffer_size(SOCKET_BUFFER_BYTES)
+        .write_buffer_size(SOCKET_BUFFER_BYTES)
+}
+
+/// The 101 answer.
+fn switching(accept: String) -> Response {
+    (
+        StatusCode::SWITCHING_PROTOCOLS,
+        [
+            (header::CONNECTION, "upgrade".to_string()),
+            (header::UPGRADE, "websocket".to_string()),
+            (header::SEC_WEBSOCKET_ACCEPT, accept),
+        ],
+    )
+        .into_response()
 }
 
 /// Why a metered read failed: the client sent more frames than its budget.
