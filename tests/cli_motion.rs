@@ -248,11 +248,47 @@ fn the_heat_map_is_a_png_of_the_grid() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let bytes = std::fs::read(&file).unwrap();
-    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
-    // IHDR: width and height, 20 cells of 12 px.
-    assert_eq!(u32::from_be_bytes(bytes[16..20].try_into().unwrap()), 240);
-    assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 240);
+    let decoder = png::Decoder::new(std::fs::File::open(&file).unwrap());
+    let mut reader = decoder.read_info().unwrap();
+    let mut rgb = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut rgb).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    let (width, height) = (info.width as usize, info.height as usize);
+    let luma = |x: usize, y: usize| {
+        let k = (y * width + x) * 3;
+        (u32::from(rgb[k]) + u32::from(rgb[k + 1]) + u32::from(rgb[k + 2])) / 3
+    };
+    let white = |x: usize, y: usize| rgb[(y * width + x) * 3..][..3] == [255, 255, 255];
+    // The map, 20 cells of 12 px, sits under a title band: its first row not white.
+    let top = (0..height).find(|&y| !white(120, y)).unwrap();
+    let top = (top..height)
+        .find(|&y| (0..240).all(|x| !white(x, y)))
+        .unwrap();
+    assert!(top >= 20, "no room for a title above the map (top {top})");
+    let ink = |rows: std::ops::Range<usize>| {
+        rows.flat_map(|y| (0..width).map(move |x| (x, y)))
+            .filter(|&(x, y)| luma(x, y) < 80)
+            .count()
+    };
+    assert!(ink(0..top) > 100, "no title above the map");
+    // Below it, a colour scale: a row running from black to white, never darker to the
+    // right, over at least 150 px.
+    let scale = (top + 240..height).any(|y| {
+        let (mut run, mut from) = (0, 0);
+        (1..width).any(|x| {
+            if luma(x, y) >= luma(x - 1, y) && !white(x, y) {
+                if run == 0 {
+                    from = luma(x - 1, y);
+                }
+                run += 1;
+            } else {
+                run = 0;
+            }
+            run >= 150 && from < 20 && luma(x, y) > 230
+        })
+    });
+    assert!(scale, "no colour scale under the map");
+    assert!(ink(top + 240..height) > 200, "no words under the map");
 }
 
 #[test]

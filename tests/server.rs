@@ -792,6 +792,36 @@ async fn recorded_matches_are_listed_downloaded_and_played_with_seek() {
             .is_err(),
         "frames while paused"
     );
+    // A seek with a lead-in sends what led to the tick first, every frame of it in order
+    // and at once, paused as it is: 2 s before tick 600 at 30 frames a second.
+    viewer
+        .send(control(
+            json!({"type": "control", "action": "seek", "tick": 600, "lead_in_s": 2.0}),
+        ))
+        .await
+        .unwrap();
+    let mut ticks = Vec::new();
+    while let Ok(Some(Ok(Message::Text(text)))) =
+        tokio::time::timeout(Duration::from_millis(400), viewer.next()).await
+    {
+        ticks.push(
+            serde_json::from_str::<Value>(&text).unwrap()["tick"]
+                .as_u64()
+                .unwrap(),
+        );
+    }
+    assert_eq!(ticks, (480..=600).step_by(2).collect::<Vec<u64>>());
+    viewer
+        .send(control(
+            json!({"type": "control", "action": "seek", "tick": 600, "lead_in_s": 20.0}),
+        ))
+        .await
+        .unwrap();
+    let refused = next_of(&mut viewer, "error").await;
+    assert_eq!(
+        (refused["code"].as_str(), refused["message"].as_str()),
+        (Some("bad_control"), Some("lead_in_s 20 is outside 0 to 15"))
+    );
     viewer
         .send(control(
             json!({"type": "control", "action": "speed", "speed": 9.0}),

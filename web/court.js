@@ -2,12 +2,16 @@
 // with, the ball; the selected player's cost map (its physical capability from motion
 // capture: seconds to reach each square) laid on the court at its pose; and its latest
 // decision in words and graphics, the safe squares outlined.
-import { $, FieldMap, costColour, escapeHtml, fitCanvas, marker, nearest, trace } from "./draw.js";
+import { $, FieldMap, MARKER_PX, NARROW_PX, costColour, escapeHtml, fitCanvas, marker, nearest, trace } from "./draw.js";
+import { Labels } from "./labels.js";
 
 const TEAM_COLOURS = { offense: "#3d6fe0", defense: "#e0483d" };
 const OVERLAY_ALPHA = 0.42;
 
 export class CourtView {
+  /** A replay seek asks for this much lead-in: enough for the holder's latest decision. */
+  leadInS = 5;
+
   constructor(hello) {
     this.field = hello.match.field;
     this.court = this.field.court;
@@ -91,14 +95,25 @@ export class CourtView {
     const decision = this.decisions.get(selected);
     if (decision && agent) this.drawDecision(g, map, agent, decision);
 
+    const labels = new Labels(g, width, height);
+    const named = [];
     for (const a of sample.agents) {
-      marker(g, map, a.position, a.heading, {
+      const [x, y] = marker(g, map, a.position, a.heading, {
         fill: TEAM_COLOURS[this.teams.get(a.id)] ?? "#fff",
-        label: `${a.id} · ${a.behaviour} · ${a.action.replaceAll("_", " ")}${a.controller === "bot" ? " (bot)" : ""}`,
         selected: a.id === selected,
       });
+      labels.avoid(x, y, MARKER_PX);
+      const text = width < NARROW_PX
+        ? a.id
+        : `${a.id} · ${a.behaviour} · ${a.action.replaceAll("_", " ")}${a.controller === "bot" ? " (bot)" : ""}`;
+      named.push({ text, x, y, first: a.id === selected });
     }
-    this.drawBall(g, map, sample);
+    const [bx, by] = this.drawBall(g, map, sample);
+    labels.avoid(bx, by, 8);
+    // The selected agent's name is placed first: it gets the spot nearest its marker.
+    named.sort((a, b) => b.first - a.first);
+    for (const n of named) labels.add(n.text, n.x, n.y);
+    labels.draw(canvas);
   }
 
   drawLines(g, map) {
@@ -187,6 +202,7 @@ export class CourtView {
     g.beginPath(); g.ellipse(sx, sy, 6, 4, 0, 0, 2 * Math.PI); g.fill();
     g.fillStyle = "#f07c1e"; g.strokeStyle = "#402000"; g.lineWidth = 1.5;
     g.beginPath(); g.arc(sx, sy - lift, 6, 0, 2 * Math.PI); g.fill(); g.stroke();
+    return [sx, sy - lift];
   }
 
   pick(px, py, sample) {
@@ -196,9 +212,12 @@ export class CourtView {
   drawPanels(sample, selected) {
     const agent = sample.agents.find((a) => a.id === selected);
     const decision = this.decisions.get(selected);
+    const byBot = agent?.controller === "bot";
     $("decision").innerHTML = decision
-      ? explain(decision, this.field.decision, sample.time_s)
-      : `${escapeHtml(selected ?? "")} has made no decision since you started watching.`;
+      ? explain(decision, this.field.decision, sample.time_s, byBot)
+      : byBot
+        ? `${escapeHtml(selected)} is moved by a connected bot; no order has changed what it does since you started watching.`
+        : `${escapeHtml(selected ?? "")} has made no decision since you started watching.`;
     const entry = agent && this.costmap(agent.behaviour);
     const horizon = entry?.map?.horizon_s ?? 8;
     $("costmap-text").textContent = !agent
@@ -249,9 +268,23 @@ export function safeSquares(court, safe) {
   return cells;
 }
 
-/** A decision in words, with the numbers of the rule C_o > C_d + T_s + ε. */
-function explain(d, rule, now) {
+/** The protocol's `reason` of a decision a bot's order made (PROTOCOL.md). */
+const BOT_ORDER = "bot order";
+
+/**
+ * A decision in words, with the numbers of the rule C_o > C_d + T_s + ε; `byBot`: a
+ * connected bot moves the agent now.
+ */
+function explain(d, rule, now, byBot) {
   const age = Math.max(0, now - d.time_s);
+  const action = escapeHtml(String(d.action).replaceAll("_", " "));
+  if (d.reason === BOT_ORDER) {
+    // The bot chose; the rule was not applied, so there are no numbers to show.
+    return `<b>${escapeHtml(d.agent)}</b> carries out its bot's order: ${action}.` +
+      `<br><span class="muted">${byBot ? "A connected bot moves this player" : "A bot moved this player"}: ` +
+      `the built-in rule (C<sub>o</sub> &gt; C<sub>d</sub> + T<sub>s</sub> + ε) does not decide for it. ` +
+      `Ordered ${age.toFixed(1)} s ago.</span>`;
+  }
   let text = `<b>${escapeHtml(d.agent)}</b> ${escapeHtml(d.reason)}`;
   const c = d.chosen;
   if (c) {

@@ -95,8 +95,11 @@ export function nearest(map, px, py, sample) {
   return best;
 }
 
-/** An agent as an oriented marker: a disc with a nose toward its heading, and a label. */
-export function marker(g, map, position, heading, { fill, label, selected }) {
+/**
+ * An agent as an oriented marker: a disc with a nose toward its heading. Returns its
+ * canvas point (its label is placed by a `Labels` layout, which keeps labels apart).
+ */
+export function marker(g, map, position, heading, { fill, selected }) {
   const [x, y] = map.px(position[0], position[1]);
   const a = map.angle(heading);
   g.fillStyle = fill;
@@ -108,15 +111,14 @@ export function marker(g, map, position, heading, { fill, label, selected }) {
   g.closePath();
   g.fill();
   g.stroke();
-  if (label) {
-    g.font = "12px system-ui, sans-serif";
-    g.lineWidth = 3;
-    g.strokeStyle = "rgba(255,255,255,.85)";
-    g.strokeText(label, x + 10, y - 10);
-    g.fillStyle = "#111";
-    g.fillText(label, x + 10, y - 10);
-  }
+  return [x, y];
 }
+
+/** The half-side of the square a marker covers, px (its disc and its nose). */
+export const MARKER_PX = 10;
+
+/** Below this canvas width (a phone), agents are labelled by id alone. */
+export const NARROW_PX = 560;
 
 /**
  * A line plot's frame: axes with labels and the data range mapped to the box. Returns

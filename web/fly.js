@@ -1,8 +1,9 @@
 // Fly balls (baseball and cricket): the field from above with the ball, its shadow and
 // height, the fielders with their trails and strategies, caught and missed balls
 // marked; a side view of the flight; and the selected fielder's eye (eye.js).
-import { $, FieldMap, fitCanvas, marker, nearest, plotFrame, trace } from "./draw.js";
+import { $, FieldMap, MARKER_PX, NARROW_PX, fitCanvas, marker, nearest, plotFrame, trace } from "./draw.js";
 import { drawEye, opticalSamples } from "./eye.js";
+import { Labels } from "./labels.js";
 
 /** How long a catch or a miss stays marked on the field, in match seconds. */
 const MARK_S = 8;
@@ -11,6 +12,9 @@ const DEFAULT_EYE_M = 1.7;
 const FIELDER_COLOURS = ["#f4f4f4", "#ffd28a", "#b8e1ff", "#ffc2d4", "#d7f5b0", "#e2ccff"];
 
 export class FlyView {
+  /** A replay seek asks for this much lead-in: a whole flight (PROTOCOL.md, `seek`). */
+  leadInS = 10;
+
   constructor(hello) {
     this.field = hello.match.field;
     this.eye = this.field.eye_height_m ?? DEFAULT_EYE_M;
@@ -95,7 +99,8 @@ export class FlyView {
       g.beginPath(); g.arc(x, y, 9, 0, 2 * Math.PI); g.stroke();
       g.setLineDash([]);
     }
-    for (const m of this.marks) this.drawMark(g, map, m);
+    const labels = new Labels(g, width, height);
+    for (const m of this.marks) this.drawMark(g, map, m, labels);
 
     // Trails: each fielder's run since the launch.
     for (const a of this.agents) {
@@ -106,14 +111,21 @@ export class FlyView {
       trace(g, map, points);
       g.stroke();
     }
+    const named = [];
     for (const a of sample.agents) {
-      marker(g, map, a.position, a.heading, {
+      const [x, y] = marker(g, map, a.position, a.heading, {
         fill: this.colours.get(a.id) ?? "#fff",
-        label: `${a.id} · ${a.strategy}${a.controller === "bot" ? " (bot)" : ""}`,
         selected: a.id === selected,
       });
+      labels.avoid(x, y, MARKER_PX);
+      const text = width < NARROW_PX ? a.id : `${a.id} · ${a.controller === "bot" ? "bot" : a.strategy}`;
+      named.push({ text, x, y, first: a.id === selected });
     }
-    this.drawBall(g, map, sample.ball);
+    this.drawBall(g, map, sample.ball, labels);
+    // The selected agent's name is placed first: it gets the spot nearest its marker.
+    named.sort((a, b) => b.first - a.first);
+    for (const n of named) labels.add(n.text, n.x, n.y);
+    labels.draw(canvas);
   }
 
   drawDiamond(g, map) {
@@ -165,7 +177,7 @@ export class FlyView {
     g.closePath(); g.fill();
   }
 
-  drawMark(g, map, m) {
+  drawMark(g, map, m, labels) {
     const [x, y] = map.px(...m.at);
     g.lineWidth = 3;
     g.strokeStyle = m.caught ? "#27c93f" : "#ff4d4d";
@@ -173,13 +185,12 @@ export class FlyView {
     if (m.caught) g.arc(x, y, 11, 0, 2 * Math.PI);
     else { g.moveTo(x - 8, y - 8); g.lineTo(x + 8, y + 8); g.moveTo(x + 8, y - 8); g.lineTo(x - 8, y + 8); }
     g.stroke();
-    g.font = "bold 12px system-ui, sans-serif";
-    g.fillStyle = g.strokeStyle;
-    g.fillText(m.label, x + 13, y + 16);
+    labels.avoid(x, y, 12);
+    labels.add(m.label, x, y, { font: "bold 12px system-ui, sans-serif", fill: m.caught ? "#0b5d1e" : "#9b1010", rank: 1 });
   }
 
   /** The ball's shadow on the ground, and the ball above it by its height. */
-  drawBall(g, map, ball) {
+  drawBall(g, map, ball, labels) {
     if (ball.state !== "flight") return;
     const [x, y, z] = ball.position;
     const [sx, sy] = map.px(x, z);
@@ -190,8 +201,9 @@ export class FlyView {
     g.beginPath(); g.moveTo(sx, sy); g.lineTo(sx, sy - lift); g.stroke();
     g.fillStyle = "#fff"; g.strokeStyle = "#c00"; g.lineWidth = 1.5;
     g.beginPath(); g.arc(sx, sy - lift, 5, 0, 2 * Math.PI); g.fill(); g.stroke();
-    g.font = "11px system-ui, sans-serif"; g.fillStyle = "#fff";
-    g.fillText(`${y.toFixed(1)} m`, sx + 8, sy - lift + 4);
+    labels.avoid(sx, sy - lift, 7);
+    labels.avoid(sx, sy, 5);
+    labels.add(`${y.toFixed(1)} m`, sx, sy - lift, { font: "11px system-ui, sans-serif", fill: "#fff", halo: "rgba(0,0,0,.45)", rank: 2 });
   }
 
   /** The agent under a canvas point, if one is within reach of a finger. */
@@ -204,7 +216,7 @@ export class FlyView {
     const eye = fitCanvas($("eye"));
     $("eye-text").textContent = drawEye(eye.g, eye.width, eye.height, {
       samples: opticalSamples(this.flight, selected, this.eye),
-      strategy: agent?.strategy ?? "",
+      strategy: sample.agents.find((a) => a.id === selected)?.controller === "bot" ? "bot" : agent?.strategy ?? "",
       fielder: selected,
       outcome: this.outcome,
     });

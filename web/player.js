@@ -10,13 +10,18 @@ export const KEYS = "space play/pause · ← → step · − + speed · Home sta
 export class Player {
   /**
    * `replay`: hello's `replay` object; `send(control)` sends a control; `onSeek()` is
-   * called before a seek so the view forgets what it drew.
+   * called before a seek so the view forgets what it drew; `leadInS`: the seconds of
+   * frames before the target a seek asks for too, so the view can rebuild what led there
+   * (the flight so far, the latest decision) instead of showing a bare moment.
    */
-  constructor(replay, ticksPerFrame, { send, onSeek }) {
+  constructor(replay, ticksPerFrame, { send, onSeek, leadInS }) {
     this.replay = replay;
     this.ticksPerFrame = ticksPerFrame;
     this.send = send;
     this.onSeek = onSeek;
+    this.leadInS = leadInS;
+    /** The tick the last seek went to: frames before it are its lead-in. */
+    this.target = 0;
     this.playing = true;
     this.speed = 1;
     this.tick = replay.first_tick ?? 0;
@@ -84,8 +89,13 @@ export class Player {
 
   seek(tick) {
     this.onSeek();
-    this.tick = tick;
-    this.send({ type: "control", action: "seek", tick });
+    this.tick = this.target = tick;
+    this.send({ type: "control", action: "seek", tick, lead_in_s: this.leadInS });
+  }
+
+  /** Whether a frame is part of a seek's lead-in (shown at once, its events not logged). */
+  leadIn(tick) {
+    return tick < this.target;
   }
 
   setSpeed(speed) {

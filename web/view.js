@@ -9,6 +9,12 @@ import { Stream } from "./stream.js";
 import { Timeline } from "./timeline.js";
 
 const LOG_LINES = 300;
+/**
+ * The protocol this page speaks (PROTOCOL.md). The page and the server ship together,
+ * but a browser can keep an old page open (or cached) across a server upgrade: a hello
+ * of another protocol or version is refused with a message, never half-understood.
+ */
+export const PROTOCOL = { name: "fieldhouse", versions: [2] };
 /** The agent picker's choice that follows whoever has the ball. */
 const FOLLOW_BALL = "@ball";
 
@@ -19,6 +25,7 @@ export function showView(kind, id) {
   $("title").textContent = id;
   $("log").replaceChildren();
   $("player").hidden = true;
+  $("mismatch").hidden = true;
   document.title = `${id} · fieldhouse`;
 
   const replay = kind === "replays";
@@ -29,6 +36,16 @@ export function showView(kind, id) {
   let shown = null;
 
   const onHello = (msg) => {
+    if (msg.protocol !== PROTOCOL.name || !PROTOCOL.versions.includes(msg.version)) {
+      stream.close();
+      const spoken = `${escapeHtml(msg.protocol)} version ${escapeHtml(msg.version)}`;
+      $("mismatch").innerHTML = `This page speaks ${PROTOCOL.name} protocol version ${PROTOCOL.versions.join(" or ")}; ` +
+        `the server speaks ${spoken}. Reload the page to get the server's own page` +
+        ` (if it persists, the server and this page come from different releases).`;
+      $("mismatch").hidden = false;
+      connection = { state: "gone", detail: "protocol mismatch" };
+      return;
+    }
     hello = msg;
     timeline.clear();
     shown = null;
@@ -50,12 +67,14 @@ export function showView(kind, id) {
     if (!choices.includes(selected)) selected = choices[0] ?? null;
     picker.value = selected;
     holder = null;
+    bots = null;
     if (replay) {
       player?.close();
       const ticksPerFrame = Math.max(1, Math.round(msg.match.tick_hz / msg.match.frame_hz));
       player = new Player(msg.replay, ticksPerFrame, {
         send: (control) => stream.send(control),
         onSeek: () => { timeline.clear(); sport.reset(); },
+        leadInS: sport.leadInS,
       });
     }
   };
@@ -64,7 +83,13 @@ export function showView(kind, id) {
     endIsFinal: !replay,
     onMessage: (msg) => {
       if (msg.type === "hello") onHello(msg);
-      else if (msg.type === "frame" && hello) { timeline.push(msg); player?.frame(msg.tick); }
+      else if (msg.type === "frame" && hello) {
+        // A frame from before the newest starts the story again (a seek's lead-in after
+        // frames that were on their way): the view forgets what it gathered too.
+        if (timeline.newest && msg.tick <= timeline.newest.tick) sport.reset();
+        timeline.push(msg);
+        player?.frame(msg.tick);
+      }
       else if (msg.type === "end") {
         ended = msg;
         player?.ended();
@@ -105,6 +130,7 @@ export function showView(kind, id) {
       const due = timeline.advance(dt, playing ? (player?.speed ?? 1) : 0, playing ? undefined : 0);
       for (const frame of due) {
         sport.apply(frame);
+        if (player?.leadIn(frame.tick)) continue;
         for (const e of frame.events) {
           const text = sport.describe(e);
           if (text) log(text, e.kind);
@@ -113,6 +139,7 @@ export function showView(kind, id) {
       // Between a seek and the frame it brings, the last picture stays up.
       const sample = (shown = timeline.sample() ?? shown);
       if (sample) {
+        namePickedAgents(sample);
         holder = sample.ball.holder ?? holder ?? sample.agents[0]?.id;
         const agent = selected === FOLLOW_BALL ? holder : selected;
         sport.draw($("field"), sample, agent);
@@ -123,6 +150,22 @@ export function showView(kind, id) {
     frameId = requestAnimationFrame(draw);
   };
   frameId = requestAnimationFrame(draw);
+
+  /**
+   * The picker names each agent by what moves it now: its built-in strategy, or "bot"
+   * while a connected bot does (frames say so; the hello only knows the strategy).
+   */
+  let bots = null;
+  function namePickedAgents(sample) {
+    const now = sample.agents.filter((a) => a.controller === "bot").map((a) => a.id).join(" ");
+    if (now === bots) return;
+    bots = now;
+    const byBot = new Set(now.split(" "));
+    for (const option of $("agent").options) {
+      const agent = hello.match.agents.find((a) => a.id === option.value);
+      if (agent) option.textContent = `${agent.id} · ${byBot.has(agent.id) ? "bot" : agent.strategy}`;
+    }
+  }
 
   function hud(sample) {
     const words = {

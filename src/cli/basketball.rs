@@ -2,7 +2,7 @@
 //! and `fieldhouse basketball-eval` (the paper's possession experiment).
 
 use super::args::{ground_pose, non_negative, parse_str, positive};
-use super::canvas::{hot, Canvas, Rgb};
+use super::canvas::{hot, text_width, Canvas, Rgb, INK, LINE_PX};
 use super::costmap::CacheArgs;
 use super::heatmap::UNREACHABLE;
 use super::motion::MotionSourceArgs;
@@ -347,7 +347,53 @@ fn picture(
             SHOOTER,
         );
     }
-    canvas.save(file)
+    annotate(canvas, (w, h), horizon, params).save(file)
+}
+
+/// The three panels (each `panel` wide and high, px) under their titles, over the time
+/// scale (0 to `horizon_s`) and a legend: the file explains itself.
+fn annotate(panels: Canvas, panel: (f64, f64), horizon_s: f64, params: &DecisionParams) -> Canvas {
+    let (panel_w, panel_h) = panel;
+    const PAD: f64 = 6.0;
+    let top = LINE_PX + 2.0 * PAD;
+    let mut canvas = panels.with_margins(top as usize, 70, 0, 0, [255, 255, 255]);
+    let titles = [
+        "C_d: shooter's dribbling time",
+        "C_o: defenders' time",
+        "the rule: safe squares",
+    ];
+    for (k, title) in titles.into_iter().enumerate() {
+        let left = k as f64 * (panel_w + GAP as f64);
+        canvas.text(
+            DVec2::new(left + 0.5 * (panel_w - text_width(title)).max(0.0), PAD),
+            title,
+            INK,
+        );
+    }
+    let below = top + panel_h + PAD;
+    let bar_w = (2.0 * panel_w + GAP as f64 - 2.0 * PAD).min(420.0);
+    canvas.hot_bar(
+        DVec2::new(PAD, below),
+        DVec2::new(bar_w, 14.0),
+        "0 s",
+        &format!("{horizon_s:.1} s (C_d, C_o)"),
+    );
+    let rule = format!(
+        "not safe: C_o <= C_d + {} s + {} s",
+        params.shot_time_s, params.epsilon_s
+    );
+    canvas.legend(
+        DVec2::new(PAD, below + 14.0 + LINE_PX + 2.0 * PAD),
+        &[
+            (FAILS, rule.as_str()),
+            (hot(0.0), "safe, best shot (darker is better)"),
+            (SHOOTER, "shooter; chosen square"),
+            (UNREACHABLE, "beyond the map"),
+            (DEFENDER, "defender"),
+            (BASKET, "basket"),
+        ],
+    );
+    canvas
 }
 
 #[derive(Args, Debug)]

@@ -1,11 +1,24 @@
 //! A small RGB raster for the PNG pictures (cost-map heat maps, basketball decisions):
-//! filled rectangles, outlines and arrows, written with the `png` crate.
+//! filled rectangles, outlines, arrows and text (a built-in bitmap font, [`super::glyphs`],
+//! so a picture carries its own title, scale and legend), written with the `png` crate.
 
+use super::glyphs::{GLYPHS, GLYPH_H, GLYPH_W};
 use anyhow::Context;
 use glam::DVec2;
 use std::path::Path;
 
 pub(super) type Rgb = [u8; 3];
+
+/// Text and frames.
+pub(super) const INK: Rgb = [30, 30, 30];
+
+/// The width of `text` in the built-in font, px.
+pub(super) fn text_width(text: &str) -> f64 {
+    (text.chars().count() * GLYPH_W) as f64
+}
+
+/// A line of text's height in the built-in font, px.
+pub(super) const LINE_PX: f64 = GLYPH_H as f64;
 
 pub(super) struct Canvas {
     width: usize,
@@ -14,7 +27,7 @@ pub(super) struct Canvas {
 }
 
 /// Dark for cheap, through red and yellow to white for the most expensive (a "hot"
-/// colour map), so a picture reads without a legend.
+/// colour map).
 pub(super) fn hot(t: f64) -> Rgb {
     let t = t.clamp(0.0, 1.0);
     let channel = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
@@ -106,6 +119,93 @@ impl Canvas {
                 w += 0.5;
             }
         }
+    }
+
+    /// The same picture inside margins of `background` (`top`, `bottom` and `left`
+    /// pixels), at least `min_width` wide: room for titles and legends around a drawing
+    /// made at (0, 0).
+    pub(super) fn with_margins(
+        &self,
+        top: usize,
+        bottom: usize,
+        left: usize,
+        min_width: usize,
+        background: Rgb,
+    ) -> Canvas {
+        let width = (self.width + left).max(min_width);
+        let mut out = Canvas::new(width, self.height + top + bottom, background);
+        for y in 0..self.height {
+            let from = y * self.width * 3;
+            let to = ((y + top) * out.width + left) * 3;
+            out.rgb[to..to + self.width * 3]
+                .copy_from_slice(&self.rgb[from..from + self.width * 3]);
+        }
+        out
+    }
+
+    /// `text` with its top-left corner at `at`, in the built-in font (printable ASCII;
+    /// anything else is drawn as `?`).
+    pub(super) fn text(&mut self, at: DVec2, text: &str, c: Rgb) {
+        let (x0, y0) = (at.x.round() as i64, at.y.round() as i64);
+        for (k, ch) in text.chars().enumerate() {
+            let code = if (' '..='~').contains(&ch) { ch } else { '?' };
+            let glyph = &GLYPHS[code as usize - ' ' as usize];
+            for (dy, row) in glyph.iter().enumerate() {
+                for dx in 0..GLYPH_W {
+                    if row >> dx & 1 == 1 {
+                        self.put(x0 + (k * GLYPH_W + dx) as i64, y0 + dy as i64, c);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The "hot" scale as a bar `size` pixels at `at`, labelled `low` under its left end
+    /// and `high` under its right: what a picture's colours mean.
+    pub(super) fn hot_bar(&mut self, at: DVec2, size: DVec2, low: &str, high: &str) {
+        for x in 0..size.x as i64 {
+            let colour = hot(x as f64 / (size.x - 1.0).max(1.0));
+            self.fill(
+                at + DVec2::new(x as f64, 0.0),
+                at + DVec2::new(x as f64 + 1.0, size.y),
+                colour,
+            );
+        }
+        self.outline(at, at + size, 1, INK);
+        self.text(at + DVec2::new(0.0, size.y + 2.0), low, INK);
+        self.text(
+            at + DVec2::new(size.x - text_width(high), size.y + 2.0),
+            high,
+            INK,
+        );
+    }
+
+    /// A legend: for each entry a square of its colour and its words, in a row from `at`
+    /// (wrapping at the picture's right edge); returns the y below the last row.
+    pub(super) fn legend(&mut self, at: DVec2, entries: &[(Rgb, &str)]) -> f64 {
+        let line = GLYPH_H as f64 + 4.0;
+        let mut p = at;
+        for (colour, words) in entries {
+            let wide = GLYPH_H as f64 + 4.0 + text_width(words) + 14.0;
+            if p.x > at.x && p.x + wide > self.width as f64 {
+                p = DVec2::new(at.x, p.y + line);
+            }
+            let square = DVec2::splat(GLYPH_H as f64 - 2.0);
+            self.fill(
+                p + DVec2::new(0.0, 1.0),
+                p + DVec2::new(0.0, 1.0) + square,
+                *colour,
+            );
+            self.outline(
+                p + DVec2::new(0.0, 1.0),
+                p + DVec2::new(0.0, 1.0) + square,
+                1,
+                INK,
+            );
+            self.text(p + DVec2::new(GLYPH_H as f64 + 2.0, 0.0), words, INK);
+            p.x += wide;
+        }
+        p.y + line
     }
 
     pub(super) fn save(&self, file: &Path) -> anyhow::Result<()> {

@@ -9,6 +9,7 @@ mod canvas;
 mod capability;
 mod catch;
 mod costmap;
+mod glyphs;
 mod heatmap;
 mod loadgen;
 mod motion;

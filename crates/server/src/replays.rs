@@ -27,6 +27,7 @@ use axum::response::{IntoResponse, Response};
 use axum::Json;
 use fieldhouse_core::protocol::{
     decode_control, encode, Control, End, ErrorMessage, Hello, ReplayInfo, Role, ViewerMessage,
+    MAX_LEAD_IN_S,
 };
 use fieldhouse_core::replay::{self, ChunkCache, Index};
 use fieldhouse_core::tags;
@@ -384,14 +385,25 @@ async fn view(
                     Ok(ViewerMessage::Control(Control::Speed { speed: s })) => {
                         Some(format!("speed {s} is outside {MIN_SPEED} to {MAX_SPEED}"))
                     }
-                    Ok(ViewerMessage::Control(Control::Seek { tick })) => {
+                    Ok(ViewerMessage::Control(Control::Seek { lead_in_s: Some(s), .. })) if !(0.0..=MAX_LEAD_IN_S).contains(&s) => {
+                        Some(format!("lead_in_s {s} is outside 0 to {MAX_LEAD_IN_S}"))
+                    }
+                    Ok(ViewerMessage::Control(Control::Seek { tick, lead_in_s })) => {
                         // The first frame at or after the tick, sent at once, paused or
-                        // not: found by a binary search over the index, then read.
+                        // not, after the lead-in's: found by binary searches over the
+                        // index, then read a batch at a time.
                         match index.seek(tick) {
                             Some(k) => {
-                                ahead = viewed.batch(k).await.map_err(|_| Sent::Failed)?;
-                                let Some(line) = ahead.pop_front() else { return Err(Sent::Failed) };
-                                send.deliver(line).await?;
+                                let lead_in = (lead_in_s.unwrap_or(0.0) * tick_hz) as u64;
+                                let first = index.seek(tick.saturating_sub(lead_in)).unwrap_or(k).min(k);
+                                ahead.clear();
+                                for at in first..=k {
+                                    if ahead.is_empty() {
+                                        ahead = viewed.batch(at).await.map_err(|_| Sent::Failed)?;
+                                    }
+                                    let Some(line) = ahead.pop_front() else { return Err(Sent::Failed) };
+                                    send.deliver(line).await?;
+                                }
                                 next = k + 1;
                                 due = Instant::now() + Duration::from_secs_f64(1.0 / tick_hz / speed);
                                 None

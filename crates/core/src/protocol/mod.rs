@@ -447,8 +447,18 @@ pub enum Control {
     Seek {
         /// The tick to go to.
         tick: u64,
+        /// Also send, at once and before it, the frames of up to this many seconds
+        /// before `tick` (0 to [`MAX_LEAD_IN_S`]): what led there, so a viewer can show
+        /// the flight so far or the latest decision, not only the moment it landed on.
+        #[serde(default)]
+        lead_in_s: Option<f64>,
     },
 }
+
+/// The longest lead-in a `seek` may ask for, s: a fly ball's whole flight (the longest
+/// catchable ones stay up about 7 s) with room to spare, and at 30 frames a second at
+/// most 450 frames sent at once.
+pub const MAX_LEAD_IN_S: f64 = 15.0;
 
 /// Reads a message the way clients' messages are read: strictly (a key given twice at
 /// any depth is refused, and only objects are messages: serde would otherwise also read
@@ -520,7 +530,10 @@ mod tests {
     fn a_viewer_control_is_read_strictly() {
         assert_eq!(
             decode_control(r#"{"type":"control","action":"seek","tick":5}"#),
-            Ok(ViewerMessage::Control(Control::Seek { tick: 5 }))
+            Ok(ViewerMessage::Control(Control::Seek {
+                tick: 5,
+                lead_in_s: None
+            }))
         );
         for bad in [
             r#"[{"type":"control","action":"play"}]"#,

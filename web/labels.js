@@ -1,0 +1,109 @@
+// Labels on the field that never cover each other, a marker or the ball.
+//
+// Names drawn at a fixed offset from their agents collided whenever agents met (two
+// fielders under the same ball, the defender on the shooter, a catch marked where a
+// fielder stands, the ball flying over a player). So a view draws its markers first,
+// telling the layout what must stay visible (`avoid`), queues its labels most important
+// first (`add`), and `draw` places each in the first free spot of a ring of candidates
+// around its anchor, widening the ring until one fits, with a leader line when it had
+// to move away. A label with no free spot within reach is left out rather than drawn
+// over another: the agent picker still names everyone.
+//
+// What was placed stays on the canvas element (`placedLabels`, `labelObstacles`, in
+// CSS pixels) so a test can check the picture without reading pixels.
+
+/** Distances from the anchor tried in turn, px: the nearest spot that is free wins. */
+const RINGS = [10, 20, 32, 46, 62, 80];
+/** Directions around the anchor tried at each distance: up-right first, as before. */
+const DIRECTIONS = [
+  [1, -1], [-1, -1], [1, 1], [-1, 1], [0, -1], [0, 1], [1, 0], [-1, 0],
+];
+/** Room kept around a label, px. */
+const PAD = 2;
+
+export class Labels {
+  constructor(g, width, height) {
+    this.g = g;
+    this.width = width;
+    this.height = height;
+    this.obstacles = [];
+    this.queue = [];
+    this.placed = [];
+  }
+
+  /** Keeps labels off a square of half-side `r` around (x, y): a marker, the ball. */
+  avoid(x, y, r) {
+    this.obstacles.push({ x0: x - r, y0: y - r, x1: x + r, y1: y + r });
+  }
+
+  /**
+   * Queues `text` for the point (x, y). `font` (px size first: "bold 12px …"), `fill`
+   * and `halo` (an outline so it reads on any ground; null for none); `rank`: labels are
+   * placed by rank, then in the order added (agents' names 0, marks 1, the ball's 2).
+   */
+  add(text, x, y, { font = "12px system-ui, sans-serif", fill = "#111", halo = "rgba(255,255,255,.85)", rank = 0 } = {}) {
+    this.queue.push({ text, x, y, font, fill, halo, rank });
+  }
+
+  /** Places and draws every queued label; returns the boxes placed. */
+  draw(canvas) {
+    const g = this.g;
+    for (const label of this.queue.sort((a, b) => a.rank - b.rank)) {
+      g.font = label.font;
+      const w = g.measureText(label.text).width;
+      const h = parseFloat(label.font.match(/(\d+(?:\.\d+)?)px/)?.[1] ?? "12") + 2;
+      const box = this.spot(label.x, label.y, w, h);
+      if (!box) continue;
+      this.placed.push({ ...box, text: label.text });
+      const moved = Math.hypot((box.x0 + box.x1) / 2 - label.x, (box.y0 + box.y1) / 2 - label.y) > RINGS[1] + w / 2;
+      if (moved) {
+        // A leader from the anchor to the label's nearest edge says whose it is.
+        g.strokeStyle = "rgba(255,255,255,.7)";
+        g.lineWidth = 1;
+        g.beginPath();
+        g.moveTo(label.x, label.y);
+        g.lineTo(clamp(label.x, box.x0, box.x1), clamp(label.y, box.y0, box.y1));
+        g.stroke();
+      }
+      g.textBaseline = "middle";
+      const y = (box.y0 + box.y1) / 2;
+      if (label.halo) {
+        g.lineWidth = 3;
+        g.strokeStyle = label.halo;
+        g.strokeText(label.text, box.x0 + PAD, y);
+      }
+      g.fillStyle = label.fill;
+      g.fillText(label.text, box.x0 + PAD, y);
+      g.textBaseline = "alphabetic";
+    }
+    canvas.placedLabels = this.placed;
+    canvas.labelObstacles = this.obstacles;
+    return this.placed;
+  }
+
+  /** The first free box of size w × h around (x, y), padding included; null if none. */
+  spot(x, y, w, h) {
+    const bw = w + 2 * PAD, bh = h;
+    for (const r of RINGS) {
+      for (const [dx, dy] of DIRECTIONS) {
+        // The box's corner (or edge middle) nearest the anchor sits `r` away from it.
+        const x0 = dx > 0 ? x + r : dx < 0 ? x - r - bw : x - bw / 2;
+        const y0 = dy > 0 ? y + r : dy < 0 ? y - r - bh : y - bh / 2;
+        const box = { x0, y0, x1: x0 + bw, y1: y0 + bh };
+        if (box.x0 < 0 || box.y0 < 0 || box.x1 > this.width || box.y1 > this.height) continue;
+        if (this.placed.some((b) => overlaps(b, box)) || this.obstacles.some((b) => overlaps(b, box))) continue;
+        return box;
+      }
+    }
+    return null;
+  }
+}
+
+/** Whether two boxes share any area. */
+export function overlaps(a, b) {
+  return a.x0 < b.x1 && b.x0 < a.x1 && a.y0 < b.y1 && b.y0 < a.y1;
+}
+
+function clamp(v, lo, hi) {
+  return Math.min(hi, Math.max(lo, v));
+}
