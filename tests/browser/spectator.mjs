@@ -172,6 +172,7 @@ async function main() {
   passed(`eye: the fielder's-eye panel is drawn (${eye.ink} pixels inked) and explained: ${eye.text}`);
   // The README's picture: the ball in flight, the fielders converging on it.
   await shot("baseball-flight");
+  await labelsApart(page, "baseball");
   // The flight ends caught or on the ground, and the panel and the log say which.
   const outcome = await until(async () => {
     const text = await page.locator("#eye-text").textContent();
@@ -179,6 +180,8 @@ async function main() {
   }, 30_000, "eye: the end of the flight is marked");
   const logged = await page.locator("#log").textContent();
   check(/caught by \w+ at|landed at/.test(logged), `eye: the end of the flight is marked (${outcome}) and logged`);
+  // The catch or miss is marked where the fielders stand: its label too stays apart.
+  await labelsApart(page, "baseball, the flight's end marked");
   await shot("baseball");
 
   // Picking another fielder from the list re-labels the panel.
@@ -195,6 +198,7 @@ async function main() {
   await page.locator("#hud-tick").waitFor({ timeout: 10_000 });
   await page.waitForTimeout(1500);
   await shot("cricket");
+  await labelsApart(page, "cricket");
 
   // Basketball: the cost-map overlay and the decisions.
   await page.goto(`${base}/#/matches/demo-basketball`);
@@ -219,19 +223,29 @@ async function main() {
   // A decision on a square names the model of the defender it counted on (issue 20).
   const decision = await (await page.waitForFunction(() => {
     const text = document.getElementById("decision").textContent;
-    return text.includes("safe square") && text.includes("model)") && text;
+    // A decision to shoot from a square (not a pass when pressed, which has no C_o).
+    return text.includes("safe square") && text.includes("model)") && /Co [\d.]+ s/.test(text) && text;
   }, null, { timeout: 30_000 })).jsonValue();
   check(/^o\d /.test(decision) && /safe square/.test(decision), `court: the ball holder's decision is explained: ${decision}`);
   check(/\((own|paper|isotropic|none) model\)/.test(decision) && /Co [\d.]+ s/.test(decision),
     `court: the decision names the defender model and gives C_o: ${decision}`);
   await shot("basketball");
+  await labelsApart(page, "basketball");
 
-  // A phone-sized window: everything fits the width.
+  // A phone-sized window: everything fits the width, the labels too (ids only).
   await page.setViewportSize({ width: 390, height: 844 });
   await page.waitForTimeout(500);
   const overflow = await page.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
   check(overflow <= 0, `phone: no sideways scrolling (${overflow} px too wide)`);
+  await labelsApart(page, "basketball on a phone");
   await shot("basketball-phone");
+  // The lobby on a phone: its tables (long ids, the hostile replays' long strings)
+  // become cards that wrap, not rows wider than the screen.
+  await page.goto(`${base}/#/`);
+  await page.locator(`#replays a[href^="#/replays/demo-baseball-"]`).first().waitFor({ timeout: 10_000 });
+  const lobbyOverflow = await page.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
+  check(lobbyOverflow <= 0, `phone: the lobby has no sideways scrolling (${lobbyOverflow} px too wide)`);
+  await shot("lobby-phone");
   await page.setViewportSize({ width: 1280, height: 900 });
 
   // A replay: opens, plays, seeks, pauses, steps one tick.
@@ -275,6 +289,25 @@ async function main() {
   await page.waitForFunction(() => document.getElementById("hud-playback")?.textContent.startsWith("paused"), null, { timeout: 2_000 });
   const after = await tick();
   check(after - before > 90, `replay: space plays at 2× and pauses (${before} to ${after} in about 2 s)`);
+  // A seek into a ball's flight, paused: the panels show the flight so far (the seek
+  // asks for a lead-in), not "waiting for a fly ball" while the ball is up.
+  await page.keyboard.press(" ");
+  const inFlight = await until(async () => {
+    const text = await page.locator("#eye-text").textContent();
+    return /tan ψ rises/.test(text) && !/Caught by|Landed/.test(text) && await tick();
+  }, 30_000, "replay: a ball in flight while playing");
+  await page.keyboard.press(" ");
+  await page.keyboard.press("Home");
+  await page.waitForFunction((t) => Number(document.getElementById("hud-tick")?.textContent) < t - 300, inFlight, { timeout: 5_000 });
+  await page.locator("#seek").evaluate((el, t) => { el.value = t; el.dispatchEvent(new Event("change")); }, inFlight);
+  await page.waitForFunction((t) => Math.abs(Number(document.getElementById("hud-tick")?.textContent) - t) <= 2, inFlight, { timeout: 5_000 });
+  const afterSeek = await until(async () => {
+    const text = await page.locator("#eye-text").textContent();
+    const side = await inked(page, "side");
+    return /tan ψ rises/.test(text) && side > 1000 && { text, side };
+  }, 3_000, `replay: after a seek to tick ${inFlight}, mid-flight, the fielder's eye and the side view show the flight`);
+  passed(`replay: after a seek into a flight the panels show it: ${afterSeek.text}`);
+  await shot("replay-seek-in-flight");
   const download = await page.locator("#download").getAttribute("href");
   const file = await page.request.get(`${base}${download}`);
   // The demo's recording is format 2: zstd frames, named so.
@@ -303,6 +336,32 @@ async function main() {
   await page.goto(`${base}/${replayHref}`);
   await page.locator("#hud-tick").waitFor({ timeout: 10_000 });
 
+  // A hello of another protocol version (an old page left open across an upgrade) is
+  // refused with a message that says what to do, and the page stops there.
+  const other = await browser.newContext({ viewport: { width: 1280, height: 900 } });
+  await other.addInitScript(() => {
+    const slot = Object.getOwnPropertyDescriptor(WebSocket.prototype, "onmessage");
+    Object.defineProperty(WebSocket.prototype, "onmessage", {
+      get: slot.get,
+      set(handler) {
+        slot.set.call(this, (event) => {
+          const msg = JSON.parse(event.data);
+          if (msg.type === "hello") msg.version = 99;
+          handler(new MessageEvent("message", { data: JSON.stringify(msg) }));
+        });
+      },
+    });
+  });
+  const newer = await other.newPage();
+  await newer.goto(`${base}/#/matches/demo-baseball`);
+  await newer.locator("#mismatch").waitFor({ state: "visible", timeout: 10_000 });
+  const mismatch = await newer.locator("#mismatch").textContent();
+  check(/version 2/.test(mismatch) && /version 99/.test(mismatch) && /Reload/.test(mismatch),
+    `version: a hello of version 99 is refused with a message: ${mismatch}`);
+  check(await newer.locator("#hud-tick").count() === 0, "version: no frame is drawn after a refused hello");
+  await newer.screenshot({ path: join(ARTIFACTS, "version-mismatch.png") });
+  await other.close();
+
   // Connection failures while the server was down are expected; nothing else may be.
   const unexpected = errors.filter((e) => !/WebSocket connection to .* failed|ERR_CONNECTION_REFUSED/.test(e));
   check(unexpected.length === 0, `console: no errors:\n${unexpected.join("\n")}`);
@@ -319,6 +378,34 @@ async function until(look, ms, what) {
     if (Date.now() > end) throw new Error(`${what}: not within ${ms / 1000} s`);
     await new Promise((r) => setTimeout(r, 200));
   }
+}
+
+/**
+ * Looks at the field's labels ten times over two seconds: no label may overlap another,
+ * a marker or the ball (the boxes the page placed, in CSS pixels), and every agent the
+ * picker lists must be named each time.
+ */
+async function labelsApart(page, what) {
+  const agents = await page.evaluate(() => [...document.querySelectorAll("#agent option")].map((o) => o.value).filter((v) => !v.startsWith("@")));
+  let worst = null, fewest = Infinity;
+  for (let look = 0; look < 10; look++) {
+    const seen = await page.evaluate(() => {
+      const c = document.getElementById("field");
+      const boxes = c.placedLabels ?? [], things = c.labelObstacles ?? [];
+      const hit = (a, b) => a.x0 < b.x1 && b.x0 < a.x1 && a.y0 < b.y1 && b.y0 < a.y1;
+      const clashes = [];
+      boxes.forEach((a, i) => {
+        boxes.slice(i + 1).forEach((b) => { if (hit(a, b)) clashes.push(`"${a.text}" over "${b.text}"`); });
+        things.forEach((b) => { if (hit(a, b)) clashes.push(`"${a.text}" over a marker or the ball`); });
+      });
+      return { count: boxes.length, clashes, texts: boxes.map((b) => b.text) };
+    });
+    if (seen.clashes.length && !worst) worst = seen;
+    fewest = Math.min(fewest, agents.filter((id) => seen.texts.some((t) => t === id || t.startsWith(`${id} `))).length);
+    await new Promise((r) => setTimeout(r, 200));
+  }
+  check(!worst, `labels (${what}): none overlaps another or a marker: ${worst?.clashes.join("; ")}`);
+  check(fewest === agents.length, `labels (${what}): all ${agents.length} agents named at every look (fewest ${fewest})`);
 }
 
 /** How many pixels of a canvas are not blank. */

@@ -30,6 +30,7 @@ const ASSETS: &[(&str, &str, &str)] = &[
     ("eye.js", JS, include_str!("../../../web/eye.js")),
     ("court.js", JS, include_str!("../../../web/court.js")),
     ("player.js", JS, include_str!("../../../web/player.js")),
+    ("labels.js", JS, include_str!("../../../web/labels.js")),
 ];
 
 const JS: &str = "text/javascript; charset=utf-8";
@@ -84,5 +85,29 @@ fn asset(name: &str) -> Response {
             format!("no page file \"{name}\""),
         )
         .into_response(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ASSETS;
+
+    /// A module written but not listed here is a page that fails to load in the
+    /// browser (its import is a 404), with nothing said at build time.
+    #[test]
+    fn every_file_beside_the_page_is_served() {
+        let web = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../web");
+        for entry in std::fs::read_dir(&web).unwrap() {
+            let path = entry.unwrap().path();
+            if !path.is_file() {
+                continue;
+            }
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            let served = ASSETS.iter().find(|(file, _, _)| *file == name);
+            let Some((_, _, body)) = served else {
+                panic!("web/{name} is not embedded in ASSETS");
+            };
+            assert_eq!(*body, std::fs::read_to_string(&path).unwrap(), "{name}");
+        }
     }
 }
