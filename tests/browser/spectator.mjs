@@ -232,6 +232,43 @@ async function main() {
   await shot("basketball");
   await labelsApart(page, "basketball");
 
+  // A player a bot moves: the picker and the decision panel say the bot decides, not
+  // the built-in rule. The bot (this script, over a real socket) orders o1 to move.
+  const created = await page.request.post(`${base}/api/matches`, {
+    headers: { Authorization: "Bearer browser-test-admin-token" },
+    data: { sport: "basketball", name: "bot court", agents: [{ id: "o1", team: "offense", bot: true },
+      { id: "o2", team: "offense", strategy: "costmap" }, { id: "d1", team: "defense", strategy: "defense" }] },
+  });
+  check(created.status() === 201, `bot: a basketball match with a bot seat is created (${created.status()})`);
+  const { id: botMatch, bot_tokens: tokens } = await created.json();
+  // The bot runs in a page of its own (Node 20's WebSocket needs a flag).
+  const botPage = await context.newPage();
+  await botPage.goto(`${base}/healthz`);
+  await botPage.evaluate((url) => {
+    const bot = new WebSocket(url);
+    let orders = 0;
+    bot.onmessage = (event) => {
+      const msg = JSON.parse(event.data);
+      // Every tenth perception, a move across the court and back: orders keep coming.
+      if (msg.type === "perception" && orders++ % 10 === 0) {
+        const target = orders % 20 === 1 ? [4, 3] : [8, -3];
+        bot.send(JSON.stringify({ type: "command", tick: msg.tick, action: { kind: "move_to", target } }));
+      }
+    };
+  }, `ws://127.0.0.1:${port}/ws/matches/${botMatch}/play?token=${tokens.o1}`);
+  await page.goto(`${base}/#/matches/${botMatch}`);
+  await page.locator("#hud-tick").waitFor({ timeout: 10_000 });
+  await page.selectOption("#agent", "o1");
+  const botNamed = await (await page.waitForFunction(() => {
+    const option = document.querySelector('#agent option[value="o1"]').textContent;
+    const text = document.getElementById("decision").textContent;
+    return option === "o1 · bot" && /bot/.test(text) && { option, text };
+  }, null, { timeout: 15_000 })).jsonValue();
+  check(!/costmap/.test(botNamed.option) && /connected bot|its bot's order/.test(botNamed.text),
+    `bot: the picker names o1 "${botNamed.option}" and the panel says who decides: ${botNamed.text}`);
+  await shot("basketball-bot");
+  await botPage.close();
+
   // A phone-sized window: everything fits the width, the labels too (ids only).
   await page.setViewportSize({ width: 390, height: 844 });
   await page.waitForTimeout(500);
