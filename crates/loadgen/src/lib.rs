@@ -12,7 +12,7 @@
 //!   window), a message counting as published when any spectator received it (a
 //!   fieldhouse frame is known by its tick, a Colyseus patch by its bytes). A stamped
 //!   frame (fieldhouse's, the bare sender's) is in the window if its `sent_us` is, and
-//!   counts as delivered if it arrives within [`RECORD_AROUND`] of the window's end; an
+//!   counts as delivered if it arrives within a second (`RECORD_AROUND`) of the window's end; an
 //!   unstamped message (Colyseus's) is placed by its first arrival at any spectator, so
 //!   every copy of a message is in the window or out of it together;
 //! * the frame rate held: the median and lowest per-spectator rate in the window;

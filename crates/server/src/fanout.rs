@@ -22,7 +22,6 @@
 
 use super::listener::Conn;
 use super::metrics::Metrics;
-use super::state::Published;
 use std::io;
 use std::pin::Pin;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering::Relaxed};
@@ -33,6 +32,16 @@ use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio::net::TcpStream;
 use tokio::sync::{oneshot, watch};
 use tokio_tungstenite::tungstenite::Utf8Bytes;
+
+/// The newest frame of a match (encoded once; every spectator gets the same bytes), and
+/// its `end` once it has ended.
+#[derive(Debug, Clone)]
+pub struct Published {
+    /// Frames published so far: a spectator that sees a gap skipped frames.
+    pub seq: u64,
+    pub frame: Utf8Bytes,
+    pub end: Option<Utf8Bytes>,
+}
 
 /// Members a shard writes to before letting other tasks on its worker run.
 const WRITES_BETWEEN_YIELDS: usize = 256;

@@ -11,10 +11,11 @@
 
 use super::auth::new_token;
 use super::config::ServerConfig;
+use super::fanout::Published;
 use super::metrics::Metrics;
 use super::recording::{self, InDir, Limit, Recording};
 use super::slot::Slot;
-use super::state::{AppState, Control, MatchEntry, Published, ToBot};
+use super::state::{AppState, Control, MatchEntry, ToBot};
 use fieldhouse_core::driver::{Event, MatchDriver, Output, Wake};
 use fieldhouse_core::protocol::{encode, End};
 use fieldhouse_core::replay;

@@ -14,16 +14,6 @@ use std::time::Instant;
 use tokio::sync::{mpsc, watch};
 use tokio_tungstenite::tungstenite::Utf8Bytes;
 
-/// The newest frame of a match (encoded once; every spectator gets the same bytes), and
-/// its `end` once it has ended.
-#[derive(Debug, Clone)]
-pub struct Published {
-    /// Frames published so far: a spectator that sees a gap skipped frames.
-    pub seq: u64,
-    pub frame: Utf8Bytes,
-    pub end: Option<Utf8Bytes>,
-}
-
 /// What a match task sends a bot's socket. A perception carries its tick: the bot owes
 /// one answer to it, and that answer is never charged to its rate limit. The last
 /// message of a connection another one took over says so, and the socket closes after it.
@@ -77,7 +67,7 @@ pub struct MatchEntry {
     pub info: MatchInfo,
     pub mode: Mode,
     pub scenario: Scenario,
-    pub published: watch::Receiver<Published>,
+    pub published: watch::Receiver<super::fanout::Published>,
     pub control: mpsc::Sender<Control>,
     /// Bot tokens: (agent index, agent id, token).
     pub tokens: Vec<(usize, String, String)>,
