@@ -131,6 +131,8 @@ fn bad_arguments_get_clear_errors() {
         ("--strategy chapman --elevation 95", "between -90 and 90"),
         ("--strategy chapman --fielder 12", "X,Z"),
         ("--strategy chapman --fielder 12,north", "not a number"),
+        ("--strategy lot --lot-reference soon", "write `apex` or seconds after the launch"),
+        ("--strategy lot --lot-reference -1", "write `apex` or seconds after the launch"),
     ];
     for (extra, expected) in cases {
         let err = stderr_of(&format!("{base} {extra}"));
@@ -161,12 +163,33 @@ fn sweep_json_compares_every_strategy_on_the_same_launches() {
         assert_eq!(s["catchable"].as_u64().unwrap(), catchable);
         assert_eq!(s["trials"], 60);
         let shares = num(&s["share_straight"])
-            + num(&s["share_convex_toward_home"])
-            + num(&s["share_concave_away_from_home"]);
+            + num(&s["share_bulging_toward_home"])
+            + num(&s["share_bulging_away_from_home"]);
         assert!((shares - 1.0).abs() < 1e-9);
     }
     // The same seed gives the same report.
     assert_eq!(doc, json("catch-sweep --n 60 --seed 4 --json"));
+}
+
+/// Gillies & Dodgson: a LOT reference taken too early makes the paths very convex. With
+/// the reference at height Y₀ and horizontal distance d₀ the fielder keeps its offset at
+/// d₀/Y₀ metres per metre of height, so an earlier (lower) reference asks for a larger
+/// offset while the ball climbs: larger bulges away from home and faster runs.
+#[test]
+fn an_early_lot_reference_bends_the_paths_away_from_home_and_runs_faster() {
+    let sweep = |reference: &str| {
+        let doc = json(&format!(
+            "catch-sweep --n 40 --seed 3 --strategies lot --limits none --lot-reference {reference} --json"
+        ));
+        doc["strategies"][0].clone()
+    };
+    let (apex, early) = (sweep("apex"), sweep("0.5"));
+    assert!(num(&early["median_bulge"]) < num(&apex["median_bulge"]));
+    assert!(num(&early["median_bulge"]) < -0.2, "{early}");
+    assert!(num(&early["mean_peak_speed"]) > 2.0 * num(&apex["mean_peak_speed"]));
+    assert!(
+        num(&early["share_bulging_away_from_home"]) >= num(&apex["share_bulging_away_from_home"])
+    );
 }
 
 #[test]

@@ -2,7 +2,7 @@
 
 use clap::Args;
 use fieldhouse::costmap::AgentPose;
-use fieldhouse::fielding::{CatchZone, FielderConfig, Limits, TrialConfig};
+use fieldhouse::fielding::{CatchZone, FielderConfig, Limits, LotReference, TrialConfig};
 use fieldhouse::names::UnknownName;
 use fieldhouse::perception::PerceptionConfig;
 use fieldhouse::physics::{AirModel, BallSpec, NATHAN_AIR_DENSITY};
@@ -41,6 +41,10 @@ pub(super) struct Setting {
     /// Horizontal catching reach in metres.
     #[arg(long, default_value_t = 1.0, value_parser = positive)]
     pub reach: f64,
+    /// When `lot` takes its reference line of sight: `apex` (the ball's perceived apex)
+    /// or seconds after the launch (e.g. 0.5; once the ball is clearly above the eye).
+    #[arg(long, default_value = "apex", value_parser = clap::value_parser!(LotReference))]
+    pub lot_reference: LotReference,
 }
 
 impl Setting {
@@ -59,6 +63,7 @@ impl Setting {
                     difference_span: self.difference_span as usize,
                 },
                 noise_seed: seed,
+                lot_reference: self.lot_reference,
             },
             zone: CatchZone {
                 reach_m: self.reach,

@@ -6,7 +6,7 @@
 use super::run::summary;
 use anyhow::{anyhow, bail, Context};
 use clap::Args;
-use fieldhouse::fielding::{Body, Brain, Forecast, Limits, StrategyKind};
+use fieldhouse::fielding::{Body, Brain, Forecast, Limits, LotReference, StrategyKind};
 use fieldhouse::perception::{PerceptionConfig, PerceptionHistory, Sighting};
 use fieldhouse::protocol::{PROTOCOL, VERSION};
 use fieldhouse::words::{figure, plural};
@@ -76,7 +76,7 @@ impl Fielding {
             };
             (
                 PerceptionHistory::new(&PerceptionConfig::default(), dt),
-                Brain::new(kind, forecast),
+                Brain::new(kind, LotReference::Apex, forecast),
             )
         });
         let t = optics["t"].as_f64().unwrap_or(0.0);

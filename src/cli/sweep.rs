@@ -95,7 +95,7 @@ fn print_table(report: &SweepReport, out: &mut impl Write) -> std::io::Result<()
     )?;
     writeln!(
         out,
-        "{:<12} {:>7} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>7} {:>7} {:>8} {:>8}",
+        "{:<12} {:>7} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>7} {:>7} {:>6} {:>8} {:>8}",
         "strategy",
         "caught",
         "catchable",
@@ -105,8 +105,9 @@ fn print_table(report: &SweepReport, out: &mut impl Write) -> std::io::Result<()
         "v peak",
         "v max",
         "straight",
-        "convex",
-        "concave",
+        "→home",
+        "←home",
+        "bulge",
         "tanψ R²",
         "image R²"
     )?;
@@ -114,12 +115,12 @@ fn print_table(report: &SweepReport, out: &mut impl Write) -> std::io::Result<()
         writeln!(out, "{}", row(s))?;
     }
     writeln!(out, "a mean: time-averaged |a| (m/s²); a peak / v peak: per-trial peaks averaged; a max / v max: largest over all trials")?;
-    writeln!(out, "path shapes vs the chord from start to end (convex bulges toward home); R²: straightness of tan ψ(t) and of the image path (medians)")
+    writeln!(out, "path shapes vs the chord from start to end: straight, bulging toward home (→home) or away from it (←home); bulge: median largest deviation / chord (+ toward home); R²: straightness of tan ψ(t) and of the image path (medians)")
 }
 
 fn row(s: &StrategySummary) -> String {
     format!(
-        "{:<12} {:>6.1}% {:>9.1}% {:>9.2} {:>9.2} {:>9.1} {:>9.2} {:>9.1} {:>7.0}% {:>6.0}% {:>6.0}% {:>8.4} {:>8.4}",
+        "{:<12} {:>6.1}% {:>9.1}% {:>9.2} {:>9.2} {:>9.1} {:>9.2} {:>9.1} {:>7.0}% {:>6.0}% {:>6.0}% {:>+6.2} {:>8.4} {:>8.4}",
         s.strategy.name(),
         100.0 * s.catch_rate,
         100.0 * s.catchable_rate,
@@ -129,8 +130,9 @@ fn row(s: &StrategySummary) -> String {
         s.mean_peak_speed,
         s.max_peak_speed,
         100.0 * s.share_straight,
-        100.0 * s.share_convex_toward_home,
-        100.0 * s.share_concave_away_from_home,
+        100.0 * s.share_bulging_toward_home,
+        100.0 * s.share_bulging_away_from_home,
+        s.median_bulge,
         s.median_tan_psi_r2,
         s.median_image_r2
     )

@@ -2,7 +2,7 @@
 //! trial drives one against a precomputed flight; a live match can drive several against
 //! its ball the same way.
 
-use super::strategy::{Brain, Forecast, Situation, StrategyKind};
+use super::strategy::{Brain, Forecast, LotReference, Situation, StrategyKind};
 use super::{Body, Limits};
 use crate::perception::{PerceptionConfig, PerceptionHistory, Sighting};
 use glam::{DVec2, DVec3};
@@ -18,6 +18,8 @@ pub struct FielderConfig {
     pub perception: PerceptionConfig,
     /// Seeds the perceptual noise; irrelevant when noise is off.
     pub noise_seed: u64,
+    /// When a `lot` fielder takes its reference (other strategies ignore it).
+    pub lot_reference: LotReference,
 }
 
 impl Default for FielderConfig {
@@ -26,6 +28,7 @@ impl Default for FielderConfig {
             limits: Limits::HUMAN,
             perception: PerceptionConfig::default(),
             noise_seed: 0,
+            lot_reference: LotReference::Apex,
         }
     }
 }
@@ -64,7 +67,7 @@ impl Fielder {
     ) -> Fielder {
         Fielder {
             body: Body::at_rest(start),
-            brain: Brain::new(strategy, forecast),
+            brain: Brain::new(strategy, config.lot_reference, forecast),
             history: PerceptionHistory::new(&config.perception, dt),
             noise: ChaCha8Rng::seed_from_u64(config.noise_seed),
             config: *config,

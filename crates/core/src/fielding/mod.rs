@@ -16,6 +16,6 @@ pub use catch_zone::CatchZone;
 pub(crate) use fielder::Fielder;
 pub use fielder::{FielderConfig, Step};
 pub(crate) use path_shape::{OpticalFit, PathShape};
-pub use strategy::{Brain, Forecast, StrategyKind};
+pub use strategy::{Brain, Forecast, LotReference, StrategyKind};
 pub use sweep::{LaunchDistribution, StrategySummary, Sweep, SweepCase, SweepReport};
 pub use trial::{forecast, Outcome, TraceEntry, Trial, TrialConfig, TrialResult};

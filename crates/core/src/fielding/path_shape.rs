@@ -9,28 +9,60 @@ use serde::Serialize;
 /// where it ended.
 ///
 /// The signed deviation of each point is its distance from the chord, positive on the
-/// side of home plate. A path *convex toward home* bulges toward the batter (mean
-/// deviation > 0), one *concave* bulges away from home (< 0); a path whose largest
-/// deviation is under 2 % of the chord (or 0.25 m) counts as straight.
+/// side of home plate. A path that *bulges toward home* bends toward the batter (mean
+/// deviation > 0), one that *bulges away from home* bends away (< 0); a path whose
+/// largest deviation is under 2 % of the chord (or 0.25 m) counts as straight. The
+/// shapes are named by their geometry: "concave" and "convex" are used both ways round
+/// in the literature (Gillies & Dodgson call LOT's paths, which bulge away from home,
+/// convex), so they name nothing here.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub(crate) enum PathShape {
     Straight,
-    ConvexTowardHome,
-    ConcaveAwayFromHome,
+    BulgesTowardHome,
+    BulgesAwayFromHome,
 }
 
 impl PathShape {
     /// The shape of `path` (the fielder's positions on the ground) with home plate at
     /// `home`.
     pub(crate) fn of(path: &[DVec2], home: DVec2) -> PathShape {
-        let (Some(&start), Some(&end)) = (path.first(), path.last()) else {
+        let Some(d) = Deviation::of(path, home) else {
             return PathShape::Straight;
         };
+        if d.max_abs < (0.02 * d.chord).max(0.25) {
+            PathShape::Straight
+        } else if d.sum > 0.0 {
+            PathShape::BulgesTowardHome
+        } else {
+            PathShape::BulgesAwayFromHome
+        }
+    }
+}
+
+/// How far a path strays from its chord, as a share of the chord's length: the largest
+/// deviation, signed by the side the path bulges to on the whole (positive toward home).
+/// 0.5 is a half circle; Gillies & Dodgson's "very convex" paths are the large ones.
+pub(crate) fn bulge(path: &[DVec2], home: DVec2) -> Option<f64> {
+    let d = Deviation::of(path, home)?;
+    Some(d.max_abs / d.chord * d.sum.signum())
+}
+
+/// A path's deviations from its chord (positive on home plate's side): the largest in
+/// size and their sum; `None` for a path that goes nowhere.
+struct Deviation {
+    chord: f64,
+    max_abs: f64,
+    sum: f64,
+}
+
+impl Deviation {
+    fn of(path: &[DVec2], home: DVec2) -> Option<Deviation> {
+        let (&start, &end) = (path.first()?, path.last()?);
         let chord = end - start;
         let length = chord.length();
         if length < 1e-9 {
-            return PathShape::Straight;
+            return None;
         }
         let normal = DVec2::new(-chord.y, chord.x) / length;
         // Orient the normal toward home so a positive deviation means "toward the batter".
@@ -45,13 +77,11 @@ impl PathShape {
             max_abs = max_abs.max(dev.abs());
             sum += dev;
         }
-        if max_abs < (0.02 * length).max(0.25) {
-            PathShape::Straight
-        } else if sum > 0.0 {
-            PathShape::ConvexTowardHome
-        } else {
-            PathShape::ConcaveAwayFromHome
-        }
+        Some(Deviation {
+            chord: length,
+            max_abs,
+            sum,
+        })
     }
 }
 
@@ -176,11 +206,33 @@ mod tests {
                 })
                 .collect()
         };
-        assert_eq!(PathShape::of(&arc(-3.0), home), PathShape::ConvexTowardHome);
+        assert_eq!(PathShape::of(&arc(-3.0), home), PathShape::BulgesTowardHome);
         assert_eq!(
             PathShape::of(&arc(3.0), home),
-            PathShape::ConcaveAwayFromHome
+            PathShape::BulgesAwayFromHome
         );
         assert_eq!(PathShape::of(&arc(0.1), home), PathShape::Straight);
+    }
+
+    #[test]
+    fn a_bulge_is_the_largest_deviation_over_the_chord_signed_toward_home() {
+        let home = DVec2::ZERO;
+        // A half circle of radius 5 away from home over a chord of 10: 5 / 10.
+        let half_circle: Vec<DVec2> = (0..=180)
+            .map(|k| {
+                let a = (k as f64).to_radians();
+                DVec2::new(50.0 + 5.0 * a.sin(), -5.0 * a.cos())
+            })
+            .collect();
+        assert!((bulge(&half_circle, home).unwrap() + 0.5).abs() < 1e-9);
+        // Mirrored toward home: +0.5; a straight run: 0; a run that goes nowhere: none.
+        let mirrored: Vec<DVec2> = half_circle
+            .iter()
+            .map(|p| DVec2::new(100.0 - p.x, p.y))
+            .collect();
+        assert!((bulge(&mirrored, home).unwrap() - 0.5).abs() < 1e-9);
+        let line = [DVec2::new(50.0, -5.0), DVec2::new(50.0, 5.0)];
+        assert_eq!(bulge(&line, home), Some(0.0));
+        assert_eq!(bulge(&[DVec2::ONE, DVec2::ONE], home), None);
     }
 }

@@ -1,6 +1,7 @@
 //! Many launches, every strategy on the same balls: the experiment that compares the
 //! catching theories.
 
+use super::path_shape::bulge;
 use super::trial::{Trial, TrialConfig, TrialResult};
 use super::{PathShape, StrategyKind};
 use crate::physics::{AirModel, BallSpec, Flight, Launch};
@@ -103,9 +104,12 @@ pub struct StrategySummary {
     /// Share of trials whose path was straight (see `PathShape`).
     pub share_straight: f64,
     /// Share of trials whose path bulged toward home plate.
-    pub share_convex_toward_home: f64,
+    pub share_bulging_toward_home: f64,
     /// Share of trials whose path bulged away from home plate.
-    pub share_concave_away_from_home: f64,
+    pub share_bulging_away_from_home: f64,
+    /// Median over trials of the path's bulge: its largest deviation from the chord as a
+    /// share of the chord, positive toward home (see `path_shape::bulge`).
+    pub median_bulge: f64,
     /// Medians over trials of the optical straightness measures (see `OpticalFit`).
     pub median_tan_psi_r2: f64,
     /// See `median_tan_psi_r2`: the image path's straightness.
@@ -133,6 +137,7 @@ struct Tally {
     peak_speed: f64,
     mean_accel: f64,
     shape: PathShape,
+    bulge: Option<f64>,
     tan_psi_r2: Option<f64>,
     image_r2: Option<f64>,
 }
@@ -228,6 +233,7 @@ impl Sweep {
                             peak_speed: r.peak_speed,
                             mean_accel: r.mean_accel,
                             shape: PathShape::of(&r.path, home),
+                            bulge: bulge(&r.path, home),
                             tan_psi_r2: r.optical.tan_psi_r2(),
                             image_r2: r.optical.image_r2(),
                         }
@@ -285,8 +291,9 @@ fn summarise<'a>(
         mean_peak_speed: mean(&|t| t.peak_speed),
         max_peak_speed: max(&|t| t.peak_speed),
         share_straight: share(PathShape::Straight),
-        share_convex_toward_home: share(PathShape::ConvexTowardHome),
-        share_concave_away_from_home: share(PathShape::ConcaveAwayFromHome),
+        share_bulging_toward_home: share(PathShape::BulgesTowardHome),
+        share_bulging_away_from_home: share(PathShape::BulgesAwayFromHome),
+        median_bulge: median(&|t| t.bulge),
         median_tan_psi_r2: median(&|t| t.tan_psi_r2),
         median_image_r2: median(&|t| t.image_r2),
     }

@@ -36,21 +36,65 @@ const OMEGA: f64 = 4.0;
 /// measured peak speeds of 400+ m/s that way). We take it at the perceived apex, the
 /// first tick the ball stops rising relative to the eye: the highest, most "clearly
 /// above" point, and the one that asks least of the fielder. The fielder waits until then.
+/// [`LotReference::After`] takes it earlier instead, to measure what the paper warns of.
 #[derive(Debug, Clone, Default)]
 pub struct Lot {
+    /// When the reference is taken.
+    reference: LotReference,
     /// L₀: horizontal offset from fielder to ball per metre of height above the eye.
     line: Option<DVec2>,
 }
 
+/// When `lot` takes its reference line of sight (Gillies & Dodgson: "once the ball is
+/// clearly above h"; taken too early, they say, the paths become very convex).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub enum LotReference {
+    /// At the perceived apex: the first tick the ball stops rising relative to the eye.
+    #[default]
+    Apex,
+    /// At the first tick this many seconds after the launch, or later, once the ball is
+    /// clearly above the eye (tan ψ ≥ 0.05), whichever comes last.
+    After(f64),
+}
+
+impl std::str::FromStr for LotReference {
+    type Err = String;
+
+    /// `apex`, or seconds after the launch (`0.5`).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s == "apex" {
+            return Ok(LotReference::Apex);
+        }
+        match s.parse::<f64>() {
+            Ok(t) if t.is_finite() && t >= 0.0 => Ok(LotReference::After(t)),
+            _ => Err(format!(
+                "\"{s}\" is not a LOT reference: write `apex` or seconds after the launch (e.g. 0.5)"
+            )),
+        }
+    }
+}
+
 impl Lot {
+    /// A `lot` fielder that takes its reference at `reference`.
+    pub(crate) fn new(reference: LotReference) -> Lot {
+        Lot {
+            reference,
+            line: None,
+        }
+    }
+
     /// The acceleration wanted this tick, m/s².
     pub(crate) fn command(&mut self, s: &Situation) -> DVec2 {
         let p = s.percept;
         let (rel, rel_vel) = (p.relative_position, p.relative_velocity);
-        let at_apex = rel_vel.y <= 0.0 && p.tan_psi >= CLEARLY_ABOVE_EYE_TAN_PSI;
+        let above = p.tan_psi >= CLEARLY_ABOVE_EYE_TAN_PSI;
+        let now = match self.reference {
+            LotReference::Apex => above && rel_vel.y <= 0.0,
+            LotReference::After(t) => above && s.t >= t,
+        };
         let line = match self.line {
             Some(line) => line,
-            None if at_apex => *self.line.insert(DVec2::new(rel.x, rel.z) / rel.y),
+            None if now => *self.line.insert(DVec2::new(rel.x, rel.z) / rel.y),
             None => return DVec2::ZERO,
         };
         let error = DVec2::new(rel.x, rel.z) - line * rel.y;

@@ -10,7 +10,7 @@ mod lot_optical;
 mod predictive;
 
 pub use chapman::Chapman;
-pub use lot::Lot;
+pub use lot::{Lot, LotReference};
 pub use lot_optical::LotOptical;
 pub use predictive::{Forecast, Predictive};
 
@@ -116,12 +116,17 @@ pub enum Brain {
 }
 
 impl Brain {
-    /// A new brain of `kind`; `forecast` is only consulted for `predictive`.
-    pub fn new(kind: StrategyKind, forecast: impl FnOnce() -> Forecast) -> Brain {
+    /// A new brain of `kind`; `lot_reference` is only consulted for `lot`, `forecast` for
+    /// `predictive`.
+    pub fn new(
+        kind: StrategyKind,
+        lot_reference: LotReference,
+        forecast: impl FnOnce() -> Forecast,
+    ) -> Brain {
         match kind {
             StrategyKind::Chapman => Brain::Chapman(Chapman::new(true)),
             StrategyKind::Chapman1d => Brain::Chapman(Chapman::new(false)),
-            StrategyKind::Lot => Brain::Lot(Lot::default()),
+            StrategyKind::Lot => Brain::Lot(Lot::new(lot_reference)),
             StrategyKind::LotOptical => Brain::LotOptical(LotOptical::default()),
             StrategyKind::Predictive => Brain::Predictive(Predictive::new(forecast())),
         }
