@@ -26,6 +26,7 @@ import asyncio
 import math
 
 from fieldhouse import Accelerate, Bot, Client, Perception, Stand
+from fieldhouse.messages import Optics
 
 # Gain of the radial law, 1/s: the optical rate returns to its reference in about 1/3 s.
 RATE_GAIN = 3.0
@@ -54,16 +55,18 @@ class Chapman:
         self.rate_ref: float | None = None
 
     def act(self, perception: Perception) -> Accelerate | Stand:
-        p = perception.perception
-        o = p.optics
+        """The command answering a fielder's perception."""
+        accel = self.accelerate(perception.perception.optics)
+        return Stand() if accel is None else Accelerate(accel)
+
+    def accelerate(self, o: Optics | None) -> tuple[float, float] | None:
+        """The acceleration ``[ax, az]`` (m/s², before the body clips it) for what the eye
+        sees; None between balls (stop: the next launch puts the fielder back home)."""
         if o is None:
-            # Between balls: stop. The next launch puts the fielder back home anyway.
             self.rate_ref = None
-            return Stand()
-        if o.rates is None:
-            self.rate_ref = None  # the first tick of a new ball
+            return None
         if o.t < self.reaction_s or o.rates is None or o.tan_psi < CLEARLY_ABOVE_EYE_TAN_PSI:
-            return Accelerate((0.0, 0.0))
+            return (0.0, 0.0)
         rate = o.rates.d_tan_psi_dt
         if self.rate_ref is None:
             self.rate_ref = rate
@@ -75,7 +78,7 @@ class Chapman:
         lateral = LATERAL_GAIN * d * o.rates.d_alpha_dt
         c, s = math.cos(o.alpha), math.sin(o.alpha)
         # Toward the ball is (c, s); a quarter turn toward increasing α is (-s, c).
-        return Accelerate((radial * c - lateral * s, radial * s + lateral * c))
+        return (radial * c - lateral * s, radial * s + lateral * c)
 
 
 async def play(url: str, token: str) -> dict | None:

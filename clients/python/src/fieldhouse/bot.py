@@ -179,14 +179,21 @@ class Bot:
         return self.hello
 
     async def act(self, action: Action, tick: int | None = None) -> None:
-        """Sends ``action`` as the command for ``tick`` (default: the latest perception's)."""
+        """Sends ``action`` as the command for ``tick`` (default: the latest perception's).
+        A command that meets a closed socket is dropped (see the iteration)."""
         if tick is None:
             if self.perception is None:
                 raise ValueError("no perception to answer yet: pass tick=")
             tick = self.perception.tick
         if self._socket is None:
             raise ConnectionClosed("the bot is not connected")
-        await self._socket.send({"type": "command", "tick": int(tick), "action": action_to_wire(action)})
+        try:
+            await self._socket.send({"type": "command", "tick": int(tick), "action": action_to_wire(action)})
+        except ConnectionClosed:
+            # The socket closed under the command: after the match's last tick (its `end`
+            # is still to be read) or a failure the iteration reconnects from. Either way
+            # the next perception, or the end, is the iteration's to report.
+            pass
 
     async def close(self) -> None:
         """Closes the socket: the agent goes back to its built-in brain."""
