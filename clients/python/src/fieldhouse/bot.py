@@ -64,8 +64,17 @@ class Socket:
         self.hello = hello
 
     @classmethod
-    async def open(cls, url: str, token: str | None = None, open_timeout_s: float = 10.0) -> Socket:
-        """Connects to ``url`` (the token, if any, as a bearer header) and reads ``hello``."""
+    async def open(
+        cls,
+        url: str,
+        token: str | None = None,
+        open_timeout_s: float = 10.0,
+        max_queue: int | None = 16,
+    ) -> Socket:
+        """Connects to ``url`` (the token, if any, as a bearer header) and reads ``hello``.
+        ``max_queue`` messages received but not yet read are buffered (None: without
+        limit; past a limit the socket stops reading, and the server drops a spectator
+        that does not take its frames)."""
         headers = {"Authorization": f"Bearer {token}"} if token else None
         try:
             ws = await connect(
@@ -74,6 +83,7 @@ class Socket:
                 max_size=None,  # the server's own messages may be large (PROTOCOL.md, Limits)
                 compression=None,
                 open_timeout=open_timeout_s,
+                max_queue=max_queue,
             )
         except InvalidStatus as e:
             raise _refusal(e) from None

@@ -45,7 +45,11 @@ in real time on the server (PROTOCOL.md, "Modes"), so a step takes at least 0.25
 
 Rewards come from the match's frames, read on a spectator socket the environment opens
 beside the bots (perceptions carry no score); the environment sets ``frame_hz`` to
-``tick_hz`` so that every tick's events arrive with the tick.
+``tick_hz`` so that every tick's events arrive with the tick. Each step waits for its tick's frame:
+with one frame at most in flight the server never skips one (its fan-out skips frames
+for a spectator that lags, and their events with them), and a skipped frame would raise
+rather than lose a catch. (Reading frames only when a ball ends is faster, and loses
+frames under load: BENCHMARKS.md, "Python clients".)
 """
 
 from __future__ import annotations
@@ -176,6 +180,7 @@ class FieldhouseParallelEnv(ParallelEnv):
         self._players: list[str] = []  # basketball: every player, in the hello's order
         self._offense: set[str] = set()
         self._points = 0
+        self._frame_tick: int | None = None
 
     def observation_space(self, agent: str) -> spaces.Space:
         return self.observation_spaces[agent]
@@ -237,6 +242,7 @@ class FieldhouseParallelEnv(ParallelEnv):
         self._players = [a["id"] for a in match["agents"]]
         self._offense = {a["id"] for a in match["agents"] if a.get("team") == "offense"}
         self._points = 0
+        self._frame_tick = None
         first = await self._perceive(self.possible_agents[0])
         if first is None:
             raise FieldhouseError("the match ended before its first perception", code="ended")
@@ -250,7 +256,9 @@ class FieldhouseParallelEnv(ParallelEnv):
         ticks = {p["tick"] for p in self._perceptions.values()}
         if len(ticks) != 1:
             raise FieldhouseError(f"the bots were seated at different ticks: {sorted(ticks)}", code="seat")
-        await self._read_frames(ticks.pop())
+        # The frames before the episode: their events are not its, and while the match
+        # ticked in real time (bots not yet seated) the server may have skipped some.
+        await self._read_frames(ticks.pop(), contiguous=False)
 
     async def _perceive(self, agent: str, after: int = -1, rejected: list | None = None) -> dict | None:
         """The agent's next perception after tick ``after`` (None at the match's end);
@@ -292,9 +300,9 @@ class FieldhouseParallelEnv(ParallelEnv):
         events, points = await self._read_frames(None if ended else tick)
         return ended, self._rewards(events, points), rejected
 
-    async def _read_frames(self, tick: int | None) -> tuple[list[dict], int]:
+    async def _read_frames(self, tick: int | None, contiguous: bool = True) -> tuple[list[dict], int]:
         """The events of the frames up to ``tick`` (to the match's end if None), and the
-        points scored in them."""
+        points scored in them; fly balls: ``contiguous`` frames, or an error."""
         events: list[dict] = []
         before = self._points
         while True:
@@ -304,6 +312,17 @@ class FieldhouseParallelEnv(ParallelEnv):
                 break  # the spectator socket closed after the end
             kind = message.get("type")
             if kind == "frame":
+                skipped = self._frame_tick is not None and message["tick"] != self._frame_tick + 1
+                if skipped and self.fly and contiguous:
+                    # The server's fan-out skips frames for a spectator that lags; their
+                    # events (a catch) would be lost and the rewards wrong. (Basketball's
+                    # reward is the score's points, which a later frame still carries.)
+                    raise FieldhouseError(
+                        f"the spectator socket skipped frames {self._frame_tick + 1} to "
+                        f"{message['tick'] - 1}: rewards would be wrong",
+                        code="skipped_frames",
+                    )
+                self._frame_tick = message["tick"]
                 events.extend(message.get("events", ()))
                 self._points = message["score"].get("points", 0)
                 if tick is not None and message["tick"] >= tick:
@@ -365,9 +384,10 @@ class FieldhouseParallelEnv(ParallelEnv):
     def _action(self, agent: str, action: Any) -> str:
         """The action's JSON for the command (built by hand: one step sends many)."""
         if self.fly:
-            ax, az = np.clip(np.asarray(action, np.float64), -1.0, 1.0)
+            # Plain floats: numpy's clip costs more than the rest of this on two numbers.
+            ax, az = (min(max(float(v), -1.0), 1.0) for v in action)
             limit = self._perceptions[agent]["perception"]["limits"]["max_accel_m_s2"]
-            return '{"kind":"accelerate","accel":[%r,%r]}' % (float(ax) * limit, float(az) * limit)
+            return '{"kind":"accelerate","accel":[%r,%r]}' % (ax * limit, az * limit)
         a = int(action)
         if a == 0:
             return '{"kind":"stand"}'

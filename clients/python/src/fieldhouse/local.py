@@ -64,6 +64,11 @@ class LocalServer:
     def __exit__(self, *exc: object) -> None:
         self.stop()
 
+    @property
+    def pid(self) -> int | None:
+        """The server process's id while it runs (benchmarks read its CPU time)."""
+        return self._process.pid if self._process is not None else None
+
     def client(self) -> Client:
         """A REST client for this server, with its admin token."""
         if self.url is None:
