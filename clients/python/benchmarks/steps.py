@@ -34,8 +34,12 @@ from fieldhouse.env import FieldhouseParallelEnv, basketball_scenario, fly_ball_
 # Thirty flies to centre field, one after the other: an episode long enough that a reset
 # (a match created and seated) does not enter the figure.
 LAUNCHES = [
-    {"time_s": 0.5 if i == 0 else 0.0, "speed_m_s": 30.0 + i % 10, "elevation_deg": 35.0 + i % 5 * 5,
-     "azimuth_deg": 40.0 + i % 3 * 5}
+    {
+        "time_s": 0.5 if i == 0 else 0.0,
+        "speed_m_s": 30.0 + i % 10,
+        "elevation_deg": 35.0 + i % 5 * 5,
+        "azimuth_deg": 40.0 + i % 3 * 5,
+    }
     for i in range(30)
 ]
 
@@ -54,7 +58,11 @@ class Meter:
         self.pid = pid
 
     def __enter__(self):
-        self.wall, self.client, self.server = time.perf_counter(), time.process_time(), server_cpu_s(self.pid)
+        self.wall, self.client, self.server = (
+            time.perf_counter(),
+            time.process_time(),
+            server_cpu_s(self.pid),
+        )
         return self
 
     def __exit__(self, *exc):
@@ -83,7 +91,9 @@ def bot_loop(server: LocalServer, steps: int) -> str:
         while done < steps:
             message = await socket.recv()
             if message["type"] == "perception":
-                await socket.send_text('{"type":"command","tick":%d,"action":{"kind":"stand"}}' % message["tick"])
+                await socket.send_text(
+                    '{"type":"command","tick":%d,"action":{"kind":"stand"}}' % message["tick"]
+                )
                 done += 1
             elif message["type"] == "end":
                 break
@@ -115,13 +125,29 @@ def main() -> None:
     parser.add_argument("--basketball-steps", type=int, default=40, help="default 40 (10 s)")
     args = parser.parse_args()
     with LocalServer(args.bin) as server:
-        print(f"server {server.binary}; Python {platform.python_version()} on {platform.machine()}, "
-              f"{os.cpu_count()} CPUs")
+        print(
+            f"server {server.binary}; Python {platform.python_version()} on {platform.machine()}, "
+            f"{os.cpu_count()} CPUs"
+        )
         print(bot_loop(server, args.steps))
-        print(run_env(server, "env fly ball, 1 bot", fly_ball_scenario(launches=LAUNCHES), args.steps,
-                      np.zeros(2, np.float32)))
-        print(run_env(server, "env basketball, 2 bots", basketball_scenario(possessions=20),
-                      args.basketball_steps, 0))
+        print(
+            run_env(
+                server,
+                "env fly ball, 1 bot",
+                fly_ball_scenario(launches=LAUNCHES),
+                args.steps,
+                np.zeros(2, np.float32),
+            )
+        )
+        print(
+            run_env(
+                server,
+                "env basketball, 2 bots",
+                basketball_scenario(possessions=20),
+                args.basketball_steps,
+                0,
+            )
+        )
 
 
 if __name__ == "__main__":

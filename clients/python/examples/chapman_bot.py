@@ -40,9 +40,27 @@ REACTION_S = 0.3
 # Balls for --server: toward the fielder's home (80 m out at azimuth 45), short, deep, wide.
 LAUNCHES = [
     {"time_s": 0.5, "speed_m_s": 36.0, "elevation_deg": 40.0, "azimuth_deg": 45.0},
-    {"time_s": 0.0, "speed_m_s": 33.0, "elevation_deg": 50.0, "azimuth_deg": 42.0, "spin_rpm": 1500.0},
-    {"time_s": 0.0, "speed_m_s": 40.0, "elevation_deg": 35.0, "azimuth_deg": 50.0, "spin_rpm": 2000.0},
-    {"time_s": 0.0, "speed_m_s": 38.0, "elevation_deg": 30.0, "azimuth_deg": 38.0, "spin_rpm": 2500.0},
+    {
+        "time_s": 0.0,
+        "speed_m_s": 33.0,
+        "elevation_deg": 50.0,
+        "azimuth_deg": 42.0,
+        "spin_rpm": 1500.0,
+    },
+    {
+        "time_s": 0.0,
+        "speed_m_s": 40.0,
+        "elevation_deg": 35.0,
+        "azimuth_deg": 50.0,
+        "spin_rpm": 2000.0,
+    },
+    {
+        "time_s": 0.0,
+        "speed_m_s": 38.0,
+        "elevation_deg": 30.0,
+        "azimuth_deg": 38.0,
+        "spin_rpm": 2500.0,
+    },
 ]
 HOME = [56.569, 56.569]
 

@@ -10,7 +10,16 @@ import time
 import pytest
 
 from fieldhouse import Bot, FielderPerception, MoveTo, PlayerPerception, RunTo, Stand
-from fieldhouse.errors import Ended, FieldhouseError, Forbidden, FutureTick, NotFound, Rejected, Replaced, StaleTick
+from fieldhouse.errors import (
+    Ended,
+    FieldhouseError,
+    Forbidden,
+    FutureTick,
+    NotFound,
+    Rejected,
+    Replaced,
+    StaleTick,
+)
 
 BALLS = [
     {"time_s": 0.5, "speed_m_s": 34.0, "elevation_deg": 45.0, "azimuth_deg": 45.0},
@@ -20,8 +29,12 @@ BALLS = [
 
 def fielder_match(client, mode: str = "lockstep", launches=BALLS):
     created = client.create_match(
-        {"sport": "baseball", "mode": mode, "agents": [{"id": "cf", "bot": True}],
-         "options": {"pause_s": 0.2, "launches": launches}}
+        {
+            "sport": "baseball",
+            "mode": mode,
+            "agents": [{"id": "cf", "bot": True}],
+            "options": {"pause_s": 0.2, "launches": launches},
+        }
     )
     return client.play_url(created.id), created.bot_tokens["cf"], created.id
 
@@ -32,7 +45,12 @@ def under_the_ball(p):
     if f.optics is None:
         return RunTo(f.body.home)
     x, z = f.body.position
-    return RunTo((x + f.optics.distance_m * math.cos(f.optics.alpha), z + f.optics.distance_m * math.sin(f.optics.alpha)))
+    return RunTo(
+        (
+            x + f.optics.distance_m * math.cos(f.optics.alpha),
+            z + f.optics.distance_m * math.sin(f.optics.alpha),
+        )
+    )
 
 
 def test_callback_style_plays_to_the_end(client):
@@ -45,13 +63,17 @@ def test_callback_style_plays_to_the_end(client):
 
     bot = Bot(url, token, on_perception=on_perception)
     end = asyncio.run(bot.run())
-    assert bot.hello.role == "bot" and bot.hello.agent == "cf" and bot.hello.match.sport == "baseball"
+    assert (
+        bot.hello.role == "bot" and bot.hello.agent == "cf" and bot.hello.match.sport == "baseball"
+    )
     assert end.reason == "finished" and end.result["balls"] == 2
     assert all(isinstance(p.perception, FielderPerception) for p in seen)
     # Lock-step: every tick perceived, none skipped, from the first after joining.
     ticks = [p.tick for p in seen]
     assert ticks == list(range(ticks[0], ticks[0] + len(ticks)))
-    assert any(p.perception.optics is not None and p.perception.optics.rates is not None for p in seen)
+    assert any(
+        p.perception.optics is not None and p.perception.optics.rates is not None for p in seen
+    )
 
 
 def test_iterator_style_and_async_callbacks(client):
@@ -171,11 +193,16 @@ def test_a_dropped_connection_reconnects_with_the_same_token(client):
 
 def test_basketball_perceptions_are_typed(client):
     created = client.create_match(
-        {"sport": "basketball", "mode": "lockstep", "agents": [
-            {"id": "o1", "team": "offense", "bot": True},
-            {"id": "o2", "team": "offense", "strategy": "costmap"},
-            {"id": "d1", "team": "defense", "strategy": "defense"}],
-         "options": {"possessions": 1}}
+        {
+            "sport": "basketball",
+            "mode": "lockstep",
+            "agents": [
+                {"id": "o1", "team": "offense", "bot": True},
+                {"id": "o2", "team": "offense", "strategy": "costmap"},
+                {"id": "d1", "team": "defense", "strategy": "defense"},
+            ],
+            "options": {"possessions": 1},
+        }
     )
 
     async def play():

@@ -17,7 +17,6 @@ from fieldhouse.env import (
     basketball_scenario,
     fly_ball_scenario,
 )
-
 from fieldhouse.messages import Optics, Rates
 
 from .conftest import REPO
@@ -32,7 +31,9 @@ def load_example(name: str):
 
 
 def test_fly_ball_env_passes_pettingzoo_parallel_api_test(server):
-    env = FieldhouseParallelEnv(server.url, fly_ball_scenario(fielders=2), admin_token=server.admin_token)
+    env = FieldhouseParallelEnv(
+        server.url, fly_ball_scenario(fielders=2), admin_token=server.admin_token
+    )
     try:
         parallel_api_test(env, num_cycles=400)
     finally:
@@ -42,7 +43,10 @@ def test_fly_ball_env_passes_pettingzoo_parallel_api_test(server):
 def test_basketball_env_passes_pettingzoo_parallel_api_test(server):
     # A step is 0.25 s of play, paced by the server: a few cycles.
     env = FieldhouseParallelEnv(
-        server.url, basketball_scenario(bots=("o1", "d1")), admin_token=server.admin_token, max_steps=8
+        server.url,
+        basketball_scenario(bots=("o1", "d1")),
+        admin_token=server.admin_token,
+        max_steps=8,
     )
     try:
         parallel_api_test(env, num_cycles=10)
@@ -53,7 +57,9 @@ def test_basketball_env_passes_pettingzoo_parallel_api_test(server):
 
 
 def test_single_fielder_passes_gymnasium_check_env(server):
-    env = FieldhouseGymEnv(server.url, fly_ball_scenario(), admin_token=server.admin_token, max_steps=50)
+    env = FieldhouseGymEnv(
+        server.url, fly_ball_scenario(), admin_token=server.admin_token, max_steps=50
+    )
     try:
         check_env(env, skip_render_check=True)
     finally:
@@ -84,7 +90,7 @@ def test_a_catch_is_rewarded_and_the_last_ball_terminates(server):
 
 def optics_of(obs: np.ndarray) -> Optics | None:
     """The optical variables of a fielder observation, as the perception gives them."""
-    v = dict(zip(FIELDER_OBSERVATION, obs.astype(float)))
+    v = dict(zip(FIELDER_OBSERVATION, obs.astype(float), strict=True))
     if not v["ball_in_play"]:
         return None
     rates = Rates(v["d_tan_psi_dt"], v["d_alpha_dt"])
@@ -93,7 +99,9 @@ def optics_of(obs: np.ndarray) -> Optics | None:
 
 def test_basketball_points_reward_offense_and_cost_defense(server):
     env = FieldhouseParallelEnv(
-        server.url, basketball_scenario(bots=("o1", "d1"), possessions=1), admin_token=server.admin_token
+        server.url,
+        basketball_scenario(bots=("o1", "d1"), possessions=1),
+        admin_token=server.admin_token,
     )
     try:
         env.reset(seed=1)

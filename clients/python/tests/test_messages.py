@@ -63,7 +63,9 @@ def schema_object(name: str, definition: str | None) -> dict:
     return obj
 
 
-@pytest.mark.parametrize(("cls", "name", "definition"), MIRRORS, ids=lambda v: getattr(v, "__name__", v))
+@pytest.mark.parametrize(
+    ("cls", "name", "definition"), MIRRORS, ids=lambda v: getattr(v, "__name__", v)
+)
 def test_dataclass_fields_are_the_schemas_properties(cls, name, definition):
     obj = schema_object(name, definition)
     properties = set(obj["properties"]) - {"type"}

@@ -14,7 +14,9 @@ ONE_BALL = {
     "sport": "baseball",
     "mode": "fast",
     "agents": [{"id": "cf", "strategy": "chapman"}],
-    "options": {"launches": [{"time_s": 0.0, "speed_m_s": 34.0, "elevation_deg": 45.0, "azimuth_deg": 45.0}]},
+    "options": {
+        "launches": [{"time_s": 0.0, "speed_m_s": 34.0, "elevation_deg": 45.0, "azimuth_deg": 45.0}]
+    },
 }
 
 
@@ -28,16 +30,23 @@ def wait_ended(client: Client, match_id: str) -> dict:
 
 def test_create_list_get_delete(client):
     created = client.create_match(
-        {"sport": "basketball", "name": "rest test", "agents": [
-            {"id": "o1", "team": "offense", "bot": True},
-            {"id": "d1", "team": "defense", "strategy": "defense"}]}
+        {
+            "sport": "basketball",
+            "name": "rest test",
+            "agents": [
+                {"id": "o1", "team": "offense", "bot": True},
+                {"id": "d1", "team": "defense", "strategy": "defense"},
+            ],
+        }
     )
     assert set(created.bot_tokens) == {"o1"} and len(created.bot_tokens["o1"]) == 32
     listed = {m["id"]: m for m in client.list_matches()}
     assert listed[created.id]["name"] == "rest test"
     assert [a["bot_slot"] for a in listed[created.id]["agents"]] == [True, False]
     full = client.get_match(created.id)
-    assert full["scenario"]["sport"] == "basketball" and full["match"]["perception_every_ticks"] == 15
+    assert (
+        full["scenario"]["sport"] == "basketball" and full["match"]["perception_every_ticks"] == 15
+    )
     client.delete_match(created.id)
     with pytest.raises(NotFound) as e:
         client.get_match(created.id)

@@ -130,7 +130,9 @@ def _refusal(e: InvalidStatus) -> FieldhouseError:
         err = json.loads(e.response.body)["error"]
         return error_for(err["code"], err["message"], status)
     except (ValueError, KeyError, TypeError):
-        return FieldhouseError(f"the upgrade was refused with HTTP {status}", code="http", status=status)
+        return FieldhouseError(
+            f"the upgrade was refused with HTTP {status}", code="http", status=status
+        )
 
 
 def _closed(e: WsClosed) -> FieldhouseError:
@@ -198,7 +200,9 @@ class Bot:
         if self._socket is None:
             raise ConnectionClosed("the bot is not connected")
         try:
-            await self._socket.send({"type": "command", "tick": int(tick), "action": action_to_wire(action)})
+            await self._socket.send(
+                {"type": "command", "tick": int(tick), "action": action_to_wire(action)}
+            )
         except ConnectionClosed:
             # The socket closed under the command: after the match's last tick (its `end`
             # is still to be read) or a failure the iteration reconnects from. Either way
@@ -245,7 +249,12 @@ class Bot:
                 if attempts == 0:
                     raise
                 return None  # the match ended while the bot was away: nothing left to play
-            except (ConnectionClosed, OSError, asyncio.TimeoutError, websockets.InvalidHandshake) as e:
+            except (
+                ConnectionClosed,
+                OSError,
+                asyncio.TimeoutError,
+                websockets.InvalidHandshake,
+            ) as e:
                 if self.end is not None:
                     return None
                 if attempts >= self.reconnects:

@@ -119,7 +119,11 @@ def _outfield_home(i: int, n: int) -> list[float]:
 def basketball_scenario(bots: tuple[str, ...] = ("o1", "d1"), possessions: int = 2) -> dict:
     """The paper's 2-v-1 (``o1``, ``o2`` against ``d1``) with ``bots`` played by the
     environment and the others by their built-in brains, for ``possessions``."""
-    line_up = [("o1", "offense", "costmap"), ("o2", "offense", "costmap"), ("d1", "defense", "defense")]
+    line_up = [
+        ("o1", "offense", "costmap"),
+        ("o2", "offense", "costmap"),
+        ("d1", "defense", "defense"),
+    ]
     return {
         "sport": "basketball",
         "agents": [
@@ -255,12 +259,16 @@ class FieldhouseParallelEnv(ParallelEnv):
                 raise FieldhouseError("the match ended while the bots were seated", code="ended")
         ticks = {p["tick"] for p in self._perceptions.values()}
         if len(ticks) != 1:
-            raise FieldhouseError(f"the bots were seated at different ticks: {sorted(ticks)}", code="seat")
+            raise FieldhouseError(
+                f"the bots were seated at different ticks: {sorted(ticks)}", code="seat"
+            )
         # The frames before the episode: their events are not its, and while the match
         # ticked in real time (bots not yet seated) the server may have skipped some.
         await self._read_frames(ticks.pop(), contiguous=False)
 
-    async def _perceive(self, agent: str, after: int = -1, rejected: list | None = None) -> dict | None:
+    async def _perceive(
+        self, agent: str, after: int = -1, rejected: list | None = None
+    ) -> dict | None:
         """The agent's next perception after tick ``after`` (None at the match's end);
         refusals of its commands go to ``rejected``."""
         socket = self._bots[agent]
@@ -285,7 +293,10 @@ class FieldhouseParallelEnv(ParallelEnv):
             if agent not in actions:
                 raise KeyError(f"no action for agent {agent!r}")
             tick = self._perceptions[agent]["tick"]
-            text = '{"type":"command","tick":%d,"action":%s}' % (tick, self._action(agent, actions[agent]))
+            text = '{"type":"command","tick":%d,"action":%s}' % (
+                tick,
+                self._action(agent, actions[agent]),
+            )
             try:
                 await self._bots[agent].send_text(text)
             except ConnectionClosed:
@@ -300,7 +311,9 @@ class FieldhouseParallelEnv(ParallelEnv):
         events, points = await self._read_frames(None if ended else tick)
         return ended, self._rewards(events, points), rejected
 
-    async def _read_frames(self, tick: int | None, contiguous: bool = True) -> tuple[list[dict], int]:
+    async def _read_frames(
+        self, tick: int | None, contiguous: bool = True
+    ) -> tuple[list[dict], int]:
         """The events of the frames up to ``tick`` (to the match's end if None), and the
         points scored in them; fly balls: ``contiguous`` frames, or an error."""
         events: list[dict] = []
@@ -361,7 +374,11 @@ class FieldhouseParallelEnv(ParallelEnv):
     def _court_observation(self, agent: str, p: dict) -> np.ndarray:
         ball = p["ball"]
         holder = ball.get("holder")
-        out = [p["shot_clock_s"], *ball["position"], *(float(ball["state"] == s) for s in BALL_STATES)]
+        out = [
+            p["shot_clock_s"],
+            *ball["position"],
+            *(float(ball["state"] == s) for s in BALL_STATES),
+        ]
         seen = {a["id"]: a for a in p["agents"]}
         for player in self._players:
             a = seen.get(player)
