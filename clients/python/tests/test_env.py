@@ -17,6 +17,7 @@ from fieldhouse.env import (
     basketball_scenario,
     fly_ball_scenario,
 )
+from fieldhouse.errors import NotFound
 from fieldhouse.messages import Optics, Rates
 
 from .conftest import REPO
@@ -113,12 +114,17 @@ def test_basketball_points_reward_offense_and_cost_defense(server):
                 totals[agent] += r
         assert totals["o1"] == -totals["d1"]
         assert all(terms.values())
-        final = env.client.get_match(env.match_id)["score"]
+        match_id = env.match_id
+        final = env.client.get_match(match_id)["score"]
         assert totals["o1"] == final["points"]
     finally:
         env.close()
+    with pytest.raises(NotFound):  # close() deletes the match
+        env.client.get_match(match_id)
 
 
-def test_reset_needs_a_bot():
+def test_scenarios_without_the_right_bots_are_refused():
     with pytest.raises(ValueError, match="bot"):
         FieldhouseParallelEnv("http://127.0.0.1:1", {"sport": "baseball"})
+    with pytest.raises(ValueError, match="FieldhouseParallelEnv"):
+        FieldhouseGymEnv("http://127.0.0.1:1", fly_ball_scenario(fielders=2))
