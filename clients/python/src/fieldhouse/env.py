@@ -3,7 +3,8 @@ wrapper (needs the ``env`` extra: ``pip install './clients/python[env]'``).
 
 **Episodes.** :meth:`FieldhouseParallelEnv.reset` creates a ``lockstep`` match on the
 server from the scenario (sport, line-up: the agents with ``"bot": true`` are the
-environment's agents; the others play their built-in strategies), seats a bot on each
+environment's agents; the others play their built-in strategies) with the match seed
+``seed`` (else the next of a sequence the last seed given started), seats a bot on each
 agent, and returns their first perceptions. :meth:`~FieldhouseParallelEnv.step` sends one
 command per agent for the tick it perceived; the server plays on once every bot has
 answered (PROTOCOL.md, "Modes") and the next perceptions are the observations. The match's
@@ -177,6 +178,7 @@ class FieldhouseParallelEnv(ParallelEnv):
         self.action_spaces = {a: act for a in self.possible_agents}
         self.match_id: str | None = None
         self.steps = 0
+        self._seeds = np.random.default_rng()
         self._loop = asyncio.new_event_loop()
         self._bots: dict[str, Socket] = {}
         self._spectator: Socket | None = None
@@ -196,9 +198,12 @@ class FieldhouseParallelEnv(ParallelEnv):
 
     def reset(self, seed: int | None = None, options: dict | None = None):
         self._end_match()
-        scenario = copy.deepcopy(self.scenario)
+        # The match's seed: ``seed``, or else the next draw of a generator that the last
+        # seed given started, so that episodes differ and a seeded run repeats.
         if seed is not None:
-            scenario["seed"] = int(seed)
+            self._seeds = np.random.default_rng(seed)
+        scenario = copy.deepcopy(self.scenario)
+        scenario["seed"] = int(seed) if seed is not None else int(self._seeds.integers(1 << 31))
         created = self.client.create_match(scenario)
         self.match_id = created.id
         self._run(self._seat(created.bot_tokens))
