@@ -1,0 +1,154 @@
+"""Environment steps per second over loopback, and where the time goes.
+
+    cargo build --release
+    FIELDHOUSE_BIN=target/release/fieldhouse python clients/python/benchmarks/steps.py
+
+Starts its own server (``fieldhouse serve --no-demo`` on a free port) and measures, one
+after the other:
+
+* ``bot loop``: one fielder's bare protocol loop on :class:`fieldhouse.Socket` (a
+  perception in, a command out, nothing else): the floor the environment stands on;
+* ``env fly ball, 1 bot``: :class:`FieldhouseParallelEnv` stepping one fielder through
+  scripted balls (a step is a tick; its frame read on the spectator socket for rewards);
+* ``env basketball, 2 bots``: ``o1`` and ``d1`` of the 2-v-1 (a step is 15 ticks, of
+  which the server plays 14 in real time: at most 4 steps a second by design).
+
+For each: steps per second (wall clock), and the CPU time per step of this process
+(the client) and of the server process (from /proc), so a figure below target says
+whose time it is. Actions are constant, so no policy's cost is counted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import os
+import platform
+import time
+
+import numpy as np
+
+from fieldhouse import LocalServer, Socket
+from fieldhouse.env import FieldhouseParallelEnv, basketball_scenario, fly_ball_scenario
+
+# Thirty flies to centre field, one after the other: an episode long enough that a reset
+# (a match created and seated) does not enter the figure.
+LAUNCHES = [
+    {
+        "time_s": 0.5 if i == 0 else 0.0,
+        "speed_m_s": 30.0 + i % 10,
+        "elevation_deg": 35.0 + i % 5 * 5,
+        "azimuth_deg": 40.0 + i % 3 * 5,
+    }
+    for i in range(30)
+]
+
+
+def server_cpu_s(pid: int) -> float:
+    """User plus system CPU seconds of process ``pid`` (Linux /proc)."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+class Meter:
+    """Wall time and both processes' CPU time over a stretch of steps."""
+
+    def __init__(self, pid: int):
+        self.pid = pid
+
+    def __enter__(self):
+        self.wall, self.client, self.server = (
+            time.perf_counter(),
+            time.process_time(),
+            server_cpu_s(self.pid),
+        )
+        return self
+
+    def __exit__(self, *exc):
+        self.wall = time.perf_counter() - self.wall
+        self.client = time.process_time() - self.client
+        self.server = server_cpu_s(self.pid) - self.server
+
+    def row(self, name: str, steps: int) -> str:
+        us = 1e6 / steps
+        return (
+            f"{name:<26} {steps:>6} steps {steps / self.wall:>8.0f} steps/s   per step: "
+            f"wall {self.wall * us:>7.0f} µs, client CPU {self.client * us:>6.0f} µs, "
+            f"server CPU {self.server * us:>6.0f} µs"
+        )
+
+
+def bot_loop(server: LocalServer, steps: int) -> str:
+    client = server.client()
+    scenario = fly_ball_scenario(launches=LAUNCHES)
+    scenario["mode"] = "lockstep"
+    created = client.create_match(scenario)
+
+    async def play() -> int:
+        socket = await Socket.open(client.play_url(created.id), created.bot_tokens["f0"])
+        done = 0
+        while done < steps:
+            message = await socket.recv()
+            if message["type"] == "perception":
+                await socket.send_text(
+                    '{"type":"command","tick":%d,"action":{"kind":"stand"}}' % message["tick"]
+                )
+                done += 1
+            elif message["type"] == "end":
+                break
+        await socket.close()
+        return done
+
+    with Meter(server.pid) as m:
+        done = asyncio.run(play())
+    client.delete_match(created.id)
+    return m.row("bot loop (no env)", done)
+
+
+def run_env(server: LocalServer, name: str, scenario: dict, steps: int, action) -> str:
+    env = FieldhouseParallelEnv(server.url, scenario, admin_token=server.admin_token)
+    env.reset(seed=1)
+    done = 0
+    with Meter(server.pid) as m:
+        while env.agents and done < steps:
+            env.step({a: action for a in env.agents})
+            done += 1
+    env.close()
+    return m.row(name, done)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--bin", help="the server binary (default $FIELDHOUSE_BIN)")
+    parser.add_argument("--steps", type=int, default=5000, help="fly-ball steps (default 5000)")
+    parser.add_argument("--basketball-steps", type=int, default=40, help="default 40 (10 s)")
+    args = parser.parse_args()
+    with LocalServer(args.bin) as server:
+        print(
+            f"server {server.binary}; Python {platform.python_version()} on {platform.machine()}, "
+            f"{os.cpu_count()} CPUs"
+        )
+        print(bot_loop(server, args.steps))
+        print(
+            run_env(
+                server,
+                "env fly ball, 1 bot",
+                fly_ball_scenario(launches=LAUNCHES),
+                args.steps,
+                np.zeros(2, np.float32),
+            )
+        )
+        print(
+            run_env(
+                server,
+                "env basketball, 2 bots",
+                basketball_scenario(possessions=20),
+                args.basketball_steps,
+                0,
+            )
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,127 @@
+"""The REST API (PROTOCOL.md, "HTTP endpoints"): matches and replays.
+
+Plain ``urllib``: a bot or a training script makes a handful of these calls per match,
+so a connection pool would buy nothing and cost a dependency. Every error answer
+(``{"error": {"code", "message"}}``) is raised as its class from :mod:`fieldhouse.errors`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import urllib.error
+import urllib.parse
+import urllib.request
+from dataclasses import dataclass
+from typing import Any
+
+from .errors import FieldhouseError, error_for
+
+
+@dataclass
+class CreatedMatch:
+    """The answer to ``POST /api/matches``: the id, and a token per bot agent (shown once)."""
+
+    id: str
+    bot_tokens: dict[str, str]
+
+
+class Client:
+    """A fieldhouse server's REST API at ``url`` (``http://127.0.0.1:7878``).
+
+    ``admin_token`` (default: ``FIELDHOUSE_ADMIN_TOKEN``) is needed to create and delete
+    matches; listing and replays need none.
+    """
+
+    def __init__(self, url: str, admin_token: str | None = None, timeout_s: float = 10.0):
+        self.url = url.rstrip("/")
+        self.admin_token = admin_token or os.environ.get("FIELDHOUSE_ADMIN_TOKEN")
+        self.timeout_s = timeout_s
+
+    # --- matches ---------------------------------------------------------------------
+
+    def create_match(self, scenario: dict) -> CreatedMatch:
+        """Creates a match from a scenario (``proto/scenario.schema.json``)."""
+        body = self._json("POST", "/api/matches", scenario, admin=True)
+        return CreatedMatch(id=body["id"], bot_tokens=body.get("bot_tokens", {}))
+
+    def list_matches(self) -> list[dict]:
+        """Every match the server holds: sport, mode, status, tick, score, agents."""
+        return self._json("GET", "/api/matches")["matches"]
+
+    def get_match(self, match_id: str) -> dict:
+        """One match in full: the summary, ``match`` (as in hello) and ``scenario``."""
+        return self._json("GET", f"/api/matches/{_segment(match_id)}")
+
+    def delete_match(self, match_id: str) -> None:
+        """Ends the match (its clients get ``end`` with reason ``deleted``) and removes it."""
+        self._json("DELETE", f"/api/matches/{_segment(match_id)}", admin=True)
+
+    # --- replays ---------------------------------------------------------------------
+
+    def list_replays(self) -> list[dict]:
+        """The server's replay directory (empty if it records none)."""
+        return self._json("GET", "/api/replays")["replays"]
+
+    def download_replay(self, replay_id: str, path: str | os.PathLike | None = None) -> bytes:
+        """The replay file as stored (format 2: zstd); written to ``path`` if given."""
+        data = self._request("GET", f"/api/replays/{_segment(replay_id)}")
+        if path is not None:
+            with open(path, "wb") as f:
+                f.write(data)
+        return data
+
+    # --- WebSocket addresses ---------------------------------------------------------
+
+    def ws_url(self, path: str) -> str:
+        """The ``ws://`` (or ``wss://``) address of a socket route on this server."""
+        scheme, rest = self.url.split("://", 1)
+        return f"{'wss' if scheme == 'https' else 'ws'}://{rest}{path}"
+
+    def play_url(self, match_id: str) -> str:
+        """Where a bot of ``match_id`` connects (its token goes in a header)."""
+        return self.ws_url(f"/ws/matches/{_segment(match_id)}/play")
+
+    def spectate_url(self, match_id: str) -> str:
+        """Where a spectator of ``match_id`` connects."""
+        return self.ws_url(f"/ws/matches/{_segment(match_id)}")
+
+    # --- plumbing --------------------------------------------------------------------
+
+    def _json(self, method: str, path: str, body: Any = None, *, admin: bool = False) -> Any:
+        return json.loads(self._request(method, path, body, admin=admin))
+
+    def _request(self, method: str, path: str, body: Any = None, *, admin: bool = False) -> bytes:
+        headers = {"Accept": "application/json"}
+        data = None
+        if body is not None:
+            data = json.dumps(body).encode()
+            headers["Content-Type"] = "application/json"
+        if admin:
+            if not self.admin_token:
+                raise FieldhouseError(
+                    f"{method} {path} needs the admin token: pass admin_token= "
+                    "or set FIELDHOUSE_ADMIN_TOKEN",
+                    code="unauthorized",
+                )
+            headers["Authorization"] = f"Bearer {self.admin_token}"
+        request = urllib.request.Request(self.url + path, data, headers, method=method)
+        try:
+            with urllib.request.urlopen(request, timeout=self.timeout_s) as answer:
+                return answer.read()
+        except urllib.error.HTTPError as e:
+            raise _http_error(e) from None
+
+
+def _segment(s: str) -> str:
+    return urllib.parse.quote(s, safe="")
+
+
+def _http_error(e: urllib.error.HTTPError) -> FieldhouseError:
+    raw = e.read()
+    try:
+        err = json.loads(raw)["error"]
+        return error_for(err["code"], err["message"], e.code)
+    except (ValueError, KeyError, TypeError):
+        text = raw.decode(errors="replace").strip() or e.reason
+        return FieldhouseError(str(text), code="http", status=e.code)
