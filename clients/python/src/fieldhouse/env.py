@@ -25,8 +25,8 @@ basketball episode may start a few ticks into its first possession.
   (m, m/s). These are exactly the perception's fields (PROTOCOL.md, "`perception`").
 * Action: ``Box(-1, 1, (2,))``: an acceleration ``[ax, az]`` in units of the body's
   ``max_accel_m_s2``, sent as ``accelerate`` (the server clips its length to the body).
-* Reward: 1 on the step whose tick the agent caught a ball (a ``caught`` event naming it),
-  else 0.
+* Reward: 1 on the step whose tick the agent caught a ball (its perception's ``caught``
+  count rose), else 0.
 
 **Basketball** players perceive every 15 ticks (0.25 s of play); the 14 ticks between run
 in real time on the server (PROTOCOL.md, "Modes"), so a step takes at least 0.25 s.
@@ -44,13 +44,12 @@ in real time on the server (PROTOCOL.md, "Modes"), so a step takes at least 0.25
 * Reward: the offense's points scored during the step, for each offensive player; their
   negative for each defender.
 
-Rewards come from the match's frames, read on a spectator socket the environment opens
-beside the bots (perceptions carry no score); the environment sets ``frame_hz`` to
-``tick_hz`` so that every tick's events arrive with the tick. Each step waits for its tick's frame:
-with one frame at most in flight the server never skips one (its fan-out skips frames
-for a spectator that lags, and their events with them), and a skipped frame would raise
-rather than lose a catch. (Reading frames only when a ball ends is faster, and loses
-frames under load: BENCHMARKS.md, "Python clients".)
+A fielder's rewards come from its own perceptions (``caught``), so a fly-ball environment
+holds only its bots' sockets. Basketball's come from the match's frames, read on a
+spectator socket the environment opens beside the bots (a player's perception carries no
+score); the environment sets ``frame_hz`` to ``tick_hz`` so that every tick's events arrive
+with the tick, and each step reads the frames up to its tick (a frame the server's
+fan-out skips for a lagging spectator costs nothing: a later frame carries the score).
 """
 
 from __future__ import annotations
@@ -186,7 +185,6 @@ class FieldhouseParallelEnv(ParallelEnv):
         self._players: list[str] = []  # basketball: every player, in the hello's order
         self._offense: set[str] = set()
         self._points = 0
-        self._frame_tick: int | None = None
 
     def observation_space(self, agent: str) -> spaces.Space:
         return self.observation_spaces[agent]
@@ -243,7 +241,8 @@ class FieldhouseParallelEnv(ParallelEnv):
         first bot's first perception T is answered by every bot (a command for T is in
         the window for a bot seated later, and answers for it: PROTOCOL.md, "Tick
         checks"), so the next tick perceives them all together."""
-        self._spectator = await Socket.open(self.client.spectate_url(self.match_id))
+        if not self.fly:
+            self._spectator = await Socket.open(self.client.spectate_url(self.match_id))
         url = self.client.play_url(self.match_id)
         for agent in self.possible_agents:
             self._bots[agent] = await Socket.open(url, tokens[agent])
@@ -251,7 +250,6 @@ class FieldhouseParallelEnv(ParallelEnv):
         self._players = [a["id"] for a in match["agents"]]
         self._offense = {a["id"] for a in match["agents"] if a.get("team") == "offense"}
         self._points = 0
-        self._frame_tick = None
         first = await self._perceive(self.possible_agents[0])
         if first is None:
             raise FieldhouseError("the match ended before its first perception", code="ended")
@@ -267,9 +265,9 @@ class FieldhouseParallelEnv(ParallelEnv):
             raise FieldhouseError(
                 f"the bots were seated at different ticks: {sorted(ticks)}", code="seat"
             )
-        # The frames before the episode: their events are not its, and while the match
-        # ticked in real time (bots not yet seated) the server may have skipped some.
-        await self._read_frames(ticks.pop(), contiguous=False)
+        if not self.fly:
+            # The frames before the episode: their points are not its.
+            await self._read_frames(ticks.pop())
 
     async def _perceive(
         self, agent: str, after: int = -1, rejected: list | None = None
@@ -308,20 +306,20 @@ class FieldhouseParallelEnv(ParallelEnv):
                 pass  # the match ended on the tick perceived: its `end` is read below
         rejected: dict[str, list] = {a: [] for a in self.agents}
         ended = False
+        caught = {a: self._caught(a) for a in self.agents}
         for agent in self.agents:
             before = self._perceptions[agent]["tick"]
             if await self._perceive(agent, before, rejected[agent]) is None:
                 ended = True
+        if self.fly:
+            # The tick of a catch is perceived (the server perceives before it ends).
+            return ended, {a: float(self._caught(a) - caught[a]) for a in self.agents}, rejected
         tick = max(p["tick"] for p in self._perceptions.values())
-        events, points = await self._read_frames(None if ended else tick)
-        return ended, self._rewards(events, points), rejected
+        points = await self._read_frames(None if ended else tick)
+        return ended, self._points_rewards(points), rejected
 
-    async def _read_frames(
-        self, tick: int | None, contiguous: bool = True
-    ) -> tuple[list[dict], int]:
-        """The events of the frames up to ``tick`` (to the match's end if None), and the
-        points scored in them; fly balls: ``contiguous`` frames, or an error."""
-        events: list[dict] = []
+    async def _read_frames(self, tick: int | None) -> int:
+        """The points scored in the frames up to ``tick`` (to the match's end if None)."""
         before = self._points
         while True:
             try:
@@ -330,24 +328,12 @@ class FieldhouseParallelEnv(ParallelEnv):
                 break  # the spectator socket closed after the end
             kind = message.get("type")
             if kind == "frame":
-                skipped = self._frame_tick is not None and message["tick"] != self._frame_tick + 1
-                if skipped and self.fly and contiguous:
-                    # The server's fan-out skips frames for a spectator that lags; their
-                    # events (a catch) would be lost and the rewards wrong. (Basketball's
-                    # reward is the score's points, which a later frame still carries.)
-                    raise FieldhouseError(
-                        f"the spectator socket skipped frames {self._frame_tick + 1} to "
-                        f"{message['tick'] - 1}: rewards would be wrong",
-                        code="skipped_frames",
-                    )
-                self._frame_tick = message["tick"]
-                events.extend(message.get("events", ()))
                 self._points = message["score"].get("points", 0)
                 if tick is not None and message["tick"] >= tick:
                     break
             elif kind == "end":
                 break
-        return events, self._points - before
+        return self._points - before
 
     async def _close_sockets(self) -> None:
         for socket in [*self._bots.values(), self._spectator]:
@@ -425,10 +411,11 @@ class FieldhouseParallelEnv(ParallelEnv):
             return '{"kind":"move_to","target":[%r,%r]}' % (x, z)
         return '{"kind":"pass","to":"%s"}' % self._players[a - 10]
 
-    def _rewards(self, events: list[dict], points: int) -> dict[str, float]:
-        if self.fly:
-            catches = [e.get("by") for e in events if e.get("kind") == "caught"]
-            return {a: float(catches.count(a)) for a in self.agents}
+    def _caught(self, agent: str) -> int:
+        """The balls the fielder has caught so far, as its latest perception says."""
+        return self._perceptions[agent]["perception"].get("caught", 0)
+
+    def _points_rewards(self, points: int) -> dict[str, float]:
         return {a: float(points if a in self._offense else -points) for a in self.agents}
 
 

@@ -149,6 +149,8 @@ class FielderPerception:
 
     body: SelfSensed = _wire("self", metadata={"nested": SelfSensed, "many": False})
     ball_in_play: bool = False
+    #: Balls this fielder has caught in the match so far.
+    caught: int = 0
     limits: BodyLimits = _nested(BodyLimits, default=None)
     optics: Optics | None = _nested(Optics, default=None)
 

@@ -207,6 +207,9 @@ impl Serialize for Event {
 pub struct Sensed {
     /// Whether a ball is in flight (then `optics` is given).
     pub ball_in_play: bool,
+    /// Balls this fielder has caught in the match so far (a reward a learning agent can
+    /// read from its own perceptions).
+    pub caught: u32,
     /// What the fielder's body can do.
     pub limits: BodyLimits,
     /// The ball as the fielder's eye sees it; null between balls.

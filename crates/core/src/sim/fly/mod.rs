@@ -52,6 +52,9 @@ struct Fielding {
     order: Option<FielderOrder>,
     /// The sighting of the previous tick, for a bot's rates.
     last_seen: Option<Sighting>,
+    /// Balls it has caught in this match: its bot perceives them (a learning agent's
+    /// reward needs no spectator socket).
+    caught: u32,
 }
 
 #[derive(Debug, Clone)]
@@ -114,6 +117,7 @@ impl FlyWorld {
                 by_bot: false,
                 order: None,
                 last_seen: None,
+                caught: 0,
             })
             .collect();
         Ok(FlyWorld {
@@ -276,6 +280,7 @@ impl FlyWorld {
                     {
                         if pass.caught_s.is_some() {
                             self.score.caught += 1;
+                            f.caught += 1;
                             events.push(AnyEvent::Fly(Event::Caught {
                                 by: f.id.clone(),
                                 ball: self.score.balls,

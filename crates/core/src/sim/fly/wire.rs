@@ -118,6 +118,7 @@ impl FlyWorld {
         let limits = &f.config.limits;
         Sensed {
             ball_in_play: optics.is_some(),
+            caught: f.caught,
             limits: BodyLimits {
                 max_accel_m_s2: limits.max_accel,
                 max_speed_m_s: limits.max_speed,
