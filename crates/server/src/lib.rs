@@ -28,6 +28,7 @@
 //! * [`admission`]: who may open a WebSocket: origin and host policy, room for
 //!   spectators.
 //! * [`metrics`]: Prometheus counters.
+//! * [`motion`]: the motion poses a spectator poses skeletons from, served once.
 //! * [`demo`]: the built-in demo matches.
 //! * [`agones`]: running as an Agones game server (Ready, Health, Shutdown).
 //! * [`web`]: the spectator page from `web/`, embedded in the binary.
@@ -46,6 +47,7 @@ pub mod hosts;
 pub mod listener;
 pub mod match_task;
 pub mod metrics;
+pub mod motion;
 pub mod range;
 pub mod recording;
 pub mod replay_dir;
@@ -132,6 +134,7 @@ pub async fn serve(
         replays: replay_dir::Replays::default(),
         replay_written: tokio::sync::Notify::new(),
         connections: connections.clone(),
+        poses: Default::default(),
     });
     if config.demo {
         demo::start_all(&app);
@@ -203,6 +206,7 @@ pub fn router(app: Arc<AppState>) -> Router {
         .route("/api/matches/{id}", get(api::show).delete(api::delete))
         .route("/api/matches/{id}/costmap/{agent}", get(api::costmap))
         .route("/api/costmaps/{behaviour}", get(api::behaviour_costmap))
+        .route("/api/motion/{behaviour}", get(motion::poses))
         .route("/api/replays", get(replays::list))
         .route("/api/replays/{id}", get(replays::download))
         .layer(TimeoutLayer::with_status_code(
