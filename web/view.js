@@ -7,6 +7,7 @@ import { FlyView } from "./fly.js";
 import { Player } from "./player.js";
 import { Stream } from "./stream.js";
 import { Timeline } from "./timeline.js";
+import { View3d } from "./view3d.js";
 
 const LOG_LINES = 300;
 /** The agent picker's choice that follows whoever has the ball. */
@@ -27,6 +28,16 @@ export function showView(kind, id) {
   let connection = { state: "connecting", detail: "" };
   let shownHud = "";
   let shown = null;
+  // The 3-D view, while it is toggled on (view3d.js).
+  let three = null;
+  const toggle3d = () => {
+    three?.dispose();
+    three = three || !hello ? null : new View3d($("view3d"), hello);
+    $("view3d").hidden = !three;
+    $("field").hidden = Boolean(three);
+    $("toggle3d").textContent = three ? "2-D view" : "3-D view";
+  };
+  $("toggle3d").addEventListener("click", toggle3d);
 
   const onHello = (msg) => {
     hello = msg;
@@ -35,6 +46,7 @@ export function showView(kind, id) {
     ended = null;
     const basketball = msg.match.field.kind === "basketball";
     sport = basketball ? new CourtView(msg) : new FlyView(msg);
+    if (three) { three.dispose(); three = new View3d($("view3d"), msg); }
     $("title").textContent = `${msg.match.name || msg.match.id} · ${msg.match.sport}${replay ? " (replay)" : ""}`;
     $("source").textContent = `motion: ${msg.match.motion_source}`;
     $("fly-panels").hidden = basketball;
@@ -115,7 +127,8 @@ export function showView(kind, id) {
       if (sample) {
         holder = sample.ball.holder ?? holder ?? sample.agents[0]?.id;
         const agent = selected === FOLLOW_BALL ? holder : selected;
-        sport.draw($("field"), sample, agent);
+        if (three) three.draw(sample, agent, sport.flight);
+        else sport.draw($("field"), sample, agent);
         sport.drawPanels(sample, agent);
       }
       hud(sample);
@@ -162,5 +175,7 @@ export function showView(kind, id) {
     player?.close();
     $("agent").removeEventListener("change", onPick);
     $("field").removeEventListener("click", onClick);
+    $("toggle3d").removeEventListener("click", toggle3d);
+    if (three) toggle3d();
   };
 }
