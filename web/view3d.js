@@ -39,7 +39,7 @@ export class View3d {
       library(behaviour).then((lib) => { this.libs[behaviour] = lib; }, (e) => { this.failed = e.message; });
     }
 
-    this.renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    this.renderer = new THREE.WebGLRenderer({ antialias: false });
     this.renderer.setPixelRatio(Math.min(2, window.devicePixelRatio || 1));
     this.canvas = this.renderer.domElement;
     this.canvas.setAttribute("aria-label", "the match in 3-D");
