@@ -134,7 +134,6 @@ pub async fn serve(
         replays: replay_dir::Replays::default(),
         replay_written: tokio::sync::Notify::new(),
         connections: connections.clone(),
-        poses: Default::default(),
     });
     if config.demo {
         demo::start_all(&app);
@@ -206,7 +205,10 @@ pub fn router(app: Arc<AppState>) -> Router {
         .route("/api/matches/{id}", get(api::show).delete(api::delete))
         .route("/api/matches/{id}/costmap/{agent}", get(api::costmap))
         .route("/api/costmaps/{behaviour}", get(api::behaviour_costmap))
-        .route("/api/motion/{behaviour}", get(motion::poses))
+        .route("/api/motion/{behaviour}", {
+            let docs = Arc::new(motion::PoseDocuments::new(app.caps.clone()));
+            get(move |behaviour, request| motion::poses(behaviour, docs.clone(), request))
+        })
         .route("/api/replays", get(replays::list))
         .route("/api/replays/{id}", get(replays::download))
         .layer(TimeoutLayer::with_status_code(

@@ -455,7 +455,6 @@ mod tests {
             replays: Default::default(),
             replay_written: tokio::sync::Notify::new(),
             connections: Arc::new(crate::listener::Connections::new(16, 64)),
-            poses: Default::default(),
         };
         (Arc::new(app), stop)
     }

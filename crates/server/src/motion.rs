@@ -3,10 +3,10 @@
 //! first asking and kept; the browser keeps them too, revalidating by ETag.
 
 use super::api::ApiError;
-use super::state::AppState;
-use axum::extract::{Path, State};
+use axum::extract::Path;
 use axum::http::{header, HeaderMap, HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Response};
+use fieldhouse_core::basketball::Capabilities;
 use fieldhouse_core::motion::PoseLibrary;
 use std::hash::{Hash, Hasher};
 use std::sync::{Arc, OnceLock};
@@ -20,20 +20,31 @@ struct Served {
     etag: HeaderValue,
 }
 
-/// Each behaviour's document, built once (a few hundred kilobytes to a megabyte of JSON
-/// each: worth building once, not per spectator).
-#[derive(Default)]
-pub struct PoseDocuments([OnceLock<Served>; 3]);
+/// Each behaviour's document, built once (up to a megabyte of JSON: worth building once,
+/// not per spectator), from the capabilities the server's matches move with.
+pub struct PoseDocuments {
+    caps: Arc<Capabilities>,
+    served: [OnceLock<Served>; 3],
+}
+
+impl PoseDocuments {
+    pub fn new(caps: Arc<Capabilities>) -> PoseDocuments {
+        PoseDocuments {
+            caps,
+            served: Default::default(),
+        }
+    }
+}
 
 pub async fn poses(
     Path(behaviour): Path<String>,
-    State(app): State<Arc<AppState>>,
+    docs: Arc<PoseDocuments>,
     request: HeaderMap,
 ) -> Result<Response, ApiError> {
     let (k, mover) = BEHAVIOURS
         .iter()
         .position(|b| *b == behaviour)
-        .and_then(|k| Some((k, app.caps.by_behaviour(&behaviour)?)))
+        .and_then(|k| Some((k, docs.caps.by_behaviour(&behaviour)?)))
         .ok_or_else(|| {
             ApiError::new(
                 StatusCode::NOT_FOUND,
@@ -44,7 +55,7 @@ pub async fn poses(
                 ),
             )
         })?;
-    let served = app.poses.0[k].get_or_init(|| {
+    let served = docs.served[k].get_or_init(|| {
         let body = serde_json::to_string(&PoseLibrary::of(&mover.graph))
             .expect("pose libraries serialise");
         // The body's own hash: a server started with other capture serves other poses

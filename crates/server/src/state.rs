@@ -115,8 +115,6 @@ pub struct AppState {
     pub replay_written: tokio::sync::Notify,
     /// Open connections, per client address and in all.
     pub connections: Arc<super::listener::Connections>,
-    /// The motion poses served to spectators, built on first asking.
-    pub poses: super::motion::PoseDocuments,
 }
 
 impl AppState {
