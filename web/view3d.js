@@ -241,7 +241,9 @@ export class View3d {
     this.aim(sample, selected);
     this.renderer.render(this.scene, this.camera);
     this.renders += 1;
-    Object.assign(this.state, { tick: sample.tick, time_s: sample.time_s, agents: shown, renders: this.renders, camera: this.mode });
+    const c = this.camera.position;
+    Object.assign(this.state, { tick: sample.tick, time_s: sample.time_s, agents: shown, renders: this.renders, camera: this.mode,
+      eye: [c.x, c.y, c.z], looking: this.camera.getWorldDirection(new THREE.Vector3()).toArray(), ball: sample.ball.position });
     const text = this.failed ? `poses unavailable: ${this.failed}` : eyeText ?? "";
     if (text !== this.overlayText) this.overlay.textContent = this.overlayText = text;
   }

@@ -103,8 +103,16 @@ async function main() {
   await page.locator('#view3d button[data-camera="eye"]').click();
   const eye = await until("baseball 3-D: the fielder's eye sees a ball rise", 60_000, () => page.evaluate(() => {
     const text = document.querySelector("#view3d .overlay3d").textContent;
-    return /tan ψ \d/.test(text) && window.fieldhouse3d.agents.some((a) => a.speed > 3) && { text, agents: window.fieldhouse3d.agents };
+    const s = window.fieldhouse3d;
+    return /tan ψ \d/.test(text) && s.agents.some((a) => a.speed > 3) && { text, ...structuredClone(s) };
   }));
+  // The camera is the selected fielder's eye (the picker's first, lf), looking at the ball.
+  const lf = eye.agents.find((a) => a.id === "lf");
+  const toBall = eye.ball.map((b, k) => b - eye.eye[k]);
+  const norm = Math.hypot(...toBall);
+  const aim = toBall.reduce((d, x, k) => d + (x / norm) * eye.looking[k], 0);
+  check(Math.abs(eye.eye[0] - lf.position[0]) < 1e-6 && Math.abs(eye.eye[2] - lf.position[1]) < 1e-6 && Math.abs(eye.eye[1] - 1.7) < 1e-6 && aim > 0.9999,
+    `baseball 3-D: the eye camera stands at lf's eye, 1.7 m up, looking at the ball (cos ${aim})`);
   check(eye.agents.length === 3 && eye.agents.every((a) => a.joints.length === libs.run.joints.length),
     `baseball 3-D: three fielders posed from the run capture; the eye says "${eye.text}"`);
   await page.locator("#view3d").screenshot({ path: join(ARTIFACTS, "view3d-fielders-eye.png") });
