@@ -40,7 +40,7 @@ async fn demo_matches_are_listed_and_stream_schema_valid_frames() {
         assert_eq!(hello["type"], "hello");
         assert_eq!(
             (hello["protocol"].as_str(), hello["version"].as_u64()),
-            (Some("fieldhouse"), Some(2))
+            (Some("fieldhouse"), Some(3))
         );
         assert_eq!(hello["role"], "spectator");
         // The embedded capture by default, named without any path of the server's.
@@ -976,5 +976,80 @@ async fn a_basketball_agents_cost_map_is_served_at_its_pose() {
             }
             other => panic!("{path}: {other:?}"),
         }
+    }
+}
+
+/// The poses a spectator draws players with: served once per behaviour (revalidated by
+/// ETag), indexed by the frames' `node` and `blend`, whose frames stay within 1 KB.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn motion_poses_are_served_once_and_frames_name_them_by_node_and_blend() {
+    let server = Server::start(&[]);
+    let mut socket = connect(&server.ws("/ws/matches/demo-basketball")).await;
+    assert_eq!(next_of(&mut socket, "hello").await["version"], 3);
+    // Frames until a player blends across a cut (the CMU graphs cut every second or so).
+    let (mut blended, mut largest) = (None, 0);
+    for _ in 0..900 {
+        let Some(Ok(Message::Text(text))) = socket.next().await else {
+            panic!("the socket closed");
+        };
+        largest = largest.max(text.len());
+        let frame: Value = serde_json::from_str(&text).unwrap();
+        if let Some(p) = frame["agents"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p.get("blend").is_some())
+        {
+            assert_valid(&frame);
+            blended = Some(p.clone());
+            break;
+        }
+    }
+    let player = blended.expect("a player blends across a cut within 30 s");
+    assert!(largest <= 1024, "a basketball frame of {largest} bytes");
+    let behaviour = player
+        .get("graph")
+        .unwrap_or(&player["behaviour"])
+        .as_str()
+        .unwrap();
+    let url = server.http(&format!("/api/motion/{behaviour}"));
+    let response = ureq::get(&url).call().unwrap();
+    assert_eq!(response.header("cache-control"), Some("no-cache"));
+    let etag = response.header("etag").unwrap().to_string();
+    let poses: Value = response.into_json().unwrap();
+    assert_eq!(poses["behaviour"], behaviour);
+    let joints = poses["joints"].as_array().unwrap().len();
+    assert!(joints >= 20, "a CMU skeleton has 31 joints, not {joints}");
+    assert_eq!(poses["parents"].as_array().unwrap().len(), joints);
+    let all = poses["poses_mm"].as_array().unwrap();
+    let [node, from] = [&player["node"], &player["blend"][0]].map(|n| n.as_u64().unwrap());
+    let weight = player["blend"][1].as_f64().unwrap();
+    assert!((0.0..=1.0).contains(&weight), "{player}");
+    for n in [node, from] {
+        let pose = all[n as usize].as_array().expect("the node has a pose");
+        assert_eq!(pose.len(), 3 * joints);
+        // The root stands on the ground under the hips, about a metre up.
+        assert_eq!([&pose[0], &pose[2]], [&json!(0), &json!(0)]);
+        assert!((700..1200).contains(&pose[1].as_i64().unwrap()), "{pose:?}");
+    }
+    // The browser's copy stays good: asked again with its tag, nothing is sent.
+    let again = ureq::get(&url).set("If-None-Match", &etag).call().unwrap();
+    assert_eq!(again.status(), 304);
+    assert_eq!(again.into_string().unwrap(), "");
+    // Running loops for the fielders come with the run poses, their slide stated.
+    let run = server.get("/api/motion/run");
+    let strides = run["strides"].as_array().unwrap();
+    assert!(!strides.is_empty());
+    assert!(strides
+        .iter()
+        .all(|s| s["foot_slide_m"].as_f64().unwrap() <= 0.10));
+    match ureq::get(&server.http("/api/motion/swimming")).call() {
+        Err(ureq::Error::Status(404, r)) => {
+            assert_eq!(
+                r.into_json::<Value>().unwrap()["error"]["code"],
+                "no_motion"
+            )
+        }
+        other => panic!("{other:?}"),
     }
 }

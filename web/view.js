@@ -7,6 +7,7 @@ import { FlyView } from "./fly.js";
 import { Player } from "./player.js";
 import { Stream } from "./stream.js";
 import { Timeline } from "./timeline.js";
+import { View3d } from "./view3d.js";
 
 const LOG_LINES = 300;
 /**
@@ -14,7 +15,7 @@ const LOG_LINES = 300;
  * but a browser can keep an old page open (or cached) across a server upgrade: a hello
  * of another protocol or version is refused with a message, never half-understood.
  */
-export const PROTOCOL = { name: "fieldhouse", versions: [2] };
+export const PROTOCOL = { name: "fieldhouse", versions: [3] };
 /** The agent picker's choice that follows whoever has the ball. */
 const FOLLOW_BALL = "@ball";
 
@@ -34,6 +35,16 @@ export function showView(kind, id) {
   let connection = { state: "connecting", detail: "" };
   let shownHud = "";
   let shown = null;
+  // The 3-D view, while it is toggled on (view3d.js).
+  let three = null;
+  const toggle3d = () => {
+    three?.dispose();
+    three = three || !hello ? null : new View3d($("view3d"), hello);
+    $("view3d").hidden = !three;
+    $("field").hidden = Boolean(three);
+    $("toggle3d").textContent = three ? "2-D view" : "3-D view";
+  };
+  $("toggle3d").addEventListener("click", toggle3d);
 
   const onHello = (msg) => {
     if (msg.protocol !== PROTOCOL.name || !PROTOCOL.versions.includes(msg.version)) {
@@ -52,6 +63,7 @@ export function showView(kind, id) {
     ended = null;
     const basketball = msg.match.field.kind === "basketball";
     sport = basketball ? new CourtView(msg) : new FlyView(msg);
+    if (three) { three.dispose(); three = new View3d($("view3d"), msg); }
     $("title").textContent = `${msg.match.name || msg.match.id} · ${msg.match.sport}${replay ? " (replay)" : ""}`;
     $("source").textContent = `motion: ${msg.match.motion_source}`;
     $("fly-panels").hidden = basketball;
@@ -142,7 +154,8 @@ export function showView(kind, id) {
         namePickedAgents(sample);
         holder = sample.ball.holder ?? holder ?? sample.agents[0]?.id;
         const agent = selected === FOLLOW_BALL ? holder : selected;
-        sport.draw($("field"), sample, agent);
+        if (three) three.draw(sample, agent, sport.flight);
+        else sport.draw($("field"), sample, agent);
         sport.drawPanels(sample, agent);
       }
       hud(sample);
@@ -205,5 +218,7 @@ export function showView(kind, id) {
     player?.close();
     $("agent").removeEventListener("change", onPick);
     $("field").removeEventListener("click", onClick);
+    $("toggle3d").removeEventListener("click", toggle3d);
+    if (three) toggle3d();
   };
 }

@@ -133,3 +133,21 @@ test("a decision's safe squares decode to the centres of exactly the squares who
   assert.deepEqual(safeSquares(court, { box: [0, 0, rows, columns], bits }), expected);
   assert.deepEqual(safeSquares(court, null), []);
 });
+
+test("a runner's pose is phase-matched to the distance run: one loop later, the same pose", async () => {
+  const { poseRunner, strideFor } = await import("../../web/pose.js");
+  // Two joints, a root and a foot; a loop of four frames 2 m long at 4 m/s.
+  const lib = {
+    standing: 0,
+    poses_mm: [[0, 1000, 0, 0, 0, 0], [0, 1000, 0, 500, 0, 0], [0, 1000, 0, 0, 0, 0], [0, 1000, 0, -500, 0, 0]],
+    strides: [{ nodes: [0, 1, 2, 3], length_m: 2, speed_m_s: 4 }, { nodes: [1, 2], length_m: 1, speed_m_s: 2 }],
+  };
+  assert.equal(strideFor(lib, 3.5).speed_m_s, 4);
+  assert.equal(strideFor(lib, 0.1), null);
+  const a = poseRunner(lib, 4, 0.75, [10, 5], Math.PI / 2);
+  const b = poseRunner(lib, 4, 2.75, [10, 5], Math.PI / 2);
+  assert.deepEqual(a, b);
+  // 0.75 m is 1.5 frames in: halfway from frame 1 (foot 0.5 m ahead) to frame 2 (0),
+  // turned to face +z.
+  assert.ok(Math.abs(a[1][2] - 5.25) < 1e-12 && Math.abs(a[1][0] - 10) < 1e-12, JSON.stringify(a));
+});

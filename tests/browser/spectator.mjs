@@ -393,7 +393,7 @@ async function main() {
   await newer.goto(`${base}/#/matches/demo-baseball`);
   await newer.locator("#mismatch").waitFor({ state: "visible", timeout: 10_000 });
   const mismatch = await newer.locator("#mismatch").textContent();
-  check(/version 2/.test(mismatch) && /version 99/.test(mismatch) && /Reload/.test(mismatch),
+  check(/version 3/.test(mismatch) && /version 99/.test(mismatch) && /Reload/.test(mismatch),
     `version: a hello of version 99 is refused with a message: ${mismatch}`);
   check(await newer.locator("#hud-tick").count() === 0, "version: no frame is drawn after a refused hello");
   await newer.screenshot({ path: join(ARTIFACTS, "version-mismatch.png") });

@@ -35,7 +35,7 @@
 //!   the `simple` and `costmap` offenses, and the possession experiment.
 //! * [`sim`]: a whole match of any sport as one deterministic [`sim::World`]: scenarios
 //!   checked field by field, fly balls with fielders, basketball, bots' commands.
-//! * [`protocol`]: the WebSocket messages (version 2) as Rust types, as the server sends
+//! * [`protocol`]: the WebSocket messages (version 3) as Rust types, as the server sends
 //!   and reads them; frames are written with their numbers rounded to a millimetre.
 //! * [`tags`]: the constant strings on the wire (`"type": "frame"`, `"controller":
 //!   "bot"`) as types, which the game's own views share with the protocol.

@@ -3,7 +3,7 @@
 //! match tasks, headless runs and replay verification all drive one, so a replay's
 //! frames and a live match's are the same bytes from the same code.
 
-use crate::protocol::{write_frame, Event, Frame};
+use crate::protocol::{write_frame, Event, Frame, FrameShape};
 use crate::sim::World;
 use crate::tags;
 
@@ -18,6 +18,8 @@ pub struct Session {
     events: Vec<Event>,
     /// The tick of the last frame encoded.
     framed: Option<u64>,
+    /// The protocol version the frames are written in.
+    shape: FrameShape,
 }
 
 impl Session {
@@ -30,7 +32,14 @@ impl Session {
             frame_every: ((tick_hz / frame_hz).round() as u64).max(1),
             events: Vec::new(),
             framed: None,
+            shape: FrameShape::CURRENT,
         }
+    }
+
+    /// The session writing its frames as an older protocol version did: what verifying
+    /// a replay recorded in that version compares.
+    pub fn in_shape(self, shape: FrameShape) -> Session {
+        Session { shape, ..self }
     }
 
     /// The frame of the world as it is now, with the events since the last one, its
@@ -44,7 +53,8 @@ impl Session {
     /// Appends the frame of the world as it is now to `out` (one line, no newline): what
     /// a headless run does, batching frames without a buffer of their own each.
     pub fn frame_into(&mut self, out: &mut Vec<u8>) {
-        let (ball, agents, score) = self.world.state();
+        let (ball, mut agents, score) = self.world.state();
+        self.shape.shape(&mut agents);
         let tick = self.world.tick();
         write_frame(
             out,

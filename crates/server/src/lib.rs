@@ -28,6 +28,7 @@
 //! * [`admission`]: who may open a WebSocket: origin and host policy, room for
 //!   spectators.
 //! * [`metrics`]: Prometheus counters.
+//! * [`motion`]: the motion poses a spectator poses skeletons from, served once.
 //! * [`demo`]: the built-in demo matches.
 //! * [`agones`]: running as an Agones game server (Ready, Health, Shutdown).
 //! * [`web`]: the spectator page from `web/`, embedded in the binary.
@@ -46,6 +47,7 @@ pub mod hosts;
 pub mod listener;
 pub mod match_task;
 pub mod metrics;
+pub mod motion;
 pub mod range;
 pub mod recording;
 pub mod replay_dir;
@@ -203,6 +205,10 @@ pub fn router(app: Arc<AppState>) -> Router {
         .route("/api/matches/{id}", get(api::show).delete(api::delete))
         .route("/api/matches/{id}/costmap/{agent}", get(api::costmap))
         .route("/api/costmaps/{behaviour}", get(api::behaviour_costmap))
+        .route("/api/motion/{behaviour}", {
+            let docs = Arc::new(motion::PoseDocuments::new(app.caps.clone()));
+            get(move |behaviour, request| motion::poses(behaviour, docs.clone(), request))
+        })
         .route("/api/replays", get(replays::list))
         .route("/api/replays/{id}", get(replays::download))
         .layer(TimeoutLayer::with_status_code(

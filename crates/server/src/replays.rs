@@ -289,6 +289,7 @@ async fn view(
             frames: index.len(),
             id,
             last_tick,
+            protocol: fieldhouse_core::replay::protocol(&index.header),
         }),
         ..Hello::new(Role::Replay, &index.header["match"], limits(app))
     });

@@ -31,7 +31,18 @@ const ASSETS: &[(&str, &str, &str)] = &[
     ("court.js", JS, include_str!("../../../web/court.js")),
     ("player.js", JS, include_str!("../../../web/player.js")),
     ("labels.js", JS, include_str!("../../../web/labels.js")),
+    ("view3d.js", JS, include_str!("../../../web/view3d.js")),
+    ("pose.js", JS, include_str!("../../../web/pose.js")),
+    (
+        VENDORED_THREE,
+        JS,
+        include_str!("../../../web/vendor/three-0.170.0.module.min.js"),
+    ),
 ];
+
+/// three.js, vendored (web/vendor/README.md): its version is in its name, so a browser
+/// may keep it for good; a new version is a new name.
+const VENDORED_THREE: &str = "three-0.170.0.module.min.js";
 
 const JS: &str = "text/javascript; charset=utf-8";
 
@@ -70,11 +81,18 @@ pub async fn file(Path(name): Path<String>) -> Response {
 fn asset(name: &str) -> Response {
     match ASSETS.iter().find(|(n, _, _)| *n == name) {
         // `no-cache`: the browser revalidates, so a new binary's page is never mixed
-        // with an old one's modules.
-        Some((_, media_type, body)) => (
+        // with an old one's modules (but for the versioned library).
+        Some((file, media_type, body)) => (
             [
                 (header::CONTENT_TYPE, *media_type),
-                (header::CACHE_CONTROL, "no-cache"),
+                (
+                    header::CACHE_CONTROL,
+                    if *file == VENDORED_THREE {
+                        "public, max-age=31536000, immutable"
+                    } else {
+                        "no-cache"
+                    },
+                ),
             ],
             *body,
         )

@@ -18,7 +18,7 @@ from dataclasses import MISSING, dataclass, field, fields
 from typing import Any, ClassVar, Union
 
 PROTOCOL = "fieldhouse"
-VERSION = 2
+VERSION = 3
 
 
 def _wire(name: str, **kw: Any) -> Any:

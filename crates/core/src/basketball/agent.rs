@@ -2,7 +2,7 @@
 
 use super::capability::Stride;
 use crate::costmap::AgentPose;
-use crate::motion::Walker;
+use crate::motion::{Blend, MotionGraph, Walker};
 use glam::DVec2;
 use schemars::JsonSchema;
 use serde::Serialize;
@@ -43,6 +43,9 @@ pub enum Action {
 #[derive(Debug, Clone)]
 pub struct Movement {
     strides: Vec<Stride>,
+    /// Per stride, the blend its pose shows ([`MotionGraph::blend_on`] along the walk),
+    /// so a spectator poses the body as playback would, cuts blended.
+    blends: Vec<Option<Blend>>,
     /// Data frames played so far (fractional: ticks need not fall on frames).
     played: f64,
     /// What the move was planned for: the goal on the court and the behaviour.
@@ -51,25 +54,43 @@ pub struct Movement {
 }
 
 impl Movement {
-    pub(crate) fn new(strides: Vec<Stride>, goal: DVec2, behaviour: &'static str) -> Movement {
+    /// A move along `strides` on `graph`; `carried` is the blend the body shows at the
+    /// first stride (a move that goes on from the node being played goes on with its
+    /// blend).
+    pub(crate) fn new(
+        strides: Vec<Stride>,
+        goal: DVec2,
+        behaviour: &'static str,
+        graph: &MotionGraph,
+        carried: Option<Blend>,
+    ) -> Movement {
         debug_assert!(!strides.is_empty());
+        let mut shown = carried;
+        let blends = std::iter::once(carried)
+            .chain(strides.windows(2).map(|w| {
+                shown = graph.blend_on(shown, w[0].node, w[1].cut);
+                shown
+            }))
+            .collect();
         Movement {
             strides,
+            blends,
             played: 0.0,
             goal,
             behaviour,
         }
     }
 
-    /// Plays `frames` more data frames; returns where the body is and the node playing.
-    pub fn advance(&mut self, frames: f64) -> (Walker, u32) {
+    /// Plays `frames` more data frames; returns where the body is, the node playing and
+    /// the blend its pose shows.
+    pub fn advance(&mut self, frames: f64) -> (Walker, u32, Option<Blend>) {
         let last = self.strides.len() - 1;
         self.played = (self.played + frames).min(last as f64);
         let k = (self.played as usize).min(last);
         let f = self.played - k as f64;
         let a = self.strides[k];
         let Some(b) = self.strides.get(k + 1) else {
-            return (a.at, a.node);
+            return (a.at, a.node, self.blends[k]);
         };
         let facing = a.at.facing.lerp(b.at.facing, f);
         let at = Walker {
@@ -80,7 +101,9 @@ impl Movement {
                 b.at.facing
             },
         };
-        (at, if f < 0.5 { a.node } else { b.node })
+        // The pose is the nearer stride's, with its blend.
+        let shown = if f < 0.5 { k } else { k + 1 };
+        (at, self.strides[shown].node, self.blends[shown])
     }
 
     pub(crate) fn finished(&self) -> bool {
@@ -97,6 +120,8 @@ pub(crate) struct Agent {
     pub node: Option<u32>,
     /// The behaviour whose graph `node` is of: a move with it goes on from `node`.
     pub playing: Option<&'static str>,
+    /// The cut `node` is being blended from, if it is.
+    pub blend: Option<Blend>,
     pub(crate) action: Action,
     pub(super) movement: Option<Movement>,
     /// When it next decides (the agents re-plan a few times a second).
@@ -116,6 +141,7 @@ impl Agent {
             pose: AgentPose { position, heading },
             node: None,
             playing: None,
+            blend: None,
             action: Action::Standing,
             movement: None,
             next_plan_s: 0.0,
@@ -127,12 +153,13 @@ impl Agent {
     /// Plays the current move on by `frames` data frames.
     pub(super) fn advance(&mut self, frames: f64) {
         if let Some(m) = &mut self.movement {
-            let (at, node) = m.advance(frames);
+            let (at, node, blend) = m.advance(frames);
             self.pose = AgentPose {
                 position: at.position,
                 heading: at.heading(),
             };
             self.node = Some(node);
+            self.blend = blend;
             self.playing = Some(m.behaviour);
             if m.finished() {
                 self.movement = None;

@@ -233,7 +233,18 @@ impl Game {
                     .cell(goal)
                     .filter(|&c| reach.on_court(c, court, margin_m))
                     .or_else(|| reach.toward(goal, court, margin_m))?;
-                Some(Movement::new(reach.strides(cell), goal, mover.behaviour))
+                // A move that goes on from the node being played goes on with its blend.
+                let carried = match self.motion_of(k, mover) {
+                    Motion::Node(_) => self.agents[k].blend,
+                    _ => None,
+                };
+                Some(Movement::new(
+                    reach.strides(cell),
+                    goal,
+                    mover.behaviour,
+                    &mover.graph,
+                    carried,
+                ))
             })
         });
     }

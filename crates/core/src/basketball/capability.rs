@@ -71,6 +71,9 @@ pub enum Motion {
 pub struct Stride {
     pub(crate) at: Walker,
     pub(crate) node: u32,
+    /// Whether the body got to `node` by a transition (a cut into another clip), which
+    /// playback blends over.
+    pub(crate) cut: bool,
 }
 
 impl Mover {
@@ -206,6 +209,7 @@ impl Mover {
         let start = Stride {
             at,
             node: map.start_node,
+            cut: false,
         };
         std::iter::once(start).chain(self.play(&map.paths[cell], at))
     }
@@ -214,11 +218,13 @@ impl Mover {
     fn play<'a>(&'a self, edges: &'a [u32], at: Walker) -> impl Iterator<Item = Stride> + 'a {
         let steps = edges.iter().flat_map(move |&id| {
             let (step, turn, k) = self.edge_frames[id as usize];
-            std::iter::repeat_n((step, turn, self.graph.edges[id as usize].to), k)
+            let e = &self.graph.edges[id as usize];
+            // A transition is a cut on its first frame only.
+            (0..k).map(move |i| (step, turn, e.to, e.transition && i == 0))
         });
-        steps.scan(at, |at, (step, turn, node)| {
+        steps.scan(at, |at, (step, turn, node, cut)| {
             *at = at.after(&step, turn);
-            Some(Stride { at: *at, node })
+            Some(Stride { at: *at, node, cut })
         })
     }
 
@@ -302,6 +308,7 @@ impl Reach<'_> {
         let first = Stride {
             at: self.start,
             node: self.node,
+            cut: false,
         };
         let lead = self.lead.map_or(&[][..], |l| &l.edges[..]);
         std::iter::once(first)

@@ -205,14 +205,24 @@ pub struct PlayerView<'a> {
     pub action: Action,
     /// The behaviour whose motion graph it walks: `dribble`, `run` or `defense`.
     pub behaviour: &'static str,
+    /// Present while the pose blends across a cut (protocol 3): the node of the clip being
+    /// left and the weight of `node`'s pose, as the motion graph's playback blends them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub blend: Option<PoseBlend>,
     /// Present, as `bot`, while a connected bot moves the player.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub controller: Option<tags::Bot>,
+    /// Present when `node` is of another behaviour's graph than `behaviour` (protocol 3):
+    /// a player standing after a move of another behaviour still shows that move's last
+    /// pose.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub graph: Option<&'static str>,
     /// Radians from +x toward +z.
     pub heading: f64,
     /// Its id.
     pub id: &'a str,
-    /// The motion graph node it is playing, while it moves.
+    /// The motion graph node it is playing, while it moves (and, once it stops, the last
+    /// one it played).
     pub node: Option<u32>,
     /// [x, z] on the court, m.
     pub position: [f64; 2],
@@ -220,6 +230,14 @@ pub struct PlayerView<'a> {
     #[serde(skip)]
     pub(crate) team: Team,
 }
+
+/// A pose blended across a cut: `[from, weight]`, the node of the clip being left and
+/// how much of the node being entered shows (0 to 1). A client poses the body as
+/// `pose(from) + weight × (pose(node) − pose(from))`, joint by joint, from the poses
+/// `GET /api/motion/{behaviour}` serves. An array, since frames go 30 times a second to
+/// every spectator.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
+pub struct PoseBlend(pub u32, pub f64);
 
 /// Where the ball is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]

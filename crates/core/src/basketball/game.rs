@@ -16,7 +16,7 @@
 use super::agent::{Agent, Team};
 use super::capability::Capabilities;
 use super::decision::Candidate;
-use super::event::{BallState, BallView, Event, Outcome, PlayerView, Snapshot};
+use super::event::{BallState, BallView, Event, Outcome, PlayerView, PoseBlend, Snapshot};
 use super::params::GameParams;
 use glam::DVec2;
 use rand::{Rng, SeedableRng};
@@ -603,18 +603,28 @@ impl Game {
                 .agents
                 .iter()
                 .enumerate()
-                .map(|(k, a)| PlayerView {
-                    id: &a.id,
-                    team: a.team,
-                    controller: crate::tags::controller(self.is_controlled(k)),
-                    behaviour: a
+                .map(|(k, a)| {
+                    let behaviour = a
                         .movement
                         .as_ref()
-                        .map_or_else(|| self.behaviour_of(k), |m| m.behaviour),
-                    position: a.pose.position.to_array(),
-                    heading: a.pose.heading,
-                    node: a.node,
-                    action: a.action,
+                        .map_or_else(|| self.behaviour_of(k), |m| m.behaviour);
+                    let graph = a.playing.filter(|&p| p != behaviour);
+                    let blend = a.blend.and_then(|b| {
+                        let mover = self.caps.by_behaviour(a.playing?)?;
+                        Some(PoseBlend(b.from, mover.graph.blend_weight(&b)))
+                    });
+                    PlayerView {
+                        id: &a.id,
+                        team: a.team,
+                        controller: crate::tags::controller(self.is_controlled(k)),
+                        behaviour,
+                        blend,
+                        graph,
+                        position: a.pose.position.to_array(),
+                        heading: a.pose.heading,
+                        node: a.node,
+                        action: a.action,
+                    }
                 })
                 .collect(),
         }

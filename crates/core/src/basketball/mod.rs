@@ -31,7 +31,7 @@ pub use capability::{Capabilities, DefenderMotion, Motion, Mover, Reach, StateMa
 pub use court::Court;
 pub use decision::{Candidate, Chosen, Decision, DecisionParams, Keep, Opponent, Situation};
 pub use eval::{compare, evaluate, Comparison, EvalReport};
-pub use event::{BallState, BallView, ChosenView, Event, Outcome, PlayerView};
+pub use event::{BallState, BallView, ChosenView, Event, Outcome, PlayerView, PoseBlend};
 pub use game::{Game, Order};
 pub use params::{Brain, DefenderModel, DefenderParams, GameParams, SimpleParams};
 pub use shot::ShotModel;

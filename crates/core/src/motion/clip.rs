@@ -38,6 +38,9 @@ pub struct Clip {
     pub(crate) fps: f64,
     /// Joint names, in the order of each frame's positions.
     pub(crate) joint_names: Vec<String>,
+    /// Each joint's parent (always an earlier joint; `None` for the root): the bones a
+    /// spectator draws between joints.
+    pub(crate) parents: Vec<Option<usize>>,
     /// Global joint positions, frame-major: `positions[f * joints + j]`. Joint 0 is the root.
     positions: Vec<DVec3>,
     /// Heading of the body per frame: angle of its forward direction on the ground,
@@ -88,14 +91,28 @@ impl Clip {
                 forward.z.atan2(forward.x)
             })
             .collect();
+        // Without a hierarchy (a synthetic clip), every joint hangs from the root.
+        let parents = (0..joints).map(|j| (j > 0).then_some(0)).collect();
         Ok(Clip {
             name,
             behaviour: behaviour.into(),
             fps,
             joint_names,
+            parents,
             positions,
             headings,
         })
+    }
+
+    /// The clip with the skeleton's hierarchy: each joint's parent, an earlier joint (as
+    /// a BVH file lists them).
+    pub(crate) fn with_parents(self, parents: Vec<Option<usize>>) -> Clip {
+        debug_assert!(parents.len() == self.joint_count());
+        debug_assert!(parents
+            .iter()
+            .enumerate()
+            .all(|(j, p)| p.is_none_or(|p| p < j)));
+        Clip { parents, ..self }
     }
 
     pub(crate) fn joint_count(&self) -> usize {

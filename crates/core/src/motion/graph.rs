@@ -157,6 +157,10 @@ pub struct MotionGraph {
     /// origin, facing +x), for playback.
     poses: Vec<DVec3>,
     joints: usize,
+    /// The skeleton the poses are of: joint names, in the order of a pose's positions.
+    pub joint_names: Vec<String>,
+    /// Each joint's parent (`None` for the root), for drawing bones.
+    pub joint_parents: Vec<Option<usize>>,
     /// The counts a user checks the graph by.
     pub stats: GraphStats,
 }
@@ -353,6 +357,8 @@ impl MotionGraph {
             out_start,
             poses,
             joints,
+            joint_names: clips[0].joint_names.clone(),
+            joint_parents: clips[0].parents.clone(),
             stats,
         })
     }

@@ -196,7 +196,8 @@ fn clip_from_bvh(
     let joints = bvh.joints.len();
     let positions = resample(&positions, joints, capture_rate(bvh.frame_time), fps);
     let names = bvh.joints.iter().map(|j| j.name.clone()).collect();
-    Ok(Clip::new(name, behaviour, fps, names, positions)?)
+    let parents = bvh.joints.iter().map(|j| j.parent).collect();
+    Ok(Clip::new(name, behaviour, fps, names, positions)?.with_parents(parents))
 }
 
 /// The capture rate in Hz. Files write the frame time rounded (`.0083333` for 120 Hz),

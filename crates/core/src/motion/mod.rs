@@ -7,7 +7,8 @@
 //! shots), which ends the part of a clip the ground-locomotion graphs use.
 //! `transitions` finds where clips can cut into each other (`alignment` is the ground
 //! alignment it uses), `graph` turns clips and transitions into a [`MotionGraph`], and
-//! `playback` plays a walk on it as a body, blending across transitions.
+//! `playback` plays a walk on it as a body, blending across transitions; `poses` is a
+//! graph's poses and running loops as a spectator draws them.
 
 mod alignment;
 mod bvh;
@@ -18,6 +19,7 @@ mod jump;
 mod library;
 mod loader;
 mod playback;
+mod poses;
 mod resample;
 mod skeleton;
 mod step;
@@ -36,7 +38,8 @@ pub use graph::{
 pub use jump::Jump;
 pub use library::{LibraryError, LoadProblem, MotionLibrary, MotionSource};
 pub use loader::parse_clip;
-pub use playback::PlaybackFrame;
+pub use playback::{Blend, PlaybackFrame};
+pub use poses::{PoseLibrary, StrideCycle, MAX_FOOT_SLIDE_M};
 pub use step::{wrap_angle, Node, RootStep};
 pub use walker::Walker;
 

@@ -2,7 +2,7 @@
 //! transition blends the clip being left into the clip being entered over the window,
 //! with an ease-in/ease-out weight, so a cut never pops.
 
-use super::{MotionGraph, Walker};
+use super::{Edge, MotionGraph, Walker};
 use glam::{DVec2, DVec3};
 
 /// One frame of playback.
@@ -24,13 +24,69 @@ fn ease(s: f64) -> f64 {
     s * s * (3.0 - 2.0 * s)
 }
 
+/// A cut being blended over, as a frame of playback shows it: the clip being left,
+/// still playing on at node `from`, faded into the node being entered with
+/// [`MotionGraph::blend_weight`]. The game keeps one per player so a spectator poses the
+/// body exactly as [`MotionGraph::playback`] would.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Blend {
+    /// The node the clip being left has reached.
+    pub from: u32,
+    /// Frames since the cut: 0 on the first frame after it.
+    frames_in: usize,
+}
+
 impl MotionGraph {
-    /// The node a clip plays next without a cut, if the graph kept it.
-    fn continuation(&self, node: u32) -> Option<u32> {
+    /// The edge to the node a clip plays next without a cut, if the graph kept it.
+    pub(super) fn continuation_edge(&self, node: u32) -> Option<&Edge> {
         self.out_edges(node)
             .map(|i| &self.edges[i])
             .find(|e| !e.transition)
-            .map(|e| e.to)
+    }
+
+    /// The node a clip plays next without a cut, if the graph kept it.
+    pub(super) fn continuation(&self, node: u32) -> Option<u32> {
+        self.continuation_edge(node).map(|e| e.to)
+    }
+
+    /// The blend of the frame after leaving `node` by an edge (a cut when `cut`), given
+    /// the blend `shown` at `node`: a cut starts one from where the left clip was going
+    /// (if the graph pruned that frame, the last one is held); otherwise a blend under way
+    /// moves one frame on, and ends after the window.
+    pub fn blend_on(&self, shown: Option<Blend>, node: u32, cut: bool) -> Option<Blend> {
+        let on = |n: u32| self.continuation(n).unwrap_or(n);
+        if cut {
+            return Some(Blend {
+                from: on(node),
+                frames_in: 0,
+            });
+        }
+        let b = shown?;
+        (b.frames_in + 1 < self.params.window).then(|| Blend {
+            from: on(b.from),
+            frames_in: b.frames_in + 1,
+        })
+    }
+
+    /// How much of the node being entered a frame under `blend` shows, 0 to 1 (the rest
+    /// is `blend.from`'s pose): an ease-in/ease-out ramp over the window.
+    pub fn blend_weight(&self, blend: &Blend) -> f64 {
+        ease((blend.frames_in + 1) as f64 / (self.params.window + 1) as f64)
+    }
+
+    /// A node's pose under `blend`, in its character frame.
+    fn blended_pose(&self, node: u32, blend: Option<Blend>) -> Vec<DVec3> {
+        match blend {
+            Some(b) => {
+                let w = self.blend_weight(&b);
+                self.pose(b.from)
+                    .iter()
+                    .zip(self.pose(node))
+                    .map(|(a, b)| a.lerp(*b, w))
+                    .collect()
+            }
+            None => self.pose(node).to_vec(),
+        }
     }
 
     /// Plays `edges` (ids into [`MotionGraph::edges`], a walk from `start`) with the body
@@ -45,7 +101,6 @@ impl MotionGraph {
         heading: f64,
         edges: &[u32],
     ) -> Vec<PlaybackFrame> {
-        let window = self.params.window;
         let place = |node: u32, pose: &[DVec3], at: &Walker| {
             let (cos, sin) = (at.facing.x, at.facing.y);
             PlaybackFrame {
@@ -70,32 +125,14 @@ impl MotionGraph {
         };
         let mut frames = vec![place(start, self.pose(start), &at)];
         let mut node = start;
-        // The clip being left and how far into the blend we are.
-        let mut leaving: Option<(u32, usize)> = None;
+        let mut blend = None;
         for &id in edges {
             let e = &self.edges[id as usize];
             assert_eq!(e.from, node, "edge {id} does not leave node {node}");
             at = at.step(&e.step);
-            if e.transition {
-                // Where the clip being left was going; if the graph pruned that frame,
-                // hold the last one.
-                leaving = Some((self.continuation(node).unwrap_or(node), 0));
-            }
+            blend = self.blend_on(blend, node, e.transition);
             node = e.to;
-            let pose: Vec<DVec3> = match leaving {
-                Some((old, k)) => {
-                    let w = ease((k + 1) as f64 / (window + 1) as f64);
-                    leaving =
-                        (k + 1 < window).then(|| (self.continuation(old).unwrap_or(old), k + 1));
-                    self.pose(old)
-                        .iter()
-                        .zip(self.pose(node))
-                        .map(|(a, b)| a.lerp(*b, w))
-                        .collect()
-                }
-                None => self.pose(node).to_vec(),
-            };
-            frames.push(place(node, &pose, &at));
+            frames.push(place(node, &self.blended_pose(node, blend), &at));
         }
         frames
     }

@@ -1,4 +1,4 @@
-//! The WebSocket protocol, version 2: every message is a JSON object with a `"type"`,
+//! The WebSocket protocol, version 3: every message is a JSON object with a `"type"`,
 //! and every message is a Rust type here. `PROTOCOL.md` explains them for bot authors;
 //! the JSON Schemas in `proto/` are generated from these types ([`crate::schemas`]).
 //! Fields are only ever added; a breaking change bumps [`VERSION`].
@@ -27,8 +27,57 @@ use serde_json::Value;
 
 /// The protocol's name, sent in every `hello` so a client knows what it is talking to.
 pub const PROTOCOL: &str = "fieldhouse";
-/// The protocol's version: within it fields are only added; a breaking change bumps it.
-pub const VERSION: u32 = 2;
+/// The protocol's version: within it fields are only added; a breaking change bumps it,
+/// and so does any change of the frames' bytes, since replays record the version their
+/// frames were written in and are verified byte for byte ([`FrameShape`]).
+///
+/// 3: basketball players carry their pose's blend across cuts (`blend`) and, when it
+/// differs from `behaviour`, the graph their `node` is of (`graph`).
+pub const VERSION: u32 = 3;
+
+/// The oldest version whose frames this build still writes (to verify a replay recorded
+/// in it).
+pub const OLDEST_VERSION: u32 = 2;
+
+/// Frames as a version of the protocol wrote them. Replays recorded in an older version
+/// are verified by re-simulating and writing the frames as that version did: the world
+/// is the same, only the fields a later version added are left out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameShape(u32);
+
+impl FrameShape {
+    /// Frames as this build sends them.
+    pub const CURRENT: FrameShape = FrameShape(VERSION);
+
+    /// Frames as protocol `version` wrote them, if this build can still write them.
+    pub fn of_version(version: u32) -> Result<FrameShape, String> {
+        if (OLDEST_VERSION..=VERSION).contains(&version) {
+            Ok(FrameShape(version))
+        } else {
+            Err(format!(
+                "frames of protocol version {version}: this build writes versions \
+                 {OLDEST_VERSION} to {VERSION}"
+            ))
+        }
+    }
+
+    /// The version.
+    pub fn version(self) -> u32 {
+        self.0
+    }
+
+    /// Leaves out of `agents` what this version's frames did not have.
+    pub fn shape(self, agents: &mut [Agent<'_>]) {
+        if self.0 < 3 {
+            for agent in agents {
+                if let Agent::Player(p) = agent {
+                    p.blend = None;
+                    p.graph = None;
+                }
+            }
+        }
+    }
+}
 
 /// Everything static about a match, as `hello` and `GET /api/matches/{id}` show it.
 #[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
@@ -112,7 +161,7 @@ pub enum Role {
 /// match (the same `match` object `GET /api/matches/{id}` shows; for a replay, the one
 /// recorded in the file's header), the agent a bot controls, what a replay holds, and
 /// the limits a client must respect. Fields may be added in later releases of version
-/// 2; ignore those you do not know.
+/// 3; ignore those you do not know.
 #[derive(Debug, Clone, Serialize, JsonSchema)]
 #[schemars(title = "hello")]
 pub struct Hello<'a, M: Serialize = MatchInfo> {
@@ -123,7 +172,7 @@ pub struct Hello<'a, M: Serialize = MatchInfo> {
     pub protocol: tags::Fieldhouse,
     /// Protocol version. A breaking change bumps it; within a version fields are only
     /// added.
-    #[schemars(extend("const" = 2))]
+    #[schemars(extend("const" = 3))]
     pub version: u32,
     /// Who this connection is.
     pub role: Role,
@@ -171,6 +220,9 @@ pub struct ReplayInfo<'a> {
     pub id: &'a str,
     /// The tick of its last frame; null without frames.
     pub last_tick: Option<u64>,
+    /// The protocol version its frames were written in (2 for a file that does not say):
+    /// a replay recorded before version 3 has frames without version 3's fields.
+    pub protocol: u32,
 }
 
 /// Server to client (spectators and replay viewers; a replay's frames are the recorded
@@ -178,7 +230,7 @@ pub struct ReplayInfo<'a> {
 /// frame. Sent frame_hz times per simulated second; a spectator that falls behind skips
 /// to the newest frame (the skipped frames' events are lost to it). The shapes of
 /// `ball`, `agents`, `score` and the events depend on the sport. Objects may gain fields
-/// in later releases of version 2, and new event kinds may appear; ignore what you do not
+/// in later releases of version 3, and new event kinds may appear; ignore what you do not
 /// know. Numbers are rounded to a millimetre, a milliradian, a millisecond.
 ///
 /// A server started with `--stamp-frames` adds `"sent_us"` (when the frame was
@@ -282,7 +334,7 @@ pub struct End<'a, R: Serialize = Score> {
 /// perception_every_ticks ticks (see hello) while the bot is connected. Answer it with
 /// a `command` carrying the same `tick`. A fielder (baseball, cricket) sees its own body
 /// and the ball only as an eye sees it; a basketball player sees the whole court.
-/// Numbers are not rounded. Objects may gain fields in later releases of version 2;
+/// Numbers are not rounded. Objects may gain fields in later releases of version 3;
 /// ignore what you do not know.
 #[derive(Debug, Clone, Serialize, JsonSchema)]
 #[schemars(title = "perception")]

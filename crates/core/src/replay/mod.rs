@@ -3,7 +3,9 @@
 //! **Records**: JSON lines (UTF-8, one record per line, `\n`-terminated):
 //!
 //! 1. a header: `{"record": "header", "format": 2, "fieldhouse": "0.1.0", "match": {...},
-//!    "scenario": {...}, "seed": 1, "motion": "<fingerprint>", "started_unix_ms": ...}`;
+//!    "scenario": {...}, "seed": 1, "motion": "<fingerprint>", "protocol": 3,
+//!    "started_unix_ms": ...}`; `protocol` is the version the frames are written in (a
+//!    file without it is protocol 2), which verification writes them in again;
 //! 2. the `frame` messages of the wire protocol, byte for byte, in order, interleaved
 //!    with the bot log: `{"record": "control", "tick": t, "agent": "cf", "bot": true}`
 //!    when a bot takes or gives back an agent, and `{"record": "command", "tick": t,
@@ -198,6 +200,8 @@ mod records {
         #[serde(rename = "match")]
         pub(super) match_info: &'a M,
         pub(super) motion: &'a str,
+        /// The protocol version the frames are written in: verifying writes them so.
+        pub(super) protocol: u32,
         pub(super) record: tags::Header,
         pub(super) scenario: &'a Scenario,
         pub(super) seed: u64,
@@ -245,6 +249,7 @@ pub fn header(match_info: &impl Serialize, scenario: &Scenario, motion: &str) ->
         format: FORMAT,
         match_info,
         motion,
+        protocol: crate::protocol::VERSION,
         record: crate::tags::Header,
         scenario,
         seed: scenario.seed,
@@ -498,6 +503,15 @@ impl Replay {
 /// The tick a file with this header starts at (0 unless it is a later segment).
 pub fn first_tick(header: &Value) -> u64 {
     header["first_tick"].as_u64().unwrap_or(0)
+}
+
+/// The protocol version a file with this header wrote its frames in: its `protocol`,
+/// or 2 for a file written before headers said (protocol 2 was the last version without
+/// it).
+pub fn protocol(header: &Value) -> u32 {
+    header["protocol"]
+        .as_u64()
+        .map_or(2, |v| u32::try_from(v).unwrap_or(u32::MAX))
 }
 
 /// Errors leave their source out of their message: it is the next link of the chain

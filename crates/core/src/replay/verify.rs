@@ -1,8 +1,11 @@
 //! Checking a replay by playing it again: the scenario, its seed and the bot log drive a
-//! fresh world, and every frame it makes must equal the recorded one, byte for byte.
+//! fresh world, and every frame it makes must equal the recorded one, byte for byte,
+//! written in the protocol version the file recorded (a file of protocol 2 has frames
+//! without the fields version 3 added).
 
 use super::{Logged, Replay};
 use crate::basketball::Capabilities;
+use crate::protocol::FrameShape;
 use crate::session::Session;
 use crate::sim::World;
 use serde_json::Value;
@@ -139,7 +142,10 @@ pub fn verify(replay: &Replay, caps: Option<Arc<Capabilities>>) -> Result<Verifi
             ticks: 0,
         });
     }
-    let mut session = Session::new(world, replay.match_id().to_string(), s.tick_hz, s.frame_hz);
+    let shape =
+        FrameShape::of_version(super::protocol(&replay.header)).map_err(Mismatch::Unplayable)?;
+    let mut session =
+        Session::new(world, replay.match_id().to_string(), s.tick_hz, s.frame_hz).in_shape(shape);
     let ids = session.world.agent_ids();
     let end_tick = replay
         .footer
