@@ -7,18 +7,12 @@
 // Each check throws with what it saw; the process exits 1 on the first failure, and
 // stops by itself within DEADLINE_MS whatever happens.
 import { chromium } from "playwright-core";
-import { spawn } from "node:child_process";
 import { mkdirSync, mkdtempSync, rmSync, writeFileSync } from "node:fs";
-import { createServer } from "node:net";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
+import { env, freePort, startServer as startOn } from "./harness.mjs";
 
 const DEADLINE_MS = 240_000;
-const env = (name, fallback) => {
-  const v = process.env[name] ?? fallback;
-  if (v === undefined) throw new Error(`${name} is not set (tests/browser.rs sets it)`);
-  return v;
-};
 const BIN = env("FIELDHOUSE_BIN");
 const CACHE = env("FIELDHOUSE_CACHE_DIR");
 const ARTIFACTS = env("ARTIFACTS");
@@ -46,26 +40,9 @@ function passed(what) {
   console.log(`ok: ${what.split(":")[0]}`);
 }
 
-async function freePort() {
-  return new Promise((resolve) => {
-    const s = createServer().listen(0, "127.0.0.1", () => { const { port } = s.address(); s.close(() => resolve(port)); });
-  });
-}
-
-/** Starts the server on `port` and resolves once it listens. */
+/** The server on `port`, with the test's motion cache and replay directory. */
 function startServer(port) {
-  return new Promise((resolve, reject) => {
-    const child = spawn(BIN, ["serve", "--addr", `127.0.0.1:${port}`, "--cache-dir", CACHE, "--replay-dir", replayDir], {
-      env: { ...process.env, FIELDHOUSE_ADMIN_TOKEN: "browser-test-admin-token", FIELDHOUSE_LOG: "info" },
-      stdio: ["ignore", "ignore", "pipe"],
-    });
-    let said = "";
-    child.stderr.on("data", (chunk) => {
-      said += chunk;
-      if (said.includes("listening")) resolve(child);
-    });
-    child.on("exit", (code) => reject(new Error(`the server exited (${code}) before listening:\n${said}`)));
-  });
+  return startOn(BIN, port, ["--cache-dir", CACHE, "--replay-dir", replayDir]);
 }
 
 /**

@@ -101,21 +101,12 @@ impl Upgrade {
         F: FnOnce(Socket) -> Fut + Send + 'static,
         Fut: Future<Output = ()> + Send + 'static,
     {
-        let settings = socket_settings(config);
-        let accept = derive_accept_key(self.key.as_bytes());
-        let on_upgrade = self.on_upgrade;
-        tokio::spawn(async move {
-            let Ok(upgraded) = on_upgrade.await else {
-                return;
-            };
+        self.switch(config, move |upgraded, settings| async move {
             let io = FrameMeter::new(TokioIo::new(upgraded));
             serve(WebSocketStream::from_raw_socket(io, Role::Server, Some(settings)).await).await;
-        });
-        switching(accept)
+        })
     }
-}
 
-impl Upgrade {
     /// Answers 101 and, once the client has switched protocols, runs `serve` with the
     /// connection's TCP stream itself (a [`RawSocket`]).
     pub fn on_upgrade_raw<F, Fut>(self, config: &ServerConfig, serve: F) -> Response
@@ -123,13 +114,7 @@ impl Upgrade {
         F: FnOnce(RawSocket) -> Fut + Send + 'static,
         Fut: Future<Output = ()> + Send + 'static,
     {
-        let settings = socket_settings(config);
-        let accept = derive_accept_key(self.key.as_bytes());
-        let on_upgrade = self.on_upgrade;
-        tokio::spawn(async move {
-            let Ok(upgraded) = on_upgrade.await else {
-                return;
-            };
+        self.switch(config, move |upgraded, settings| async move {
             // Every connection comes through the accept loop, which serves it as this.
             let parts = match upgraded.downcast::<TokioIo<super::listener::Counted>>() {
                 Ok(parts) => parts,
@@ -146,6 +131,24 @@ impl Upgrade {
                 settings,
             })
             .await;
+        })
+    }
+
+    /// Answers 101 and, once the client has switched protocols (hyper has written the
+    /// answer and hands the connection over), runs `then` with it and the settings of
+    /// the WebSocket to make of it.
+    fn switch<F, Fut>(self, config: &ServerConfig, then: F) -> Response
+    where
+        F: FnOnce(hyper::upgrade::Upgraded, WebSocketConfig) -> Fut + Send + 'static,
+        Fut: Future<Output = ()> + Send + 'static,
+    {
+        let settings = socket_settings(config);
+        let accept = derive_accept_key(self.key.as_bytes());
+        let on_upgrade = self.on_upgrade;
+        tokio::spawn(async move {
+            if let Ok(upgraded) = on_upgrade.await {
+                then(upgraded, settings).await;
+            }
         });
         switching(accept)
     }
