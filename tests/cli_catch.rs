@@ -166,6 +166,19 @@ fn sweep_json_compares_every_strategy_on_the_same_launches() {
             + num(&s["share_bulging_toward_home"])
             + num(&s["share_bulging_away_from_home"]);
         assert!((shares - 1.0).abs() < 1e-9);
+        // The time-to-spare bins split the catchable balls, and no strategy catches
+        // more of a bin than it holds.
+        let bins = s["by_time_to_spare"].as_array().unwrap();
+        assert_eq!(bins.len(), 4);
+        let in_bins: u64 = bins.iter().map(|b| b["catchable"].as_u64().unwrap()).sum();
+        assert_eq!(in_bins, catchable);
+        for b in bins {
+            assert!(b["caught"].as_u64() <= b["catchable"].as_u64());
+            // `predictive` defines catchability: it catches every catchable ball.
+            if s["strategy"] == "predictive" {
+                assert_eq!(b["caught"], b["catchable"]);
+            }
+        }
     }
     // The same seed gives the same report.
     assert_eq!(doc, json("catch-sweep --n 60 --seed 4 --json"));

@@ -4,7 +4,9 @@ use super::args::Setting;
 use super::plots;
 use anyhow::Context;
 use clap::Args;
-use fieldhouse::fielding::{LaunchDistribution, StrategyKind, StrategySummary, Sweep, SweepReport};
+use fieldhouse::fielding::{
+    LaunchDistribution, SpareBin, StrategyKind, StrategySummary, Sweep, SweepReport,
+};
 use fieldhouse::words::plural;
 use std::io::Write;
 use std::path::PathBuf;
@@ -115,7 +117,49 @@ fn print_table(report: &SweepReport, out: &mut impl Write) -> std::io::Result<()
         writeln!(out, "{}", row(s))?;
     }
     writeln!(out, "a mean: time-averaged |a| (m/s²); a peak / v peak: per-trial peaks averaged; a max / v max: largest over all trials")?;
-    writeln!(out, "path shapes vs the chord from start to end: straight, bulging toward home (→home) or away from it (←home); bulge: median largest deviation / chord (+ toward home); R²: straightness of tan ψ(t) and of the image path (medians)")
+    writeln!(out, "path shapes vs the chord from start to end: straight, bulging toward home (→home) or away from it (←home); bulge: median largest deviation / chord (+ toward home); R²: straightness of tan ψ(t) and of the image path (medians)")?;
+    print_spare(report, out)
+}
+
+/// Catches of catchable balls by their time to spare: where each strategy fails.
+fn print_spare(report: &SweepReport, out: &mut impl Write) -> std::io::Result<()> {
+    let Some(first) = report.strategies.first() else {
+        return Ok(());
+    };
+    writeln!(out)?;
+    writeln!(out, "catchable balls caught, by time to spare (time to the catch band less the fastest sprint to within reach of it)")?;
+    write!(out, "{:<12}", "")?;
+    for bin in &first.by_time_to_spare {
+        write!(out, " {:>16}", spare_label(bin))?;
+    }
+    writeln!(out)?;
+    write!(out, "{:<12}", "balls")?;
+    for bin in &first.by_time_to_spare {
+        write!(out, " {:>16}", bin.catchable)?;
+    }
+    writeln!(out)?;
+    for s in &report.strategies {
+        write!(out, "{:<12}", s.strategy.name())?;
+        for bin in &s.by_time_to_spare {
+            let share = if bin.catchable == 0 {
+                "–".to_string()
+            } else {
+                format!("{:.0}%", 100.0 * bin.caught as f64 / bin.catchable as f64)
+            };
+            write!(out, " {:>16}", format!("{} ({share})", bin.caught))?;
+        }
+        writeln!(out)?;
+    }
+    Ok(())
+}
+
+fn spare_label(bin: &SpareBin) -> String {
+    match (bin.from_s, bin.to_s) {
+        (None, Some(to)) => format!("< {to} s"),
+        (Some(from), Some(to)) => format!("{from}–{to} s"),
+        (Some(from), None) => format!("≥ {from} s"),
+        (None, None) => "all".to_string(),
+    }
 }
 
 fn row(s: &StrategySummary) -> String {

@@ -37,6 +37,23 @@ impl Limits {
     pub(crate) fn is_limited(&self) -> bool {
         self.max_speed.is_finite() && self.max_accel.is_finite()
     }
+
+    /// The least time, from the hit, for a fielder at rest to cover `distance` m: its
+    /// reaction, then full acceleration up to top speed (no need to stop: a ball within
+    /// reach is caught on the run). Without limits, the reaction alone.
+    pub fn sprint_time(&self, distance: f64) -> f64 {
+        if !self.is_limited() {
+            return self.reaction_s;
+        }
+        let d = distance.max(0.0);
+        let ramp = self.max_speed * self.max_speed / (2.0 * self.max_accel);
+        self.reaction_s
+            + if d <= ramp {
+                (2.0 * d / self.max_accel).sqrt()
+            } else {
+                d / self.max_speed + self.max_speed / (2.0 * self.max_accel)
+            }
+    }
 }
 
 impl FromStr for Limits {
@@ -107,5 +124,19 @@ mod tests {
             b.advance(DVec2::new(2.0, 0.0), &Limits::NONE, 0.01);
         }
         assert!((b.pos.x - 0.5 * 2.0 * 1.0).abs() < 1e-12);
+    }
+
+    /// Human limits ramp up to 8.5 m/s over 8.5² / (2 · 4.5) = 8.03 m: 2 m take
+    /// √(2·2/4.5) s after the 0.3 s reaction; 30 m take 30/8.5 + 8.5/9 s after it; the
+    /// two pieces meet at the ramp's end.
+    #[test]
+    fn a_sprint_accelerates_then_runs_at_top_speed() {
+        let l = Limits::HUMAN;
+        assert!((l.sprint_time(2.0) - (0.3 + (4.0f64 / 4.5).sqrt())).abs() < 1e-12);
+        assert!((l.sprint_time(30.0) - (0.3 + 30.0 / 8.5 + 8.5 / 9.0)).abs() < 1e-12);
+        let ramp = 8.5 * 8.5 / 9.0;
+        assert!((l.sprint_time(ramp - 1e-9) - l.sprint_time(ramp + 1e-9)).abs() < 1e-6);
+        assert_eq!(l.sprint_time(-1.0), 0.3);
+        assert_eq!(Limits::NONE.sprint_time(100.0), 0.0);
     }
 }

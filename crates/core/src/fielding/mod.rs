@@ -17,5 +17,7 @@ pub(crate) use fielder::Fielder;
 pub use fielder::{FielderConfig, Step};
 pub(crate) use path_shape::{OpticalFit, PathShape};
 pub use strategy::{Brain, Forecast, LotReference, StrategyKind};
-pub use sweep::{LaunchDistribution, StrategySummary, Sweep, SweepCase, SweepReport};
+pub use sweep::{
+    LaunchDistribution, SpareBin, StrategySummary, Sweep, SweepCase, SweepReport, SPARE_BINS_S,
+};
 pub use trial::{forecast, Outcome, TraceEntry, Trial, TrialConfig, TrialResult};

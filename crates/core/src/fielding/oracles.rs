@@ -129,19 +129,6 @@ fn chapman_never_exceeds_the_human_limits() {
     }
 }
 
-/// Time for a fielder at rest, after reacting, to cover `distance` at full acceleration
-/// and top speed (no need to stop: a ball within reach is caught on the run).
-fn closed_form_run_time(distance: f64, l: &Limits) -> f64 {
-    let d = distance.max(0.0);
-    let ramp = l.max_speed * l.max_speed / (2.0 * l.max_accel);
-    l.reaction_s
-        + if d <= ramp {
-            (2.0 * d / l.max_accel).sqrt()
-        } else {
-            d / l.max_speed + l.max_speed / (2.0 * l.max_accel)
-        }
-}
-
 /// `predictive` defines catchability, so check it against closed-form reachability: a
 /// ball whose band crossing a straight sprint reaches with time to spare is caught; a
 /// ball no point of whose descent through the band can be reached in time is not.
@@ -162,7 +149,7 @@ fn predictive_catches_exactly_what_closed_form_reachability_allows() {
             config: &sweep.trial,
         }
         .forecast();
-        if closed_form_run_time((point - case.start).length(), &l) < t - 0.15 {
+        if l.sprint_time((point - case.start).length()) < t - 0.15 {
             surely += 1;
             assert!(caught, "case {i}: reachable with time to spare but missed");
         }
@@ -179,7 +166,7 @@ fn predictive_catches_exactly_what_closed_form_reachability_allows() {
             })
             .any(|s| {
                 let d = (DVec2::new(s.pos.x, s.pos.z) - case.start).length() - zone.reach_m;
-                closed_form_run_time(d, &l) <= s.t + 0.05
+                l.sprint_time(d) <= s.t + 0.05
             });
         if !reachable_somewhere {
             never += 1;

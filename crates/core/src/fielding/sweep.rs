@@ -2,7 +2,7 @@
 //! catching theories.
 
 use super::path_shape::bulge;
-use super::trial::{Trial, TrialConfig, TrialResult};
+use super::trial::{forecast, Trial, TrialConfig, TrialResult};
 use super::{PathShape, StrategyKind};
 use crate::physics::{AirModel, BallSpec, Flight, Launch};
 use glam::DVec2;
@@ -110,10 +110,41 @@ pub struct StrategySummary {
     /// Median over trials of the path's bulge: its largest deviation from the chord as a
     /// share of the chord, positive toward home (see `path_shape::bulge`).
     pub median_bulge: f64,
+    /// Catchable balls and this strategy's catches of them, by the time the ball left
+    /// to spare (see [`SPARE_BINS_S`]): where a strategy fails.
+    pub by_time_to_spare: Vec<SpareBin>,
     /// Medians over trials of the optical straightness measures (see `OpticalFit`).
     pub median_tan_psi_r2: f64,
     /// See `median_tan_psi_r2`: the image path's straightness.
     pub median_image_r2: f64,
+}
+
+/// The upper edges of the time-to-spare bins, s (the last bin has none). A ball's time to
+/// spare is its time to the catch band (where `predictive` is told it comes down) less
+/// the fastest sprint to within reach of that point: how much slack a perfect fielder
+/// has. Negative for balls caught only elsewhere in the band.
+pub const SPARE_BINS_S: [f64; 3] = [0.25, 0.5, 1.0];
+
+/// Catchable balls whose time to spare is in `[from_s, to_s)`, and how many a strategy
+/// caught.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SpareBin {
+    /// Lower edge, s (`null`: no lower edge).
+    pub from_s: Option<f64>,
+    /// Upper edge, s (`null`: no upper edge).
+    pub to_s: Option<f64>,
+    /// Catchable balls in the bin.
+    pub catchable: usize,
+    /// Of those, the ones this strategy caught.
+    pub caught: usize,
+}
+
+/// The bin of a time to spare: an index into [`SPARE_BINS_S`]'s bins.
+fn spare_bin(spare_s: f64) -> usize {
+    SPARE_BINS_S
+        .iter()
+        .take_while(|&&edge| spare_s >= edge)
+        .count()
 }
 
 /// A sweep's result: every strategy's summary over the same cases.
@@ -133,6 +164,8 @@ pub struct SweepReport {
 #[derive(Debug, Clone, Copy)]
 struct Tally {
     caught: bool,
+    /// The case's time-to-spare bin.
+    spare_bin: usize,
     peak_accel: f64,
     peak_speed: f64,
     mean_accel: f64,
@@ -221,6 +254,9 @@ impl Sweep {
                     .trial(i, case, StrategyKind::Predictive, false)
                     .outcome
                     .caught;
+                let band = forecast(&case.flight, &self.trial.zone);
+                let run = (band.point - case.start).length() - self.trial.zone.reach_m;
+                let spare_bin = spare_bin(band.t - self.trial.fielder.limits.sprint_time(run));
                 let tallies = strategies
                     .iter()
                     .map(|&s| {
@@ -229,6 +265,7 @@ impl Sweep {
                             DVec2::new(case.flight.samples[0].pos.x, case.flight.samples[0].pos.z);
                         Tally {
                             caught: r.outcome.caught,
+                            spare_bin,
                             peak_accel: r.peak_accel,
                             peak_speed: r.peak_speed,
                             mean_accel: r.mean_accel,
@@ -277,6 +314,14 @@ fn summarise<'a>(
         xs.get(xs.len() / 2).copied().unwrap_or(f64::NAN)
     };
     let rate = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f64 / b as f64 };
+    let by_time_to_spare = (0..=SPARE_BINS_S.len())
+        .map(|k| SpareBin {
+            from_s: k.checked_sub(1).map(|j| SPARE_BINS_S[j]),
+            to_s: SPARE_BINS_S.get(k).copied(),
+            catchable: count(&|c, t| c && t.spare_bin == k),
+            caught: count(&|c, t| c && t.caught && t.spare_bin == k),
+        })
+        .collect();
     StrategySummary {
         strategy,
         trials: n,
@@ -294,6 +339,7 @@ fn summarise<'a>(
         share_bulging_toward_home: share(PathShape::BulgesTowardHome),
         share_bulging_away_from_home: share(PathShape::BulgesAwayFromHome),
         median_bulge: median(&|t| t.bulge),
+        by_time_to_spare,
         median_tan_psi_r2: median(&|t| t.tan_psi_r2),
         median_image_r2: median(&|t| t.image_r2),
     }
