@@ -100,7 +100,7 @@ export class Labels {
 }
 
 /** Whether two boxes share any area. */
-export function overlaps(a, b) {
+function overlaps(a, b) {
   return a.x0 < b.x1 && b.x0 < a.x1 && a.y0 < b.y1 && b.y0 < a.y1;
 }
 

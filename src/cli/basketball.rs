@@ -356,7 +356,7 @@ fn annotate(panels: Canvas, panel: (f64, f64), horizon_s: f64, params: &Decision
     let (panel_w, panel_h) = panel;
     const PAD: f64 = 6.0;
     let top = LINE_PX + 2.0 * PAD;
-    let mut canvas = panels.with_margins(top as usize, 70, 0, 0, [255, 255, 255]);
+    let mut canvas = panels.with_margins(top as usize, 70, 0, [255, 255, 255]);
     let titles = [
         "C_d: shooter's dribbling time",
         "C_o: defenders' time",

@@ -121,22 +121,21 @@ impl Canvas {
         }
     }
 
-    /// The same picture inside margins of `background` (`top`, `bottom` and `left`
-    /// pixels), at least `min_width` wide: room for titles and legends around a drawing
-    /// made at (0, 0).
+    /// The same picture with `top` and `bottom` margins of `background`, at least
+    /// `min_width` wide (widened on the right): room for titles and legends around a
+    /// drawing made at (0, 0).
     pub(super) fn with_margins(
         &self,
         top: usize,
         bottom: usize,
-        left: usize,
         min_width: usize,
         background: Rgb,
     ) -> Canvas {
-        let width = (self.width + left).max(min_width);
+        let width = self.width.max(min_width);
         let mut out = Canvas::new(width, self.height + top + bottom, background);
         for y in 0..self.height {
             let from = y * self.width * 3;
-            let to = ((y + top) * out.width + left) * 3;
+            let to = (y + top) * out.width * 3;
             out.rgb[to..to + self.width * 3]
                 .copy_from_slice(&self.rgb[from..from + self.width * 3]);
         }

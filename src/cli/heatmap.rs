@@ -50,7 +50,7 @@ fn annotate(map_picture: Canvas, map: &CostMap, max_s: f64) -> Canvas {
     const PAD: f64 = 6.0;
     let side = (map.grid.n * SCALE) as f64;
     let top = 2.0 * LINE_PX + 3.0 * PAD;
-    let mut canvas = map_picture.with_margins(top as usize, 100, 0, 380, WHITE);
+    let mut canvas = map_picture.with_margins(top as usize, 100, 380, WHITE);
     canvas.text(
         DVec2::new(PAD, PAD),
         &format!("\"{}\" cost map ({})", map.behaviour, map.method.name()),
