@@ -35,9 +35,9 @@ pub(super) struct Setting {
     /// Standard deviation of Gaussian noise on the optical angles, in degrees (0 = off).
     #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
     pub noise_deg: f64,
-    /// Ticks between samples for the optical rate differences (widen it with noise).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=60))]
-    pub difference_span: u32,
+    /// Seconds of looks the fielder fits the ball's path over (0: the last three looks).
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    pub smoothing: f64,
     /// Horizontal catching reach in metres.
     #[arg(long, default_value_t = 1.0, value_parser = positive)]
     pub reach: f64,
@@ -60,7 +60,7 @@ impl Setting {
                     eye_height_m: self.eye_height,
                     delay_s: self.delay,
                     noise_rad: self.noise_deg.to_radians(),
-                    difference_span: self.difference_span as usize,
+                    smoothing_s: self.smoothing,
                 },
                 noise_seed: seed,
                 lot_reference: self.lot_reference,

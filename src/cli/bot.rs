@@ -81,17 +81,20 @@ impl Fielding {
         });
         let t = optics["t"].as_f64().unwrap_or(0.0);
         let alpha = optics["alpha"].as_f64().unwrap_or(0.0);
-        history.record(Sighting {
-            t,
-            tan_psi: optics["tan_psi"].as_f64().unwrap_or(0.0),
-            toward_ball: DVec2::from_angle(alpha),
-            distance: optics["distance_m"].as_f64().unwrap_or(1.0),
-        });
         let body = Body {
             pos: v(&p["self"]["position"]),
             vel: v(&p["self"]["velocity"]),
         };
-        let accel = match history.percept() {
+        history.record(
+            Sighting {
+                t,
+                tan_psi: optics["tan_psi"].as_f64().unwrap_or(0.0),
+                toward_ball: DVec2::from_angle(alpha),
+                distance: optics["distance_m"].as_f64().unwrap_or(1.0),
+            },
+            body.pos,
+        );
+        let accel = match history.percept(body.pos, body.vel) {
             Some(percept) if t >= limits.reaction_s => {
                 brain.command(&fieldhouse::fielding::strategy::Situation {
                     percept: &percept,

@@ -80,9 +80,11 @@ impl Fielder {
     pub(crate) fn step(&mut self, t: f64, ball: DVec3, dt: f64) -> Step {
         let (limits, perception) = (&self.config.limits, &self.config.perception);
         let sighting = Sighting::of(t, ball, self.body.pos, perception.eye_height_m);
-        self.history
-            .record(sighting.blurred(perception.noise_rad, &mut self.noise));
-        let command = match self.history.percept() {
+        self.history.record(
+            sighting.blurred(perception.noise_rad, &mut self.noise),
+            self.body.pos,
+        );
+        let command = match self.history.percept(self.body.pos, self.body.vel) {
             Some(percept) if t >= limits.reaction_s => self.brain.command(&Situation {
                 percept: &percept,
                 body: &self.body,

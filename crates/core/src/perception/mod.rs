@@ -1,5 +1,5 @@
-//! What a fielder can see: the optical angles of the ball from its own eye, and their rates
-//! estimated by differences over its own perception history (as Gillies & Dodgson do).
+//! What a fielder can see: the optical angles of the ball from its own eye, and their rates,
+//! from its estimate of the ball's path over its last looks.
 //!
 //! A strategy reads only a [`Percept`]: never the ball's future, never its true state
 //! (with noise or delay switched on, what it reads is what its eye would have reported).
@@ -22,9 +22,10 @@ pub struct PerceptionConfig {
     pub delay_s: f64,
     /// Standard deviation of Gaussian noise added to both optical angles. Off by default.
     pub noise_rad: f64,
-    /// Ticks between the samples used for finite differences. One tick is exact enough
-    /// without noise; with noise a wider span keeps the second difference usable.
-    pub difference_span: usize,
+    /// How far back, in seconds, the fielder's estimate of the ball's path reaches (see
+    /// [`PerceptionHistory`]); never fewer than three looks. Zero (three looks) is exact
+    /// enough without noise; with noise a longer span averages it away.
+    pub smoothing_s: f64,
 }
 
 impl Default for PerceptionConfig {
@@ -33,7 +34,7 @@ impl Default for PerceptionConfig {
             eye_height_m: 1.7,
             delay_s: 0.0,
             noise_rad: 0.0,
-            difference_span: 1,
+            smoothing_s: 0.0,
         }
     }
 }
