@@ -97,7 +97,7 @@ impl Fielding {
         let accel = match history.percept(body.pos, body.vel) {
             Some(percept) if t >= limits.reaction_s => {
                 brain.command(&fieldhouse::fielding::strategy::Situation {
-                    percept: &percept,
+                    percept: Some(&percept),
                     body: &body,
                     limits: &limits,
                     home: DVec2::ZERO,

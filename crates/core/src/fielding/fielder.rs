@@ -84,16 +84,18 @@ impl Fielder {
             sighting.blurred(perception.noise_rad, &mut self.noise),
             self.body.pos,
         );
-        let command = match self.history.percept(self.body.pos, self.body.vel) {
-            Some(percept) if t >= limits.reaction_s => self.brain.command(&Situation {
-                percept: &percept,
+        let percept = self.history.percept(self.body.pos, self.body.vel);
+        let command = if t >= limits.reaction_s {
+            self.brain.command(&Situation {
+                percept: percept.as_ref(),
                 body: &self.body,
                 limits,
                 home: self.home,
                 t,
                 dt,
-            }),
-            _ => DVec2::ZERO,
+            })
+        } else {
+            DVec2::ZERO
         };
         let accel = self.body.advance(command, limits, dt);
         Step { sighting, accel }

@@ -219,7 +219,11 @@ mod tests {
         assert!((p.relative_position - relative(t)).length() < 1e-6);
         assert!((p.tan_psi - tan_psi(t)).abs() < 1e-9);
         let rate = (tan_psi(t + h) - tan_psi(t - h)) / (2.0 * h);
-        assert!((p.tan_psi_rate - rate).abs() < 1e-6, "{} vs {rate}", p.tan_psi_rate);
+        assert!(
+            (p.tan_psi_rate - rate).abs() < 1e-6,
+            "{} vs {rate}",
+            p.tan_psi_rate
+        );
         let alpha_rate = (alpha(t + h) - alpha(t - h)) / (2.0 * h);
         assert!((p.alpha_rate - alpha_rate).abs() < 1e-6);
     }
@@ -264,8 +268,12 @@ mod tests {
         };
         let dt = 0.01;
         // 10 ticks of delay and a window of 6 looks: the 16th look is the first usable.
-        assert!(looked_at(&cfg, dt, 15).percept(DVec2::ZERO, DVec2::ZERO).is_none());
-        assert!(looked_at(&cfg, dt, 16).percept(DVec2::ZERO, DVec2::ZERO).is_some());
+        assert!(looked_at(&cfg, dt, 15)
+            .percept(DVec2::ZERO, DVec2::ZERO)
+            .is_none());
+        assert!(looked_at(&cfg, dt, 16)
+            .percept(DVec2::ZERO, DVec2::ZERO)
+            .is_some());
     }
 
     /// Noise of sd σ on each look: a longer window must bring the rate's error down.

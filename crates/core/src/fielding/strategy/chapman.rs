@@ -58,7 +58,9 @@ impl Chapman {
 
     /// The acceleration wanted this tick, m/s².
     pub(crate) fn command(&mut self, s: &Situation) -> DVec2 {
-        let p = s.percept;
+        let Some(p) = s.percept else {
+            return DVec2::ZERO;
+        };
         if p.tan_psi < CLEARLY_ABOVE_EYE_TAN_PSI {
             return DVec2::ZERO;
         }

@@ -85,7 +85,9 @@ impl Lot {
 
     /// The acceleration wanted this tick, m/s².
     pub(crate) fn command(&mut self, s: &Situation) -> DVec2 {
-        let p = s.percept;
+        let Some(p) = s.percept else {
+            return DVec2::ZERO;
+        };
         let (rel, rel_vel) = (p.relative_position, p.relative_velocity);
         let above = p.tan_psi >= CLEARLY_ABOVE_EYE_TAN_PSI;
         let now = match self.reference {

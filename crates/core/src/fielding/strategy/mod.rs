@@ -88,8 +88,9 @@ impl FromStr for StrategyKind {
 /// What a strategy may consult on one tick.
 #[derive(Debug, Clone, Copy)]
 pub struct Situation<'a> {
-    /// What the fielder sees this tick.
-    pub percept: &'a Percept,
+    /// What the fielder sees this tick: `None` until its eye has looked long enough (the
+    /// optical strategies then stand still; `predictive` needs no eyes).
+    pub percept: Option<&'a Percept>,
     /// The fielder's own position and velocity.
     pub body: &'a Body,
     /// The fielder's limits (only `predictive` plans with them; the body applies them).
