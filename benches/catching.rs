@@ -3,7 +3,7 @@
 //! Run with `cargo bench --bench catching`; results are written up in BENCHMARKS.md.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use fieldhouse::fielding::{LaunchDistribution, StrategyKind, Sweep, TrialConfig};
+use fieldhouse::fielding::{LaunchDistribution, Observer, StrategyKind, Sweep, TrialConfig};
 use fieldhouse::physics::{AirModel, BallSpec, Launch, NATHAN_AIR_DENSITY};
 use std::hint::black_box;
 
@@ -14,6 +14,7 @@ fn sweep() -> Sweep {
         air_density: NATHAN_AIR_DENSITY,
         dt: 1.0 / 60.0,
         trial: TrialConfig::default(),
+        observer: Observer::IDEAL,
     }
 }
 

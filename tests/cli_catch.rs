@@ -110,7 +110,7 @@ fn a_sweep_of_one_launch_says_so_in_the_singular() {
     let out = fieldhouse("catch-sweep --n 1 --seed 3");
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap();
-    assert!(text.starts_with("1 launch (seed 3), "), "{text}");
+    assert!(text.contains("\n1 launch (seed 3), "), "{text}");
     assert_reads_well(&text);
 }
 
@@ -133,6 +133,8 @@ fn bad_arguments_get_clear_errors() {
         ("--strategy chapman --fielder 12,north", "not a number"),
         ("--strategy lot --lot-reference soon", "write `apex` or seconds after the launch"),
         ("--strategy lot --lot-reference -1", "write `apex` or seconds after the launch"),
+        ("--strategy chapman --observer robot", "expected one of ideal, human"),
+        ("--strategy chapman --smoothing -0.1", "must not be negative"),
     ];
     for (extra, expected) in cases {
         let err = stderr_of(&format!("{base} {extra}"));
@@ -147,7 +149,43 @@ fn bad_arguments_get_clear_errors() {
 #[test]
 fn sweep_json_compares_every_strategy_on_the_same_launches() {
     let doc = json("catch-sweep --n 60 --seed 4 --json");
-    assert_eq!(doc["n"], 60);
+    let reports = doc.as_array().unwrap();
+    let observers: Vec<&str> = reports
+        .iter()
+        .map(|r| r["observer"]["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(observers, ["ideal", "human"], "both observers by default");
+    for report in reports {
+        assert_eq!(report["n"], 60);
+        check_sweep_report(report);
+    }
+    // The same seed gives the same report.
+    assert_eq!(doc, json("catch-sweep --n 60 --seed 4 --json"));
+}
+
+/// The human preset's settings reach the report, and a flag changes one of them.
+#[test]
+fn a_sweep_reports_the_observers_settings_and_flags_change_them() {
+    let doc = json("catch-sweep --n 5 --observers human,ideal --delay 0.1 --json");
+    let (human, ideal) = (&doc[0]["observer"], &doc[1]["observer"]);
+    assert_eq!(human["name"], "human");
+    assert_eq!(num(&human["delay_s"]), 0.1);
+    assert_eq!(num(&human["noise_deg"]), 0.05);
+    assert_eq!(num(&human["smoothing_s"]), 0.2);
+    assert_eq!(num(&human["reach_m"]), 0.9);
+    assert_eq!(num(&ideal["delay_s"]), 0.1);
+    assert_eq!(num(&ideal["noise_deg"]), 0.0);
+    assert_eq!(num(&ideal["reach_m"]), 1.0);
+    let text = String::from_utf8(fieldhouse("catch-sweep --n 5 --observers human").stdout).unwrap();
+    assert!(
+        text.starts_with(
+            "observer human: delay 0.2 s, noise 0.05°, smoothing 0.2 s, reach 0.9 m\n"
+        ),
+        "{text}"
+    );
+}
+
+fn check_sweep_report(doc: &Value) {
     let strategies = doc["strategies"].as_array().unwrap();
     let names: Vec<&str> = strategies
         .iter()
@@ -180,8 +218,6 @@ fn sweep_json_compares_every_strategy_on_the_same_launches() {
             }
         }
     }
-    // The same seed gives the same report.
-    assert_eq!(doc, json("catch-sweep --n 60 --seed 4 --json"));
 }
 
 /// Gillies & Dodgson: a LOT reference taken too early makes the paths very convex. With
@@ -192,9 +228,9 @@ fn sweep_json_compares_every_strategy_on_the_same_launches() {
 fn an_early_lot_reference_bends_the_paths_away_from_home_and_runs_faster() {
     let sweep = |reference: &str| {
         let doc = json(&format!(
-            "catch-sweep --n 40 --seed 3 --strategies lot --limits none --lot-reference {reference} --json"
+            "catch-sweep --n 40 --seed 3 --strategies lot --limits none --observers ideal --lot-reference {reference} --json"
         ));
-        doc["strategies"][0].clone()
+        doc[0]["strategies"][0].clone()
     };
     let (apex, early) = (sweep("apex"), sweep("0.5"));
     assert!(num(&early["median_bulge"]) < num(&apex["median_bulge"]));
@@ -217,15 +253,17 @@ fn sweep_draws_svg_plots() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let names: Vec<String> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().into_string().unwrap())
-        .collect();
-    assert!(names.contains(&"catch-rates.svg".to_string()));
-    for kind in ["paths", "tan-psi", "image"] {
-        assert!(names.contains(&format!("launch-0-{kind}.svg")), "{names:?}");
+    for observer in ["ideal", "human"] {
+        let names: Vec<String> = std::fs::read_dir(dir.join(observer))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        assert!(names.contains(&"catch-rates.svg".to_string()));
+        for kind in ["paths", "tan-psi", "image"] {
+            assert!(names.contains(&format!("launch-0-{kind}.svg")), "{names:?}");
+        }
     }
-    let svg = std::fs::read_to_string(dir.join("launch-0-paths.svg")).unwrap();
+    let svg = std::fs::read_to_string(dir.join("human/launch-0-paths.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.contains("chapman") && svg.trim_end().ends_with("</svg>"));
     std::fs::remove_dir_all(dir).unwrap();
 }

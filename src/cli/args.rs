@@ -2,7 +2,7 @@
 
 use clap::Args;
 use fieldhouse::costmap::AgentPose;
-use fieldhouse::fielding::{CatchZone, FielderConfig, Limits, LotReference, TrialConfig};
+use fieldhouse::fielding::{CatchZone, FielderConfig, Limits, LotReference, Observer, TrialConfig};
 use fieldhouse::names::UnknownName;
 use fieldhouse::perception::PerceptionConfig;
 use fieldhouse::physics::{AirModel, BallSpec, NATHAN_AIR_DENSITY};
@@ -29,18 +29,20 @@ pub(super) struct Setting {
     /// Height of the fielder's eye in metres.
     #[arg(long, default_value_t = 1.7, value_parser = positive)]
     pub eye_height: f64,
-    /// Visuomotor delay in seconds (0 = off).
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
-    pub delay: f64,
-    /// Standard deviation of Gaussian noise on the optical angles, in degrees (0 = off).
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
-    pub noise_deg: f64,
-    /// Seconds of looks the fielder fits the ball's path over (0: the last three looks).
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
-    pub smoothing: f64,
-    /// Horizontal catching reach in metres.
-    #[arg(long, default_value_t = 1.0, value_parser = positive)]
-    pub reach: f64,
+    /// Visuomotor delay in seconds, instead of the observer's (0 = none).
+    #[arg(long, value_parser = non_negative)]
+    pub delay: Option<f64>,
+    /// Standard deviation of Gaussian noise on each look's optical angles, in degrees,
+    /// instead of the observer's (0 = none).
+    #[arg(long, value_parser = non_negative)]
+    pub noise_deg: Option<f64>,
+    /// Seconds of looks the fielder fits the ball's path over, instead of the observer's
+    /// (0: its last three looks).
+    #[arg(long, value_parser = non_negative)]
+    pub smoothing: Option<f64>,
+    /// Horizontal catching reach in metres, instead of the observer's.
+    #[arg(long, value_parser = positive)]
+    pub reach: Option<f64>,
     /// When `lot` takes its reference line of sight: `apex` (the ball's perceived apex)
     /// or seconds after the launch (e.g. 0.5; once the ball is clearly above the eye).
     #[arg(long, default_value = "apex", value_parser = clap::value_parser!(LotReference))]
@@ -52,23 +54,31 @@ impl Setting {
         1.0 / f64::from(self.tick_hz)
     }
 
+    /// `observer` with whatever `--delay`, `--noise-deg`, `--smoothing` and `--reach`
+    /// changed.
+    pub(super) fn observer(&self, preset: Observer) -> Observer {
+        Observer {
+            delay_s: self.delay.unwrap_or(preset.delay_s),
+            noise_deg: self.noise_deg.unwrap_or(preset.noise_deg),
+            smoothing_s: self.smoothing.unwrap_or(preset.smoothing_s),
+            reach_m: self.reach.unwrap_or(preset.reach_m),
+            ..preset
+        }
+    }
+
+    /// A trial's configuration before an observer is applied.
     pub(super) fn trial_config(&self, seed: u64, record_trace: bool) -> TrialConfig {
         TrialConfig {
             fielder: FielderConfig {
                 limits: self.limits,
                 perception: PerceptionConfig {
                     eye_height_m: self.eye_height,
-                    delay_s: self.delay,
-                    noise_rad: self.noise_deg.to_radians(),
-                    smoothing_s: self.smoothing,
+                    ..PerceptionConfig::default()
                 },
                 noise_seed: seed,
                 lot_reference: self.lot_reference,
             },
-            zone: CatchZone {
-                reach_m: self.reach,
-                ..CatchZone::default()
-            },
+            zone: CatchZone::default(),
             record_trace,
         }
     }

@@ -2,7 +2,7 @@
 
 use super::args::{any_number, ground_point, non_negative, parse_str, positive, Setting};
 use clap::Args;
-use fieldhouse::fielding::{Outcome, StrategyKind, TraceEntry, Trial};
+use fieldhouse::fielding::{Observer, Outcome, StrategyKind, TraceEntry, Trial};
 use fieldhouse::physics::{Flight, Launch};
 use glam::DVec2;
 use serde::Serialize;
@@ -45,7 +45,12 @@ pub(super) struct CatchArgs {
     /// backspin (lift up), 90 side spin curving toward increasing azimuth, -90 the other way.
     #[arg(long, value_name = "DEG", default_value_t = 0.0, value_parser = any_number)]
     spin_axis: f64,
-    /// Seed for perceptual noise (only matters with --noise-deg).
+    /// Who watches the ball: `ideal` (no delay or noise, 1 m reach) or `human` (0.2 s
+    /// delay, 0.05° noise, 0.2 s smoothing, 0.9 m reach; docs/catching.md gives the
+    /// sources). --delay, --noise-deg, --smoothing and --reach change single settings.
+    #[arg(long, default_value = "ideal", value_parser = parse_str::<Observer>)]
+    observer: Observer,
+    /// Seed for perceptual noise (only matters with noise).
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Print one JSON document with the outcome and a trace entry per tick.
@@ -88,7 +93,8 @@ pub(super) fn run(args: CatchArgs, out: &mut impl Write) -> anyhow::Result<()> {
     };
     let air = launch.air(s.air, s.air_density, &s.ball);
     let flight = Flight::simulate(launch.initial_state(), &air, s.dt(), MAX_FLIGHT_S);
-    let config = s.trial_config(args.seed, args.json);
+    let mut config = s.trial_config(args.seed, args.json);
+    s.observer(args.observer).apply(&mut config);
     let result = Trial {
         flight: &flight,
         config: &config,

@@ -5,11 +5,12 @@ use super::plots;
 use anyhow::Context;
 use clap::Args;
 use fieldhouse::fielding::{
-    LaunchDistribution, SpareBin, StrategyKind, StrategySummary, Sweep, SweepReport,
+    LaunchDistribution, Observer, SpareBin, StrategyKind, StrategySummary, Sweep, SweepCase,
+    SweepReport,
 };
 use fieldhouse::words::plural;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// How many launches `--svg` draws.
@@ -33,13 +34,21 @@ pub(super) struct SweepArgs {
     /// Number of launches.
     #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
     n: u64,
+    /// Comma-separated observers, each a full sweep over the same launches: `ideal` (no
+    /// delay or noise, 1 m reach) and `human` (0.2 s delay, 0.05° noise, 0.2 s
+    /// smoothing, 0.9 m reach; docs/catching.md gives the sources). --delay, --noise-deg,
+    /// --smoothing and --reach change that setting for every observer.
+    #[arg(long, value_delimiter = ',', default_value = "ideal,human",
+          value_parser = super::args::parse_str::<Observer>)]
+    observers: Vec<Observer>,
     /// Seed of the launch distribution (and of perceptual noise).
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Print the report as one JSON document.
+    /// Print the reports as one JSON document: an array, a report per observer.
     #[arg(long)]
     json: bool,
-    /// Draw the first launches' paths and optical trajectories as SVG files into DIR.
+    /// Draw the first launches' paths and optical trajectories as SVG files into a folder
+    /// per observer in DIR (DIR/ideal, DIR/human).
     #[arg(long, value_name = "DIR")]
     svg: Option<PathBuf>,
     #[command(flatten)]
@@ -48,46 +57,80 @@ pub(super) struct SweepArgs {
 
 pub(super) fn run(args: SweepArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let s = &args.setting;
-    let sweep = Sweep {
-        ball: s.ball,
-        air: s.air,
-        air_density: s.air_density,
-        dt: s.dt(),
-        trial: s.trial_config(args.seed, false),
-    };
     let dist = LaunchDistribution::default();
     let started = Instant::now();
-    let cases = sweep.cases(&dist, args.n as usize, args.seed);
-    let report = sweep.run(&cases, &args.strategies, &dist, args.seed);
+    let mut reports = Vec::with_capacity(args.observers.len());
+    let mut cases = Vec::new();
+    for &preset in &args.observers {
+        let sweep = Sweep {
+            ball: s.ball,
+            air: s.air,
+            air_density: s.air_density,
+            dt: s.dt(),
+            trial: s.trial_config(args.seed, false),
+            observer: s.observer(preset),
+        };
+        if cases.is_empty() {
+            // The launches are the observers' common ground: drawn and flown once.
+            cases = sweep.cases(&dist, args.n as usize, args.seed);
+        }
+        let report = sweep.run(&cases, &args.strategies, &dist, args.seed);
+        if let Some(dir) = &args.svg {
+            draw(
+                &dir.join(sweep.observer.name),
+                &sweep,
+                &cases,
+                &args,
+                &report,
+            )?;
+        }
+        reports.push(report);
+    }
     tracing::info!(
         launches = args.n,
         strategies = args.strategies.len(),
+        observers = args.observers.len(),
         elapsed_s = started.elapsed().as_secs_f64(),
         "sweep finished"
     );
-    if let Some(dir) = &args.svg {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        for (i, case) in cases.iter().take(PLOTTED_LAUNCHES).enumerate() {
-            let results: Vec<_> = args
-                .strategies
-                .iter()
-                .map(|&k| sweep.trial(i, case, k, true))
-                .collect();
-            plots::draw_launch(dir, i, case, &results, s.eye_height)?;
-        }
-        plots::draw_rates(dir, &report)?;
-        tracing::info!(dir = %dir.display(), "plots written");
-    }
     if args.json {
-        writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
+        writeln!(out, "{}", serde_json::to_string_pretty(&reports)?)?;
     } else {
-        print_table(&report, out)?;
+        for (k, report) in reports.iter().enumerate() {
+            if k > 0 {
+                writeln!(out)?;
+            }
+            print_table(report, out)?;
+        }
     }
+    Ok(())
+}
+
+/// The first launches' plots and the catch rates of one observer's sweep, into `dir`.
+fn draw(
+    dir: &Path,
+    sweep: &Sweep,
+    cases: &[SweepCase],
+    args: &SweepArgs,
+    report: &SweepReport,
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    for (i, case) in cases.iter().take(PLOTTED_LAUNCHES).enumerate() {
+        let results: Vec<_> = args
+            .strategies
+            .iter()
+            .map(|&k| sweep.trial(i, case, k, true))
+            .collect();
+        plots::draw_launch(dir, i, case, &results, args.setting.eye_height)?;
+    }
+    plots::draw_rates(dir, report)?;
+    tracing::info!(dir = %dir.display(), "plots written");
     Ok(())
 }
 
 fn print_table(report: &SweepReport, out: &mut impl Write) -> std::io::Result<()> {
     let catchable = report.strategies.first().map_or(0, |s| s.catchable);
+    writeln!(out, "observer {}", report.observer)?;
     writeln!(
         out,
         "{} (seed {}), {} catchable by the predictive baseline",

@@ -4,6 +4,7 @@
 mod body;
 mod catch_zone;
 mod fielder;
+mod observer;
 #[cfg(test)]
 mod oracles;
 mod path_shape;
@@ -15,6 +16,7 @@ pub use body::{Body, Limits};
 pub use catch_zone::CatchZone;
 pub(crate) use fielder::Fielder;
 pub use fielder::{FielderConfig, Step};
+pub use observer::Observer;
 pub(crate) use path_shape::{OpticalFit, PathShape};
 pub use strategy::{Brain, Forecast, LotReference, StrategyKind};
 pub use sweep::{

@@ -35,6 +35,7 @@ fn sweep(limits: Limits) -> Sweep {
             },
             ..TrialConfig::default()
         },
+        observer: Observer::IDEAL,
     }
 }
 

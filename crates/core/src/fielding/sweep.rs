@@ -3,7 +3,7 @@
 
 use super::path_shape::bulge;
 use super::trial::{forecast, Trial, TrialConfig, TrialResult};
-use super::{PathShape, StrategyKind};
+use super::{Observer, PathShape, StrategyKind};
 use crate::physics::{AirModel, BallSpec, Flight, Launch};
 use glam::DVec2;
 use rand::{Rng, SeedableRng};
@@ -71,8 +71,11 @@ pub struct Sweep {
     pub air_density: f64,
     /// The tick, s.
     pub dt: f64,
-    /// The fielder and catch zone of every trial.
+    /// The fielder and catch zone of every trial, before the observer's senses and
+    /// reach are applied.
     pub trial: TrialConfig,
+    /// Who watches: its delay, noise, smoothing and reach replace the trial's.
+    pub observer: Observer,
 }
 
 /// What one strategy did over a whole sweep.
@@ -156,6 +159,8 @@ pub struct SweepReport {
     pub seed: u64,
     /// What the cases were drawn from.
     pub(crate) distribution: LaunchDistribution,
+    /// Who watched.
+    pub observer: Observer,
     /// One summary per strategy, in the order asked for.
     pub strategies: Vec<StrategySummary>,
 }
@@ -217,6 +222,13 @@ impl Sweep {
         Flight::simulate(launch.initial_state(), &air, self.dt, MAX_FLIGHT_S)
     }
 
+    /// The trial configuration with the observer's senses and reach.
+    pub fn config(&self) -> TrialConfig {
+        let mut config = self.trial;
+        self.observer.apply(&mut config);
+        config
+    }
+
     /// Runs one strategy on one case. Noise (if any) is seeded by the case and strategy.
     pub fn trial(
         &self,
@@ -227,7 +239,7 @@ impl Sweep {
     ) -> TrialResult {
         let mut config = TrialConfig {
             record_trace,
-            ..self.trial
+            ..self.config()
         };
         config.fielder.noise_seed ^= (case_index as u64) << 8 | strategy as u64;
         Trial {
@@ -246,6 +258,7 @@ impl Sweep {
         dist: &LaunchDistribution,
         seed: u64,
     ) -> SweepReport {
+        let zone = self.config().zone;
         let tallies: Vec<(bool, Vec<Tally>)> = cases
             .par_iter()
             .enumerate()
@@ -254,8 +267,8 @@ impl Sweep {
                     .trial(i, case, StrategyKind::Predictive, false)
                     .outcome
                     .caught;
-                let band = forecast(&case.flight, &self.trial.zone);
-                let run = (band.point - case.start).length() - self.trial.zone.reach_m;
+                let band = forecast(&case.flight, &zone);
+                let run = (band.point - case.start).length() - zone.reach_m;
                 let spare_bin = spare_bin(band.t - self.trial.fielder.limits.sprint_time(run));
                 let tallies = strategies
                     .iter()
@@ -288,6 +301,7 @@ impl Sweep {
             n: cases.len(),
             seed,
             distribution: *dist,
+            observer: self.observer,
             strategies,
         }
     }
