@@ -12,21 +12,22 @@
 //! fielder), not `catch-sweep`'s. The binary runs as a user runs it, once per launch.
 //!
 //! **What is shared.** Only what docs/catching.md states: Nathan's drag and lift laws and
-//! the baseball's constants; the eye height and what the eye reads (tan ψ, α and their
-//! rates by differences between ticks); the law a1 = −K·(d/tan ψ)·(ṙ − ṙ₀), a2 = K_lat·d·α̇
-//! with K = 3/s, K_lat = 5/s and ṙ₀ the rate at the first step, once the ball is clearly
-//! above the eye (tan ψ ≥ 0.05); the human limits and how the body clips them; the catch
-//! zone. Where the documentation leaves a choice open, the comment at that line says
-//! which reading the oracle takes.
+//! the baseball's constants; the eye height and what the eye reads (tan ψ and α, and
+//! their rates: the ideal observer, no delay and no noise, sees them as they are); the
+//! law a1 = −K·(d/tan ψ)·(ṙ − ṙ₀), a2 = K_lat·d·α̇ with K = 3/s, K_lat = 5/s and ṙ₀ the
+//! rate at the first step, once the ball is clearly above the eye (tan ψ ≥ 0.05); the
+//! human limits and how the body clips them; the catch zone. Where the documentation
+//! leaves a choice open, the comment at that line says which reading the oracle takes.
 //!
 //! **Why ±3 percentage points** (the issue's bound on the two catch rates). Two faithful
-//! implementations differ in rounding, integration steps and interpolation, which move a
-//! fielder by millimetres and so flip only a ball that passes within millimetres of the
-//! edge of the reach; a few such balls in a few hundred are well inside 3 points, while a
-//! wrong law is not: without the lateral term chapman catches a thirtieth as many balls.
-//! The rate is a blunt instrument, though: chapman catches nearly the same balls with
-//! its gains 10 % off, or even without the d/tan ψ factor. So the test also compares the
-//! fielders' paths tick by tick, which such errors move by decimetres to metres.
+//! implementations differ in rounding, integration and how the eye estimates rates,
+//! which move a fielder by centimetres and so flip only a ball that passes within
+//! centimetres of the edge of the reach; a few such balls in a few hundred are well
+//! inside 3 points, while a wrong law is not: without the lateral term chapman catches a
+//! thirtieth as many balls. The rate is a blunt instrument, though: chapman catches
+//! nearly the same balls with its gains 10 % off, or even without the d/tan ψ factor. So
+//! the test also compares the fielders' paths tick by tick, which such errors move by
+//! decimetres to metres.
 
 mod common;
 
@@ -58,7 +59,6 @@ const CATCH_BAND: (f64, f64) = (0.3, 2.4);
 const SUBSTEPS: usize = 4;
 
 /// One fly ball and where the fielder starts.
-#[derive(Debug, Clone, Copy)]
 struct Launch {
     speed: f64,
     elevation_deg: f64,
@@ -67,10 +67,10 @@ struct Launch {
     fielder: [f64; 2],
 }
 
-/// The ball at each tick from the launch until the first tick below the ground, and the
-/// point (x, z) where it first reaches the ground.
+/// The ball's state at each tick from the launch until the first tick below the ground,
+/// and the point (x, z) where it first reaches the ground.
 struct Flight {
-    at_ticks: Vec<[f64; 3]>,
+    at_ticks: Vec<BallState>,
     landing: [f64; 2],
 }
 
@@ -83,16 +83,17 @@ fn ball_derivative(state: &BallState, spin_axis: [f64; 3], spin_rpm: f64) -> Bal
     let v = [state[3], state[4], state[5]];
     let radius = BALL_CIRCUMFERENCE / TAU;
     let k = 0.5 * AIR_DENSITY * PI * radius * radius / BALL_MASS;
-    let speed = norm(v);
+    let speed = length3(v);
     let cd = 0.3008 + 0.0292 * spin_rpm / 1000.0;
     let s = radius * (spin_rpm * TAU / 60.0) / speed;
     let cl = 1.120 * s / (0.583 + 2.333 * s);
     let lift = cross(spin_axis, v);
-    let lift_len = norm(lift);
+    let lift_len = length3(lift);
     let force = |i: usize| k * (-cd * speed * v[i] + cl * speed * speed * lift[i] / lift_len);
     [v[0], v[1], v[2], force(0), force(1) - GRAVITY, force(2)]
 }
 
+/// One step of classic fourth-order Runge–Kutta.
 fn rk4_step(y: &BallState, h: f64, f: impl Fn(&BallState) -> BallState) -> BallState {
     let along = |k: &BallState, c: f64| std::array::from_fn(|i| y[i] + c * k[i]);
     let k1 = f(y);
@@ -119,7 +120,7 @@ fn fly(launch: &Launch) -> Flight {
     // makes ω̂ × v̂ point up; it stays fixed in space.
     let spin_axis = [-azimuth.sin(), 0.0, azimuth.cos()];
     let h = 1.0 / (TICK_HZ * SUBSTEPS as f64);
-    let mut at_ticks = vec![[state[0], state[1], state[2]]];
+    let mut at_ticks = vec![state];
     let mut landing = None;
     while at_ticks.last().expect("the launch point")[1] >= 0.0 {
         for _ in 0..SUBSTEPS {
@@ -137,7 +138,7 @@ fn fly(launch: &Launch) -> Flight {
             }
             state = next;
         }
-        at_ticks.push([state[0], state[1], state[2]]);
+        at_ticks.push(state);
     }
     Flight {
         at_ticks,
@@ -146,21 +147,36 @@ fn fly(launch: &Launch) -> Flight {
 }
 
 /// What the fielder's eye reads off the ball at one tick: tan ψ, the bearing α (from +x
-/// toward +z) and the horizontal distance d.
-#[derive(Clone, Copy)]
+/// toward +z), the horizontal distance d, and the rates of tan ψ and α.
 struct Sight {
     tan_psi: f64,
     alpha: f64,
     distance: f64,
+    tan_psi_rate: f64,
+    alpha_rate: f64,
 }
 
-fn look(ball: [f64; 3], fielder: [f64; 2]) -> Sight {
-    let (dx, dz) = (ball[0] - fielder[0], ball[2] - fielder[1]);
-    let distance = dx.hypot(dz);
+/// The ideal observer (no delay, no noise) sees the present as it is: the angles, and
+/// their rates from the ball's velocity relative to the fielder's own.
+fn look(ball: &BallState, fielder: [f64; 2], fielder_velocity: [f64; 2]) -> Sight {
+    let (x, y, z) = (
+        ball[0] - fielder[0],
+        ball[1] - EYE_HEIGHT,
+        ball[2] - fielder[1],
+    );
+    let (vx, vy, vz) = (
+        ball[3] - fielder_velocity[0],
+        ball[4],
+        ball[5] - fielder_velocity[1],
+    );
+    let d = x.hypot(z);
+    let d_rate = (x * vx + z * vz) / d;
     Sight {
-        tan_psi: (ball[1] - EYE_HEIGHT) / distance,
-        alpha: dz.atan2(dx),
-        distance,
+        tan_psi: y / d,
+        alpha: z.atan2(x),
+        distance: d,
+        tan_psi_rate: (vy * d - y * d_rate) / (d * d),
+        alpha_rate: (x * vz - z * vx) / (d * d),
     }
 }
 
@@ -176,40 +192,34 @@ fn chapman_run(flight: &Flight, start: [f64; 2], lateral_gain: f64) -> Run {
     let dt = 1.0 / TICK_HZ;
     let (mut pos, mut vel) = (start, [0.0, 0.0]);
     let mut path = Vec::new();
-    let mut before: Option<Sight> = None;
     let mut held_rate: Option<f64> = None;
     for (tick, segment) in flight.at_ticks.windows(2).enumerate() {
         path.push(pos);
-        let now = look(segment[0], pos);
+        let now = look(&segment[0], pos, vel);
+        // The law acts after the reaction time while the ball is clearly above the eye:
+        // the fielder stands until then, and runs on without a command in the last
+        // ticks before a catch below it. The rate of tan ψ at its first step is the one
+        // it holds.
+        let reacted = tick as f64 / TICK_HZ >= REACTION_S;
         let mut command = [0.0, 0.0];
-        if let Some(before) = before {
-            let psi_rate = (now.tan_psi - before.tan_psi) / dt;
-            let alpha_rate = wrap(now.alpha - before.alpha) / dt;
-            // The law acts after the reaction time while the ball is clearly above the
-            // eye: the fielder stands until then, and runs on without a command in the
-            // last ticks before a catch below it. The rate of tan ψ at its first step is
-            // the one it holds.
-            let reacted = tick as f64 / TICK_HZ >= REACTION_S;
-            if reacted && now.tan_psi >= CLEARLY_ABOVE {
-                let held = *held_rate.get_or_insert(psi_rate);
-                let toward = [now.alpha.cos(), now.alpha.sin()];
-                let sideways = [-toward[1], toward[0]];
-                let radial = -RADIAL_GAIN * now.distance / now.tan_psi * (psi_rate - held);
-                let lateral = lateral_gain * now.distance * alpha_rate;
-                command = std::array::from_fn(|i| radial * toward[i] + lateral * sideways[i]);
-            }
+        if reacted && now.tan_psi >= CLEARLY_ABOVE {
+            let held = *held_rate.get_or_insert(now.tan_psi_rate);
+            let toward = [now.alpha.cos(), now.alpha.sin()];
+            let sideways = [-toward[1], toward[0]];
+            let radial = -RADIAL_GAIN * now.distance / now.tan_psi * (now.tan_psi_rate - held);
+            let lateral = lateral_gain * now.distance * now.alpha_rate;
+            command = std::array::from_fn(|i| radial * toward[i] + lateral * sideways[i]);
         }
-        before = Some(now);
         // The body: the acceleration's length clipped (its direction kept), then the
         // speed's; constant acceleration over the tick moves it by the mean velocity.
-        let accel = scale(command, (TOP_ACCEL / norm2(command)).min(1.0));
+        let accel = scale(command, (TOP_ACCEL / length2(command)).min(1.0));
         let pushed = [vel[0] + accel[0] * dt, vel[1] + accel[1] * dt];
-        let next_vel = scale(pushed, (TOP_SPEED / norm2(pushed)).min(1.0));
+        let next_vel = scale(pushed, (TOP_SPEED / length2(pushed)).min(1.0));
         let next_pos = [
             pos[0] + 0.5 * (vel[0] + next_vel[0]) * dt,
             pos[1] + 0.5 * (vel[1] + next_vel[1]) * dt,
         ];
-        if passes_within_reach(segment[0], segment[1], pos, next_pos) {
+        if passes_within_reach(&segment[0], &segment[1], pos, next_pos) {
             return Run { caught: true, path };
         }
         (pos, vel) = (next_pos, next_vel);
@@ -223,7 +233,7 @@ fn chapman_run(flight: &Flight, start: [f64; 2], lateral_gain: f64) -> Run {
 /// The catch zone on the segment between two ticks (ball and fielder each moving in a
 /// straight line along it): a descending ball whose horizontal distance from the fielder
 /// is within reach at some instant while its height is in the catch band.
-fn passes_within_reach(ball0: [f64; 3], ball1: [f64; 3], f0: [f64; 2], f1: [f64; 2]) -> bool {
+fn passes_within_reach(ball0: &BallState, ball1: &BallState, f0: [f64; 2], f1: [f64; 2]) -> bool {
     let drop = ball0[1] - ball1[1];
     if drop <= 0.0 {
         return false;
@@ -247,12 +257,7 @@ fn passes_within_reach(ball0: [f64; 3], ball1: [f64; 3], f0: [f64; 2], f1: [f64;
     } else {
         enter
     };
-    norm2([p[0] + closest * q[0], p[1] + closest * q[1]]) <= REACH
-}
-
-/// An angle difference brought into (−π, π], so α̇ does not jump where atan2 wraps.
-fn wrap(angle: f64) -> f64 {
-    (angle + PI).rem_euclid(TAU) - PI
+    length2([p[0] + closest * q[0], p[1] + closest * q[1]]) <= REACH
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -263,11 +268,11 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-fn norm(v: [f64; 3]) -> f64 {
+fn length3(v: [f64; 3]) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
 
-fn norm2(v: [f64; 2]) -> f64 {
+fn length2(v: [f64; 2]) -> f64 {
     v[0].hypot(v[1])
 }
 
@@ -275,8 +280,9 @@ fn scale(v: [f64; 2], k: f64) -> [f64; 2] {
     [v[0] * k, v[1] * k]
 }
 
-fn distance2(a: [f64; 2], b: [f64; 2]) -> f64 {
-    norm2([a[0] - b[0], a[1] - b[1]])
+/// The distance between two points on the ground.
+fn apart(a: [f64; 2], b: [f64; 2]) -> f64 {
+    length2([a[0] - b[0], a[1] - b[1]])
 }
 
 /// The issue's launch distribution (docs/catching.md, "Experiments"), drawn here: the
@@ -348,7 +354,7 @@ fn compare(launch: &Launch, flight: &Flight) -> Comparison {
             (chapman_run(flight, launch.fielder, LATERAL_GAIN), chapman),
             (chapman_run(flight, launch.fielder, 0.0), chapman_1d),
         ],
-        landing_error: distance2(landing, flight.landing),
+        landing_error: apart(landing, flight.landing),
     }
 }
 
@@ -357,7 +363,7 @@ fn path_gap(a: &Run, b: &Run) -> f64 {
     a.path
         .iter()
         .zip(&b.path)
-        .map(|(p, q)| distance2(*p, *q))
+        .map(|(p, q)| apart(*p, *q))
         .fold(0.0, f64::max)
 }
 
@@ -398,7 +404,7 @@ fn an_independent_chapman_fielder_catches_the_balls_the_binary_catches() {
             .map(|c| path_gap(&c.runs[k].0, &c.runs[k].1))
             .collect();
         gaps.sort_by(f64::total_cmp);
-        let gap_90th = gaps[gaps.len() * 9 / 10];
+        let (gap_90th, gap_worst) = (gaps[gaps.len() * 9 / 10], gaps[gaps.len() - 1]);
         eprintln!(
             "{name}: caught {:.1}% (oracle) and {:.1}% (binary) of {} launches, the same \
              decision on {:.1}%; largest gap between the paths: median {:.4} m, 90th \
@@ -409,7 +415,7 @@ fn an_independent_chapman_fielder_catches_the_balls_the_binary_catches() {
             100.0 * agreement,
             gaps[gaps.len() / 2],
             gap_90th,
-            gaps[gaps.len() - 1],
+            gap_worst,
         );
         // (a) The issue's bound: the two catch rates within 3 percentage points.
         assert!(
@@ -417,7 +423,7 @@ fn an_independent_chapman_fielder_catches_the_balls_the_binary_catches() {
             "{name}: the catch rates differ: {:?}",
             rates[k]
         );
-        // (b) The same balls, not only as many. The paths agree to millimetres (below),
+        // (b) The same balls, not only as many. The paths agree to centimetres (below),
         // so a decision can differ only for a ball that passes within about that of the
         // edge of the 1 m reach or of the catch band's ends. There were none in 300 when
         // this was written; 97 % leaves room for a few such balls, and fails a side that
@@ -427,18 +433,21 @@ fn an_independent_chapman_fielder_catches_the_balls_the_binary_catches() {
             "{name}: the same decision on only {:.1}% of launches",
             100.0 * agreement
         );
-        // The same runs: the fielders agree tick by tick. Measured: 2 mm at the 90th
-        // percentile, all of it from the balls (with the library's rounding of the
-        // circumference, below, under 0.1 mm). Each of these errors in the oracle puts
-        // it at 11–47 cm and fails here: K = 2.7, K_lat = 4.5, 8.4 m/s, 4.4 m/s², a
-        // 0.35 s reaction, "clearly above" at tan ψ = 0.06, the eye at 1.8 m, the lateral
-        // term acting before the first step. Without the d/tan ψ factor (3.3 m) the rates
-        // agree within 3 points and the decisions on 97.7 %: decisions alone would not
-        // catch that. 5 cm leaves room for a ball that tiny differences steer to the
-        // other side of a fielder.
+        // The same runs: the fielders agree tick by tick. The oracle's eye sees the
+        // ball's true velocity; the library's ideal observer fits its last three looks
+        // with gravity but no drag, so it sees the drag's and lift's effect on the
+        // velocity a tick late (about 0.1 m/s). That parts the fielders by 2.6 cm
+        // (median), 5 cm (90th percentile) and 7 cm at worst; an oracle that mimics the
+        // lag agrees to 3 mm. These errors in the oracle fail here: K or K_lat 10 % off,
+        // 8.4 m/s, 4.4 m/s², a 0.35 s reaction, "clearly above" at tan ψ = 0.06 (90th
+        // percentile 19–47 cm), the eye at 1.6 m (14 cm), the lateral term acting before
+        // the first step (worst 1.05 m), no d/tan ψ factor (3.2 m, though the rates
+        // agree within 3 points and the decisions on 98 %: decisions alone would not
+        // catch it).
         assert!(
-            gap_90th <= 0.05,
-            "{name}: the paths differ by {gap_90th:.3} m at the 90th percentile"
+            gap_90th <= 0.12 && gap_worst <= 0.3,
+            "{name}: the paths differ by {gap_90th:.3} m at the 90th percentile, \
+             {gap_worst:.3} m at worst"
         );
     }
     // (c) The physics on its own: the same landing points. Both integrators are exact to
