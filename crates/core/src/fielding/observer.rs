@@ -51,9 +51,9 @@ impl Observer {
     ///   the head bobbing on a run, is worse. *Assumption*, three times the acuity limit,
     ///   per 60 Hz look, independent between looks.
     /// * **Reach 0.9 m.** Half the shoulder breadth plus upper arm, forearm and half the
-    ///   hand, from Winter's segment proportions of body height H (0.129 + 0.186 + 0.146
-    ///   + 0.054 = 0.515 H; *Biomechanics and Motor Control of Human Movement*, after
-    ///   Drillis & Contini 1966): 0.93 m for H = 1.8 m, whose eye height 0.936 H = 1.68 m
+    ///   hand, from Winter's segment proportions of body height H, 0.129 H + 0.186 H +
+    ///   0.146 H + 0.054 H = 0.515 H (*Biomechanics and Motor Control of Human Movement*,
+    ///   after Drillis & Contini 1966): 0.93 m for H = 1.8 m, whose eye height 0.936 H = 1.68 m
     ///   is our 1.7 m. No lean, no dive.
     /// * **Smoothing 0.2 s.** Not a sense but the fielder's remedy for the noise: the
     ///   sweeps' best window for both optical strategies (0.15–0.2 s; see
