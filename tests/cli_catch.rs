@@ -241,6 +241,22 @@ fn an_early_lot_reference_bends_the_paths_away_from_home_and_runs_faster() {
     );
 }
 
+/// The theories' optical signatures, without limits so each law holds as written:
+/// Chapman with Tresilian's lateral term keeps the ball's bearing (its sweep stays near
+/// 0°), LOT keeps the image on a line (it bends less than Chapman's) and lets the bearing
+/// turn as the image slides along a tilted line.
+#[test]
+fn the_optical_signatures_tell_chapman_from_lot() {
+    let doc = json(
+        "catch-sweep --n 60 --seed 4 --limits none --observers ideal --strategies chapman,lot-optical --json",
+    );
+    let (chapman, lot) = (&doc[0]["strategies"][0], &doc[0]["strategies"][1]);
+    let sweep = |s: &Value| num(&s["median_bearing_sweep_deg"]);
+    assert!(sweep(chapman) < 1.0, "{chapman}");
+    assert!(sweep(lot) > 3.0 * sweep(chapman).max(1.0), "{lot}");
+    assert!(num(&lot["median_image_bend"]) < num(&chapman["median_image_bend"]));
+}
+
 #[test]
 fn sweep_draws_svg_plots() {
     let dir = std::env::temp_dir().join(format!("fieldhouse-svg-{}", std::process::id()));

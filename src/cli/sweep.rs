@@ -140,7 +140,7 @@ fn print_table(report: &SweepReport, out: &mut impl Write) -> std::io::Result<()
     )?;
     writeln!(
         out,
-        "{:<12} {:>7} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>7} {:>7} {:>6} {:>8} {:>8}",
+        "{:<12} {:>7} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>7} {:>7} {:>6} {:>8} {:>8} {:>7}",
         "strategy",
         "caught",
         "catchable",
@@ -153,14 +153,15 @@ fn print_table(report: &SweepReport, out: &mut impl Write) -> std::io::Result<()
         "→home",
         "←home",
         "bulge",
-        "tanψ R²",
-        "image R²"
+        "ṙ drift",
+        "img bend",
+        "α sweep"
     )?;
     for s in &report.strategies {
         writeln!(out, "{}", row(s))?;
     }
     writeln!(out, "a mean: time-averaged |a| (m/s²); a peak / v peak: per-trial peaks averaged; a max / v max: largest over all trials")?;
-    writeln!(out, "path shapes vs the chord from start to end: straight, bulging toward home (→home) or away from it (←home); bulge: median largest deviation / chord (+ toward home); R²: straightness of tan ψ(t) and of the image path (medians)")?;
+    writeln!(out, "path shapes vs the chord from start to end: straight, bulging toward home (→home) or away from it (←home); bulge: median largest deviation / chord (+ toward home); ṙ drift: change of d(tan ψ)/dt over the flight / its mean (0: OAC's constant rate); img bend: scatter of the image across its best line / along it (0: LOT's straight image); medians")?;
     print_spare(report, out)
 }
 
@@ -207,7 +208,7 @@ fn spare_label(bin: &SpareBin) -> String {
 
 fn row(s: &StrategySummary) -> String {
     format!(
-        "{:<12} {:>6.1}% {:>9.1}% {:>9.2} {:>9.2} {:>9.1} {:>9.2} {:>9.1} {:>7.0}% {:>6.0}% {:>6.0}% {:>+6.2} {:>8.4} {:>8.4}",
+        "{:<12} {:>6.1}% {:>9.1}% {:>9.2} {:>9.2} {:>9.1} {:>9.2} {:>9.1} {:>7.0}% {:>6.0}% {:>6.0}% {:>+6.2} {:>8.3} {:>8.3} {:>6.1}°",
         s.strategy.name(),
         100.0 * s.catch_rate,
         100.0 * s.catchable_rate,
@@ -220,7 +221,8 @@ fn row(s: &StrategySummary) -> String {
         100.0 * s.share_bulging_toward_home,
         100.0 * s.share_bulging_away_from_home,
         s.median_bulge,
-        s.median_tan_psi_r2,
-        s.median_image_r2
+        s.median_rate_drift,
+        s.median_image_bend,
+        s.median_bearing_sweep_deg
     )
 }

@@ -2,7 +2,7 @@
 //! straight the ball's optical trajectory stays.
 
 use super::strategy::CLEARLY_ABOVE_EYE_TAN_PSI;
-use glam::{DVec2, DVec3};
+use glam::{DMat3, DVec2, DVec3};
 use serde::Serialize;
 
 /// A run's bend relative to the straight line (chord) from where the fielder started to
@@ -85,23 +85,42 @@ impl Deviation {
     }
 }
 
-/// Running sums for two straightness measures of what the fielder saw, accumulated a
+/// Running sums for the optical signatures of the catching theories, accumulated a
 /// tick at a time so a sweep never stores a trace.
 ///
-/// * `tan_psi_r2`: R² of a straight-line fit of tan ψ against time. Chapman's law holds
-///   it at 1.
-/// * `image_r2`: how much of the scatter of the image points (u, v) — the ball projected
-///   on a plane facing home plate — lies along their principal axis, λ_max/(λ_max+λ_min).
-///   An image that rises along a straight line (LOT) gives 1.
+/// Each theory keeps one thing constant, so each measure asks how far the flight was from
+/// that, relative to its own scale (an R² of a straight-line fit does not separate them:
+/// the trend of a rising tan ψ dwarfs any curvature, and every strategy scores 0.98+):
+///
+/// * `rate_drift`: OAC (Chapman) holds d(tan ψ)/dt constant. Fit tan ψ(s) = a + b·s + c·s²
+///   by least squares (s: time since the first counted look, up to S); the rate goes from
+///   b to b + 2c·S while its mean is b + c·S, so the drift is |2c·S / (b + c·S)|: 0 for a
+///   constant rate, 2/3 for tan ψ = 0.1 + 0.2·s + 0.05·s² over 2 s.
+/// * `bearing_sweep_deg`: Chapman's lateral law (Tresilian's term) drives dα/dt to zero,
+///   so the ball keeps its bearing from the fielder: the angle between the first and the
+///   latest line of sight, 0 for a constant bearing. LOT lets the image slide along a
+///   tilted line, which turns the bearing.
+/// * `image_bend`: LOT (McBeath et al.) keeps the ball's image (u, v) on a straight line
+///   (u, v: the tangents of the lateral and vertical angles on a plane facing home). With
+///   λ_max ≥ λ_min the principal variances of the image points, the bend is
+///   √(λ_min/λ_max): the scatter across the best line over the spread along it, 0 for a
+///   straight image, 1 for points round a circle.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct OpticalFit {
     n: f64,
-    t: Moments,
-    tan_psi: Moments,
+    /// Time of the first counted look, s.
+    t0: Option<f64>,
+    /// Time since `t0` of the latest, s.
+    s_last: f64,
+    /// Σ s^k for k = 1..4 and Σ s^k·tan ψ for k = 0..2.
+    s_pow: [f64; 4],
+    tan_psi_s_pow: [f64; 3],
     u: Moments,
     v: Moments,
-    t_tan_psi: f64,
     uv: f64,
+    n_image: f64,
+    /// The ball's first and latest counted bearings from the fielder (unit vectors).
+    bearings: Option<(DVec2, DVec2)>,
 }
 
 #[derive(Debug, Clone, Copy, Default)]
@@ -129,55 +148,82 @@ impl OpticalFit {
         let forward = (home - fielder).normalize_or(DVec2::X);
         let depth = r.dot(forward);
         let tan_psi = (ball.y - eye) / r.length();
+        let s = t - *self.t0.get_or_insert(t);
+        let bearing = r.normalize();
+        self.bearings = Some(
+            self.bearings
+                .map_or((bearing, bearing), |(first, _)| (first, bearing)),
+        );
         self.n += 1.0;
-        self.t.add(t);
-        self.tan_psi.add(tan_psi);
-        self.t_tan_psi += t * tan_psi;
+        self.s_last = s;
+        let mut power = 1.0;
+        for k in 0..4 {
+            if k < 3 {
+                self.tan_psi_s_pow[k] += power * tan_psi;
+            }
+            power *= s;
+            self.s_pow[k] += power;
+        }
         if depth > 0.0 {
             let (u, v) = (
                 r.dot(DVec2::new(-forward.y, forward.x)) / depth,
                 (ball.y - eye) / depth,
             );
+            self.n_image += 1.0;
             self.u.add(u);
             self.v.add(v);
             self.uv += u * v;
         }
     }
 
-    fn covariance(&self, a: &Moments, b: &Moments, ab: f64) -> f64 {
-        ab / self.n - (a.sum / self.n) * (b.sum / self.n)
-    }
-
-    /// `None` with fewer than three samples.
-    pub(crate) fn tan_psi_r2(&self) -> Option<f64> {
-        if self.n < 3.0 {
+    /// `None` with fewer than four looks, or looks the fit cannot tell apart.
+    pub(crate) fn rate_drift(&self) -> Option<f64> {
+        if self.n < 4.0 {
             return None;
         }
-        let var_t = self.covariance(&self.t, &self.t, self.t.sum_sq);
-        let var_p = self.covariance(&self.tan_psi, &self.tan_psi, self.tan_psi.sum_sq);
-        let cov = self.covariance(&self.t, &self.tan_psi, self.t_tan_psi);
-        Some(if var_p <= 0.0 {
-            1.0
-        } else {
-            (cov * cov / (var_t * var_p)).min(1.0)
+        let [s1, s2, s3, s4] = self.s_pow;
+        let normal = DMat3::from_cols(
+            DVec3::new(self.n, s1, s2),
+            DVec3::new(s1, s2, s3),
+            DVec3::new(s2, s3, s4),
+        );
+        if normal.determinant().abs() < 1e-12 {
+            return None;
+        }
+        let [_, b, c] = (normal.inverse() * DVec3::from(self.tan_psi_s_pow)).to_array();
+        let span = self.s_last;
+        Some((2.0 * c * span / (b + c * span)).abs())
+    }
+
+    /// The angle between the ball's first and latest counted bearings, degrees; `None`
+    /// before any look counts.
+    pub(crate) fn bearing_sweep_deg(&self) -> Option<f64> {
+        self.bearings.map(|(first, last)| {
+            first
+                .perp_dot(last)
+                .atan2(first.dot(last))
+                .abs()
+                .to_degrees()
         })
     }
 
-    /// `None` with fewer than three samples.
-    pub(crate) fn image_r2(&self) -> Option<f64> {
-        if self.n < 3.0 {
+    /// `None` with fewer than three looks in front of the fielder.
+    pub(crate) fn image_bend(&self) -> Option<f64> {
+        if self.n_image < 3.0 {
             return None;
         }
-        let a = self.covariance(&self.u, &self.u, self.u.sum_sq);
-        let c = self.covariance(&self.v, &self.v, self.v.sum_sq);
-        let b = self.covariance(&self.u, &self.v, self.uv);
+        let n = self.n_image;
+        let covariance = |a: &Moments, b: &Moments, ab: f64| ab / n - (a.sum / n) * (b.sum / n);
+        let a = covariance(&self.u, &self.u, self.u.sum_sq);
+        let c = covariance(&self.v, &self.v, self.v.sum_sq);
+        let b = covariance(&self.u, &self.v, self.uv);
         let half_trace = 0.5 * (a + c);
         let root = (0.25 * (a - c) * (a - c) + b * b).sqrt();
         let (l_max, l_min) = (half_trace + root, (half_trace - root).max(0.0));
         Some(if l_max <= 0.0 {
-            1.0
+            0.0
         } else {
-            l_max / (l_max + l_min)
+            (l_min / l_max).sqrt()
         })
     }
 }
@@ -193,6 +239,57 @@ fn counts_optically(ball: DVec3, fielder: DVec2, eye: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A fielder at the origin facing home far down −x: a ball `depth` m toward home,
+    /// `u·depth` to the fielder's left and `v·depth` above the eye has image (u, v), and
+    /// tan ψ = v / √(1 + u²).
+    fn look(fit: &mut OpticalFit, t: f64, u: f64, v: f64) {
+        let (eye, depth) = (1.7, 30.0);
+        let ball = DVec3::new(-depth, eye + v * depth, -u * depth);
+        fit.add(t, ball, DVec2::ZERO, DVec2::new(-1000.0, 0.0), eye);
+    }
+
+    #[test]
+    fn rate_drift_is_zero_for_a_constant_rate_and_two_thirds_for_the_worked_quadratic() {
+        let (mut constant, mut quadratic) = (OpticalFit::default(), OpticalFit::default());
+        for k in 0..=120 {
+            let s = k as f64 / 60.0;
+            look(&mut constant, 1.0 + s, 0.0, 0.1 + 0.2 * s);
+            look(&mut quadratic, 1.0 + s, 0.0, 0.1 + 0.2 * s + 0.05 * s * s);
+        }
+        assert!(constant.rate_drift().unwrap() < 1e-9);
+        // 2c·S / (b + c·S) = 2·0.05·2 / (0.2 + 0.05·2).
+        assert!((quadratic.rate_drift().unwrap() - 2.0 / 3.0).abs() < 1e-9);
+        assert_eq!(OpticalFit::default().rate_drift(), None);
+    }
+
+    #[test]
+    fn image_bend_is_zero_on_a_line_and_one_round_a_circle() {
+        let (mut line, mut circle) = (OpticalFit::default(), OpticalFit::default());
+        for k in 0..360 {
+            let a = (k as f64).to_radians();
+            look(&mut line, k as f64, 0.01 * k as f64, 0.1 + 0.02 * k as f64);
+            look(&mut circle, k as f64, 0.3 * a.cos(), 0.5 + 0.3 * a.sin());
+        }
+        assert!(line.image_bend().unwrap() < 1e-6);
+        assert!((circle.image_bend().unwrap() - 1.0).abs() < 1e-9);
+    }
+
+    /// A ball whose image slides sideways as it rises turns its bearing by atan(u) (the
+    /// image plane faces along the fielder's line to home); one rising straight up the
+    /// image keeps its bearing.
+    #[test]
+    fn bearing_sweep_is_the_turn_of_the_line_of_sight_in_degrees() {
+        let (mut sliding, mut rising) = (OpticalFit::default(), OpticalFit::default());
+        for k in 0..=100 {
+            let s = k as f64 / 100.0;
+            look(&mut sliding, s, s, 0.1 + s);
+            look(&mut rising, s, 0.0, 0.1 + s);
+        }
+        assert!((sliding.bearing_sweep_deg().unwrap() - 45.0).abs() < 1e-9);
+        assert!(rising.bearing_sweep_deg().unwrap() < 1e-9);
+        assert_eq!(OpticalFit::default().bearing_sweep_deg(), None);
+    }
 
     #[test]
     fn shapes_are_classified_by_their_bulge_relative_to_home() {

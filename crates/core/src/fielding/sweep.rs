@@ -116,10 +116,15 @@ pub struct StrategySummary {
     /// Catchable balls and this strategy's catches of them, by the time the ball left
     /// to spare (see [`SPARE_BINS_S`]): where a strategy fails.
     pub by_time_to_spare: Vec<SpareBin>,
-    /// Medians over trials of the optical straightness measures (see `OpticalFit`).
-    pub median_tan_psi_r2: f64,
-    /// See `median_tan_psi_r2`: the image path's straightness.
-    pub median_image_r2: f64,
+    /// Median over trials of how much d(tan ψ)/dt changed, relative to its mean: OAC's
+    /// signature is 0 (see `OpticalFit`).
+    pub median_rate_drift: f64,
+    /// Median over trials of the image path's bend: LOT's signature is 0 (see
+    /// `OpticalFit`).
+    pub median_image_bend: f64,
+    /// Median over trials of how far the ball's bearing from the fielder turned, degrees:
+    /// the constant-bearing signature of Chapman's lateral law is 0.
+    pub median_bearing_sweep_deg: f64,
 }
 
 /// The upper edges of the time-to-spare bins, s (the last bin has none). A ball's time to
@@ -176,8 +181,9 @@ struct Tally {
     mean_accel: f64,
     shape: PathShape,
     bulge: Option<f64>,
-    tan_psi_r2: Option<f64>,
-    image_r2: Option<f64>,
+    rate_drift: Option<f64>,
+    image_bend: Option<f64>,
+    bearing_sweep_deg: Option<f64>,
 }
 
 impl Sweep {
@@ -284,8 +290,9 @@ impl Sweep {
                             mean_accel: r.mean_accel,
                             shape: PathShape::of(&r.path, home),
                             bulge: bulge(&r.path, home),
-                            tan_psi_r2: r.optical.tan_psi_r2(),
-                            image_r2: r.optical.image_r2(),
+                            rate_drift: r.optical.rate_drift(),
+                            image_bend: r.optical.image_bend(),
+                            bearing_sweep_deg: r.optical.bearing_sweep_deg(),
                         }
                     })
                     .collect();
@@ -354,7 +361,8 @@ fn summarise<'a>(
         share_bulging_away_from_home: share(PathShape::BulgesAwayFromHome),
         median_bulge: median(&|t| t.bulge),
         by_time_to_spare,
-        median_tan_psi_r2: median(&|t| t.tan_psi_r2),
-        median_image_r2: median(&|t| t.image_r2),
+        median_rate_drift: median(&|t| t.rate_drift),
+        median_image_bend: median(&|t| t.image_bend),
+        median_bearing_sweep_deg: median(&|t| t.bearing_sweep_deg),
     }
 }
