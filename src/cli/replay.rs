@@ -112,6 +112,7 @@ fn info(replay: &Replay, as_json: bool, out: &mut impl Write) -> anyhow::Result<
     let doc = json!({
         "format": replay.header["format"],
         "fieldhouse": replay.header["fieldhouse"],
+        "simulation": fieldhouse::replay::simulation(&replay.header),
         "match": replay.match_id(),
         "sport": replay.scenario.sport.name(),
         "name": replay.scenario.name,
@@ -137,12 +138,13 @@ fn info(replay: &Replay, as_json: bool, out: &mut impl Write) -> anyhow::Result<
     }
     writeln!(
         out,
-        "{} replay of match {} ({}), seed {}, fieldhouse {}",
+        "{} replay of match {} ({}), seed {}, fieldhouse {}, simulation {}",
         doc["sport"].as_str().unwrap_or_default(),
         replay.match_id(),
         replay.scenario.name.as_deref().unwrap_or("unnamed"),
         replay.scenario.seed,
-        doc["fieldhouse"].as_str().unwrap_or("?")
+        doc["fieldhouse"].as_str().unwrap_or("?"),
+        doc["simulation"]
     )?;
     writeln!(
         out,

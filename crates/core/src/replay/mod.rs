@@ -4,8 +4,9 @@
 //!
 //! 1. a header: `{"record": "header", "format": 2, "fieldhouse": "0.1.0", "match": {...},
 //!    "scenario": {...}, "seed": 1, "motion": "<fingerprint>", "protocol": 3,
-//!    "started_unix_ms": ...}`; `protocol` is the version the frames are written in (a
-//!    file without it is protocol 2), which verification writes them in again;
+//!    "simulation": 2, "started_unix_ms": ...}`; `protocol` is the version the frames
+//!    are written in (a file without it is protocol 2), which verification writes them
+//!    in again; `simulation` is [`crate::sim::VERSION`] (a file without it is 1);
 //! 2. the `frame` messages of the wire protocol, byte for byte, in order, interleaved
 //!    with the bot log: `{"record": "control", "tick": t, "agent": "cf", "bot": true}`
 //!    when a bot takes or gives back an agent, and `{"record": "command", "tick": t,
@@ -205,6 +206,8 @@ mod records {
         pub(super) record: tags::Header,
         pub(super) scenario: &'a Scenario,
         pub(super) seed: u64,
+        /// The simulation's version: only it re-simulates the frames exactly.
+        pub(super) simulation: u32,
         pub(super) started_unix_ms: u64,
     }
 
@@ -253,6 +256,7 @@ pub fn header(match_info: &impl Serialize, scenario: &Scenario, motion: &str) ->
         record: crate::tags::Header,
         scenario,
         seed: scenario.seed,
+        simulation: crate::sim::VERSION,
         started_unix_ms,
     })
     .expect("headers serialise")
@@ -512,6 +516,14 @@ pub fn protocol(header: &Value) -> u32 {
     header["protocol"]
         .as_u64()
         .map_or(2, |v| u32::try_from(v).unwrap_or(u32::MAX))
+}
+
+/// The simulation version that recorded a file with this header: its `simulation`, or 1
+/// for a file written before headers said.
+pub fn simulation(header: &Value) -> u32 {
+    header["simulation"]
+        .as_u64()
+        .map_or(1, |v| u32::try_from(v).unwrap_or(u32::MAX))
 }
 
 /// Errors leave their source out of their message: it is the next link of the chain

@@ -44,6 +44,14 @@ pub enum Mismatch {
         /// Frames the re-simulation made.
         replayed: usize,
     },
+    /// A frame or the count differed, and the file was recorded by another version of
+    /// the simulation, which is the likely reason.
+    Simulation {
+        /// The version in the file's header.
+        recorded: u32,
+        /// The difference found.
+        first: Box<Mismatch>,
+    },
     /// The footer's hash is not the hash of the frames.
     Hash {
         /// The footer's hash, hex.
@@ -69,6 +77,13 @@ impl fmt::Display for Mismatch {
             Mismatch::Count { recorded, replayed } => write!(
                 f,
                 "the file has {recorded} frames, the re-simulation made {replayed}"
+            ),
+            Mismatch::Simulation { recorded, first } => write!(
+                f,
+                "{first}; the replay was recorded by simulation version {recorded} and this \
+                 build simulates version {}: only the simulation that recorded a replay can \
+                 re-simulate it (its frames still play and export)",
+                crate::sim::VERSION
             ),
             Mismatch::Hash { footer, frames } => {
                 write!(
@@ -132,6 +147,20 @@ fn apply(world: &mut World, ids: &[String], entry: &Logged) -> Result<(), Mismat
 /// segment of a rotated recording). Basketball needs the motion capabilities the match
 /// was played with.
 pub fn verify(replay: &Replay, caps: Option<Arc<Capabilities>>) -> Result<Verified, Mismatch> {
+    let recorded = super::simulation(&replay.header);
+    resimulate(replay, caps).map_err(|first| match first {
+        Mismatch::Frame { .. } | Mismatch::Count { .. } if recorded != crate::sim::VERSION => {
+            Mismatch::Simulation {
+                recorded,
+                first: Box::new(first),
+            }
+        }
+        other => other,
+    })
+}
+
+/// [`verify`] without the explanation of a version change.
+fn resimulate(replay: &Replay, caps: Option<Arc<Capabilities>>) -> Result<Verified, Mismatch> {
     let s = &replay.scenario;
     let world = World::new(s, caps).map_err(|e| Mismatch::Unplayable(e.to_string()))?;
     // A file cut before its first frame was written (in format 2, before its first

@@ -22,6 +22,16 @@ pub use scenario::{
 
 pub use crate::protocol::Action;
 
+/// The simulation's version, which replay headers record: bumped whenever the same
+/// scenario and seed play differently, so a replay only the old simulation can
+/// re-simulate says so instead of failing at some tick without a reason.
+///
+/// 1. Up to fieldhouse 0.1.0 (headers without `simulation`).
+/// 2. Fielders estimate the ball's path by a least-squares fit over their looks instead
+///    of differencing the last two or three (baseball and cricket play differently;
+///    basketball does not).
+pub const VERSION: u32 = 2;
+
 use crate::basketball::{Capabilities, Order};
 use crate::protocol::{Agent, AgentInfo, Ball, Event, Field, MatchInfo, Score, Sensed};
 use fly::{FielderOrder, FlyWorld};
