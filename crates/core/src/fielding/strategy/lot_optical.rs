@@ -22,16 +22,17 @@ const LINE_CHORD_S: f64 = 0.3;
 ///
 /// **The image.** Let ê_f point from the fielder to home plate and ê_l be a quarter turn
 /// from it toward increasing bearing. With the ball at D along ê_f, L along ê_l and Y
-/// above the eye, its image
-/// on a plane one metre in front of the eye is (u, v) = (L/D, Y/D): u and v are the
-/// tangents of McBeath's lateral and vertical optical angles.
+/// above the eye, its image on a plane one metre in front of the eye is
+/// (u, v) = (L/D, Y/D): u and v are the tangents of McBeath's lateral and vertical
+/// optical angles.
 ///
 /// **Which line.** Once the ball is clearly above the eye and the fielder starts to run,
 /// it latches the image point (u₀, v₀) and the direction the image is moving in; the line
-/// through that point in that direction is the one it keeps. For the first
-/// [`LINE_CHORD_S`] it refines the direction as the chord from (u₀, v₀) to the image. A straight image path means
-/// the ball's path relative to the eye stays in one plane through the eye (a·L + b·Y =
-/// c·D); the latched line picks the plane the ball is moving in at that moment.
+/// through that point in that direction is the one it keeps. For its first 0.3 s
+/// (`LINE_CHORD_S`) it refines the direction as the chord from (u₀, v₀) to the image. A
+/// straight image path means the ball's path relative to the eye stays in one plane
+/// through the eye (a·L + b·Y = c·D); the latched line picks the plane the ball is
+/// moving in at that moment.
 ///
 /// We do not force the line through the image origin (home plate). That reading, which
 /// makes the ratio of tangents u/v constant, moves the fielder sideways only as gravity
