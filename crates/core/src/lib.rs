@@ -17,11 +17,13 @@
 //!
 //! * [`physics`]: ball flight. Gravity, Nathan's drag and Magnus lift, a fixed-step RK4
 //!   integrator, bounces and rolls; baseball and cricket presets.
-//! * [`perception`]: what a fielder can see from its eye: the elevation tan ψ and bearing
-//!   α of the ball and their rates by differences, with optional delay and noise.
-//! * [`fielding`]: fielders with human limits, the sub-tick catch test, the catching
-//!   strategies (Chapman/OAC with Tresilian's lateral term, Gillies & Dodgson's LOT,
-//!   McBeath's optical LOT, trajectory prediction), single trials and sweeps.
+//! * [`perception`]: what a fielder can see from its eye (the elevation tan ψ and bearing
+//!   α of the ball, with optional delay and noise) and its estimate of the present from
+//!   its looks: a least-squares fit of the ball's path, carried over the delay.
+//! * [`fielding`]: fielders with human limits, the ideal and human observers, the
+//!   sub-tick catch test, the catching strategies (Chapman/OAC with Tresilian's lateral
+//!   term, Gillies & Dodgson's LOT, McBeath's optical LOT, trajectory prediction), single
+//!   trials, sweeps, path shapes and the optical signatures.
 //! * [`motion`]: human motion: BVH motion capture (the CMU clips embedded in the binary,
 //!   or a user's own directory) loaded into clips, and the motion graph of a behaviour
 //!   (Kovar et al. 2002): transitions between similar frames, pruned to the largest
