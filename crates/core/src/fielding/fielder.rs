@@ -84,8 +84,9 @@ impl Fielder {
             sighting.blurred(perception.noise_rad, &mut self.noise),
             self.body.pos,
         );
-        let percept = self.history.percept(self.body.pos, self.body.vel);
+        // The estimate is a fit over the window: only worth making once it can be acted on.
         let command = if t >= limits.reaction_s {
+            let percept = self.history.percept(self.body.pos, self.body.vel);
             self.brain.command(&Situation {
                 percept: percept.as_ref(),
                 body: &self.body,

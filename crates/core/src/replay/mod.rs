@@ -513,17 +513,21 @@ pub fn first_tick(header: &Value) -> u64 {
 /// or 2 for a file written before headers said (protocol 2 was the last version without
 /// it).
 pub fn protocol(header: &Value) -> u32 {
-    header["protocol"]
-        .as_u64()
-        .map_or(2, |v| u32::try_from(v).unwrap_or(u32::MAX))
+    version(header, "protocol", 2)
 }
 
 /// The simulation version that recorded a file with this header: its `simulation`, or 1
 /// for a file written before headers said.
 pub fn simulation(header: &Value) -> u32 {
-    header["simulation"]
+    version(header, "simulation", 1)
+}
+
+/// A version number in a header, or `before` for a file written before headers gave it.
+/// A number too large for a `u32` reads as `u32::MAX`: no build knows it either way.
+fn version(header: &Value, key: &str, before: u32) -> u32 {
+    header[key]
         .as_u64()
-        .map_or(1, |v| u32::try_from(v).unwrap_or(u32::MAX))
+        .map_or(before, |v| u32::try_from(v).unwrap_or(u32::MAX))
 }
 
 /// Errors leave their source out of their message: it is the next link of the chain
