@@ -10,14 +10,14 @@ use fieldhouse::basketball::{
     ShotModel, Situation,
 };
 use fieldhouse::costmap::AgentPose;
-use fieldhouse::motion::{MotionLibrary, FPS};
+use fieldhouse::motion::{Mirroring, MotionLibrary, FPS};
 use glam::DVec2;
 use std::hint::black_box;
 use std::path::PathBuf;
 use std::sync::Arc;
 
 fn capabilities() -> Arc<Capabilities> {
-    let library = MotionLibrary::embedded(FPS);
+    let library = MotionLibrary::embedded(FPS, Mirroring::On);
     let cache = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/bench-cache");
     Arc::new(
         Capabilities::build(&library, Some(&cache), &mut |_| {}).expect("the behaviours build"),
@@ -27,7 +27,7 @@ fn capabilities() -> Arc<Capabilities> {
 /// Target: every graph and every map of every behaviour and start state, as a first
 /// start builds them with no cache, in under 10 s.
 fn capabilities_uncached(c: &mut Criterion) {
-    let library = MotionLibrary::embedded(FPS);
+    let library = MotionLibrary::embedded(FPS, Mirroring::On);
     let mut group = c.benchmark_group("basketball/capabilities");
     group.sample_size(10);
     group.bench_function("all_graphs_and_maps_uncached", |b| {

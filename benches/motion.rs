@@ -4,11 +4,11 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use fieldhouse::costmap::{BuildParams, CostMap, Method};
-use fieldhouse::motion::{Clip, MotionGraph, MotionLibrary, AUTO_WINDOWS, FPS};
+use fieldhouse::motion::{Clip, Mirroring, MotionGraph, MotionLibrary, AUTO_WINDOWS, FPS};
 use std::hint::black_box;
 
 fn library() -> MotionLibrary {
-    MotionLibrary::embedded(FPS)
+    MotionLibrary::embedded(FPS, Mirroring::On)
 }
 
 fn graph(library: &MotionLibrary, behaviour: &str) -> MotionGraph {
@@ -32,7 +32,7 @@ fn motion_graphs(c: &mut Criterion) {
         })
     });
     group.bench_function("load_bvh_all", |b| {
-        b.iter(|| black_box(MotionLibrary::embedded(FPS)))
+        b.iter(|| black_box(MotionLibrary::embedded(FPS, Mirroring::On)))
     });
     group.finish();
 }

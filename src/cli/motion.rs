@@ -3,7 +3,7 @@
 
 use anyhow::Context;
 use clap::Args;
-use fieldhouse::motion::{GraphParams, MotionGraph, MotionLibrary, AUTO_WINDOWS, FPS};
+use fieldhouse::motion::{GraphParams, Mirroring, MotionGraph, MotionLibrary, AUTO_WINDOWS, FPS};
 use fieldhouse::words::{figure, plural};
 use serde_json::json;
 use std::io::Write;
@@ -17,13 +17,23 @@ pub(super) struct MotionSourceArgs {
     /// the repository lists its clips, sources and terms).
     #[arg(long, value_name = "DIR", env = "FIELDHOUSE_MOCAP_DIR")]
     pub mocap: Option<PathBuf>,
+    /// Use the clips only as captured. By default every clip is also played mirrored
+    /// (left and right exchanged): one take of a movement to one side says what a body
+    /// can do to the other, and without it the CMU defender could not slide left.
+    #[arg(long)]
+    pub no_mirror: bool,
 }
 
 impl MotionSourceArgs {
     /// Loads the motion library, logging which source it is and every clip that failed.
     pub(super) fn load(&self) -> anyhow::Result<MotionLibrary> {
+        let mirroring = if self.no_mirror {
+            Mirroring::Off
+        } else {
+            Mirroring::On
+        };
         let library = match &self.mocap {
-            Some(dir) => MotionLibrary::load(dir, FPS).with_context(|| {
+            Some(dir) => MotionLibrary::load(dir, FPS, mirroring).with_context(|| {
                 format!(
                     "--mocap (or FIELDHOUSE_MOCAP_DIR) {} is not a usable motion directory. \
                      It takes your own capture: one folder per behaviour of BVH files \
@@ -32,7 +42,7 @@ impl MotionSourceArgs {
                     dir.display()
                 )
             })?,
-            None => MotionLibrary::embedded(FPS),
+            None => MotionLibrary::embedded(FPS, mirroring),
         };
         match library.source.dir() {
             // The operator's own log may name the directory; visitors never see it.

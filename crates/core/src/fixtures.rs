@@ -79,7 +79,7 @@ pub fn graph() -> MotionGraph {
 /// The CMU motion capture embedded in the binary, loaded once per test binary.
 pub fn cmu_library() -> &'static MotionLibrary {
     static LIBRARY: std::sync::OnceLock<MotionLibrary> = std::sync::OnceLock::new();
-    LIBRARY.get_or_init(|| MotionLibrary::embedded(FPS))
+    LIBRARY.get_or_init(|| MotionLibrary::embedded(FPS, Mirroring::On))
 }
 
 /// The repository's copy of the motion capture, which the binary embeds: for tests of

@@ -4,27 +4,32 @@
 //! and `--mocap data/mocap` give the same clips and the same fingerprint.
 
 use super::loader::{self, MotionFile};
-use super::{MotionLibrary, MotionSource};
+use super::{Mirroring, MotionLibrary, MotionSource};
 use std::path::Path;
 
 /// The pack: records of `u32 path length, path, u64 data length, data` (little-endian)
 /// in sorted path order, zstd-compressed as one stream (see `build.rs`).
 static PACK: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/mocap.zst"));
 
-/// The embedded library at `fps`.
+/// The embedded library at `fps`, with `mirroring`.
 ///
 /// # Panics
 /// If the pack does not unpack or none of its clips parses. Both are build defects that
 /// the test suite catches (`embedded_library_is_the_repository_copy`), not conditions a
 /// user can meet, so they are not part of the signature.
-pub(super) fn library(fps: f64) -> MotionLibrary {
+pub(super) fn library(fps: f64, mirroring: Mirroring) -> MotionLibrary {
     let files = unpack(PACK).expect("the embedded motion capture unpacks");
     loader::from_files(
         files,
         Vec::new(),
         fps,
+        mirroring,
         Path::new("embedded"),
-        |clips, fingerprint| MotionSource::Embedded { clips, fingerprint },
+        |clips, fingerprint| MotionSource::Embedded {
+            clips,
+            mirroring,
+            fingerprint,
+        },
     )
     .expect("the embedded motion capture loads")
 }
@@ -75,15 +80,17 @@ mod tests {
 
     #[test]
     fn embedded_library_is_the_repository_copy() {
-        let from_dir = MotionLibrary::load(&crate::fixtures::mocap_dir(), FPS).unwrap();
-        let embedded = MotionLibrary::embedded(FPS);
+        let from_dir =
+            MotionLibrary::load(&crate::fixtures::mocap_dir(), FPS, Mirroring::On).unwrap();
+        let embedded = MotionLibrary::embedded(FPS, Mirroring::On);
         assert!(embedded.problems.is_empty(), "{:?}", embedded.problems);
         assert_eq!(embedded.source.fingerprint(), from_dir.source.fingerprint());
         assert_eq!(embedded.clips.len(), from_dir.clips.len());
         let MotionSource::Embedded { clips, .. } = embedded.source else {
             panic!("{}", embedded.source)
         };
-        assert_eq!(clips, embedded.clips.len());
+        // Each captured clip and its mirror image.
+        assert_eq!(2 * clips, embedded.clips.len());
         for (a, b) in embedded.clips.iter().zip(&from_dir.clips) {
             assert_eq!((&a.behaviour, &a.name), (&b.behaviour, &b.name));
             assert_eq!(a.frame_count(), b.frame_count());

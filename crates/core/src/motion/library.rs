@@ -6,32 +6,49 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
+/// Whether a library also plays every clip mirrored, left and right exchanged (see
+/// [`Clip::mirrored`](super::Clip)): on by default, since one take of a movement to one
+/// side says what a body can do to the other.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Mirroring {
+    /// Every clip and its mirror image.
+    #[default]
+    On,
+    /// The clips as captured, only.
+    Off,
+}
+
 /// Where the motion came from: named wherever motion is used, so everyone knows what the
 /// agents move with.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum MotionSource {
     /// The CMU motion capture compiled into the binary (the repository's `data/mocap`).
     Embedded {
-        /// Clips loaded.
+        /// Clips loaded (captured ones; mirror images are not counted).
         clips: usize,
+        /// Whether each clip is also played mirrored.
+        mirroring: Mirroring,
         /// See [`MotionSource::fingerprint`].
         fingerprint: String,
     },
-    /// A user's own BVH capture, read from `dir`.
+    /// A user's own capture, read from `dir`.
     Directory {
         /// The directory given (`--mocap DIR`).
         dir: PathBuf,
-        /// Clips loaded.
+        /// Clips loaded (captured ones; mirror images are not counted).
         clips: usize,
+        /// Whether each clip is also played mirrored.
+        mirroring: Mirroring,
         /// See [`MotionSource::fingerprint`].
         fingerprint: String,
     },
 }
 
 impl MotionSource {
-    /// A hash over every loaded file's relative path and bytes: the same data gives the
-    /// same fingerprint, embedded or read from a directory, on any machine. What cached
-    /// artefacts built from the motion are keyed by, and what a replay records.
+    /// A hash over every loaded file's relative path and bytes, and whether the clips are
+    /// also mirrored: the same data gives the same fingerprint, embedded or read from a
+    /// directory, on any machine. What cached artefacts built from the motion are keyed
+    /// by, and what a replay records.
     pub fn fingerprint(&self) -> &str {
         match self {
             MotionSource::Embedded { fingerprint, .. }
@@ -54,20 +71,31 @@ impl MotionSource {
 impl fmt::Display for MotionSource {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let plural = |n: usize| if n == 1 { "" } else { "s" };
+        let mirrored = |m: &Mirroring| match m {
+            Mirroring::On => " and their mirror images",
+            Mirroring::Off => "",
+        };
         match self {
-            MotionSource::Embedded { clips, .. } => {
+            MotionSource::Embedded {
+                clips, mirroring, ..
+            } => {
                 write!(
                     f,
-                    "CMU motion capture, embedded: {clips} clip{}",
-                    plural(*clips)
+                    "CMU motion capture, embedded: {clips} clip{}{}",
+                    plural(*clips),
+                    mirrored(mirroring)
                 )
             }
             MotionSource::Directory {
-                clips, fingerprint, ..
+                clips,
+                mirroring,
+                fingerprint,
+                ..
             } => write!(
                 f,
-                "user capture: {clips} clip{}, fingerprint {fingerprint}",
-                plural(*clips)
+                "user capture: {clips} clip{}{}, fingerprint {fingerprint}",
+                plural(*clips),
+                mirrored(mirroring)
             ),
         }
     }
@@ -112,24 +140,25 @@ pub struct MotionLibrary {
     /// Where the clips came from.
     pub source: MotionSource,
     /// Clips sorted by behaviour, then name, so everything built from them is
-    /// deterministic whatever order the file system lists them in.
+    /// deterministic whatever order the file system lists them in; with
+    /// [`Mirroring::On`], each clip's mirror image follows it (named `…-mirror`).
     pub clips: Vec<Clip>,
     /// Clips that failed to load, with file and line.
     pub problems: Vec<LoadProblem>,
 }
 
 impl MotionLibrary {
-    /// Loads every `DIR/<behaviour>/*.bvh`, resampled to `fps`. A clip that fails to
-    /// parse is reported in `problems` and the rest still load; it is an error only if
-    /// nothing loads.
-    pub fn load(dir: &Path, fps: f64) -> Result<MotionLibrary, LibraryError> {
-        loader::load_library(dir, fps)
+    /// Loads every `DIR/<behaviour>/*.bvh`, resampled to `fps`, with `mirroring`. A clip
+    /// that fails to parse is reported in `problems` and the rest still load; it is an
+    /// error only if nothing loads.
+    pub fn load(dir: &Path, fps: f64, mirroring: Mirroring) -> Result<MotionLibrary, LibraryError> {
+        loader::load_library(dir, fps, mirroring)
     }
 
-    /// The CMU motion capture compiled into the binary, resampled to `fps`: the motion
-    /// every command uses unless told to read a directory.
-    pub fn embedded(fps: f64) -> MotionLibrary {
-        embedded::library(fps)
+    /// The CMU motion capture compiled into the binary, resampled to `fps`, with
+    /// `mirroring`: the motion every command uses unless told to read a directory.
+    pub fn embedded(fps: f64, mirroring: Mirroring) -> MotionLibrary {
+        embedded::library(fps, mirroring)
     }
 
     /// The behaviours present, sorted.

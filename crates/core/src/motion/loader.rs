@@ -5,7 +5,7 @@
 use super::bvh::{self, ParseError};
 use super::skeleton::global_positions;
 use super::{resample::resample, Clip, ClipError, LibraryError, LoadProblem};
-use super::{MotionLibrary, MotionSource};
+use super::{Mirroring, MotionLibrary, MotionSource};
 use sha2::{Digest, Sha256};
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -51,8 +51,12 @@ pub(super) struct MotionFile {
 }
 
 /// Loads every `DIR/<behaviour>/*.bvh` (the folder name is the behaviour; other files
-/// are ignored), resampled to `fps`, sorted by (behaviour, name).
-pub(super) fn load_library(dir: &Path, fps: f64) -> Result<MotionLibrary, LibraryError> {
+/// are ignored), resampled to `fps`, sorted by (behaviour, name), with `mirroring`.
+pub(super) fn load_library(
+    dir: &Path,
+    fps: f64,
+    mirroring: Mirroring,
+) -> Result<MotionLibrary, LibraryError> {
     let unreadable = |source| LibraryError::Unreadable {
         dir: dir.to_path_buf(),
         source,
@@ -86,23 +90,31 @@ pub(super) fn load_library(dir: &Path, fps: f64) -> Result<MotionLibrary, Librar
             }
         }
     }
-    from_files(files, problems, fps, dir, |clips, fingerprint| {
-        MotionSource::Directory {
+    from_files(
+        files,
+        problems,
+        fps,
+        mirroring,
+        dir,
+        |clips, fingerprint| MotionSource::Directory {
             dir: dir.to_path_buf(),
             clips,
+            mirroring,
             fingerprint,
-        }
-    })
+        },
+    )
 }
 
-/// Parses `files` into a library whose source `source(clips, fingerprint)` names. A file
-/// that fails costs its clip, reported in `problems` under `root/rel`; it is an error
-/// only if nothing loads. Directory and embedded libraries both come through here, so the
-/// same files give the same clips and the same fingerprint wherever they are read from.
+/// Parses `files` into a library whose source `source(clips, fingerprint)` names, each
+/// clip followed by its mirror image with [`Mirroring::On`]. A file that fails costs its
+/// clip, reported in `problems` under `root/rel`; it is an error only if nothing loads.
+/// Directory and embedded libraries both come through here, so the same files give the
+/// same clips and the same fingerprint wherever they are read from.
 pub(super) fn from_files(
     files: Vec<MotionFile>,
     mut problems: Vec<LoadProblem>,
     fps: f64,
+    mirroring: Mirroring,
     root: &Path,
     source: impl FnOnce(usize, String) -> MotionSource,
 ) -> Result<MotionLibrary, LibraryError> {
@@ -132,8 +144,18 @@ pub(super) fn from_files(
         });
     }
     clips.sort_by(|a, b| (&a.behaviour, &a.name).cmp(&(&b.behaviour, &b.name)));
+    let captured = clips.len();
+    if mirroring == Mirroring::On {
+        clips = clips
+            .into_iter()
+            .flat_map(|clip| {
+                let mirror = clip.mirrored();
+                [clip, mirror]
+            })
+            .collect();
+    }
     Ok(MotionLibrary {
-        source: source(clips.len(), fingerprint(&mut loaded)),
+        source: source(captured, fingerprint(&mut loaded, mirroring)),
         clips,
         problems,
     })
@@ -215,11 +237,16 @@ fn capture_rate(frame_time: f64) -> f64 {
 }
 
 /// Hex of the first 8 bytes of a SHA-256 over each file's relative path and bytes,
-/// sorted by path: the same data gives the same fingerprint on any machine. Lengths
-/// prefix each part so no two different libraries can run together the same stream.
-fn fingerprint(files: &mut [MotionFile]) -> String {
+/// sorted by path, and the mirroring: the same data gives the same fingerprint on any
+/// machine. Lengths prefix each part so no two different libraries can run together the
+/// same stream; a mirrored library hashes a marker first (no file record starts with it,
+/// a length prefix being eight bytes), and an unmirrored one hashes exactly its files.
+fn fingerprint(files: &mut [MotionFile], mirroring: Mirroring) -> String {
     files.sort_by(|a, b| a.rel.cmp(&b.rel));
     let mut hash = Sha256::new();
+    if mirroring == Mirroring::On {
+        hash.update(b"mirrored");
+    }
     for file in files.iter() {
         hash.update((file.rel.len() as u64).to_le_bytes());
         hash.update(file.rel.as_bytes());

@@ -2,7 +2,7 @@
 //!
 //! BVH files go through `bvh` (parse), `skeleton` (forward kinematics to metres),
 //! `resample` (to [`FPS`]) and `loader` (behaviour folders of files) into a
-//! [`MotionLibrary`] of [`Clip`]s; `embedded` holds the CMU capture compiled into the
+//! [`MotionLibrary`] of [`Clip`]s, each also played mirrored (`mirror`); `embedded` holds the CMU capture compiled into the
 //! binary, the default everywhere. `jump` finds where a clip leaves the ground (the jump
 //! shots), which ends the part of a clip the ground-locomotion graphs use.
 //! `transitions` finds where clips can cut into each other (`alignment` is the ground
@@ -18,6 +18,7 @@ mod graph;
 mod jump;
 mod library;
 mod loader;
+mod mirror;
 mod playback;
 mod poses;
 mod resample;
@@ -36,7 +37,7 @@ pub use graph::{
     AUTO_THRESHOLDS_M, AUTO_WINDOWS,
 };
 pub use jump::Jump;
-pub use library::{LibraryError, LoadProblem, MotionLibrary, MotionSource};
+pub use library::{LibraryError, LoadProblem, Mirroring, MotionLibrary, MotionSource};
 pub use loader::parse_clip;
 pub use playback::{Blend, PlaybackFrame};
 pub use poses::{PoseLibrary, StrideCycle, MAX_FOOT_SLIDE_M};

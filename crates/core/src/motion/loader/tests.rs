@@ -70,9 +70,9 @@ fn file_stem(path: &Path) -> String {
 
 #[test]
 fn every_file_of_the_cmu_data_loads_as_a_clip_of_its_behaviour() {
-    let lib = library();
+    let lib = MotionLibrary::embedded(FPS, Mirroring::Off);
     assert!(lib.problems.is_empty(), "{:?}", lib.problems);
-    assert_eq!(lib.behaviours(), ["defense", "dribble", "run"]);
+    assert_eq!(lib.behaviours(), ["defense", "dribble", "run", "run-127"]);
     let files = files_on_disk();
     assert_eq!(lib.clips.len(), files.len());
     for (clip, (behaviour, name, frames)) in lib.clips.iter().zip(files) {
@@ -86,12 +86,17 @@ fn every_file_of_the_cmu_data_loads_as_a_clip_of_its_behaviour() {
     }
     assert_eq!(lib.source.fingerprint().len(), 16);
     assert_eq!(
-        load_library(&mocap_dir(), FPS)
+        load_library(&mocap_dir(), FPS, Mirroring::Off)
             .unwrap()
             .source
             .fingerprint(),
         lib.source.fingerprint(),
         "the same data gives the same fingerprint, embedded or from a directory"
+    );
+    assert_ne!(
+        library().source.fingerprint(),
+        lib.source.fingerprint(),
+        "mirroring is part of what the fingerprint keys"
     );
 }
 
@@ -229,7 +234,7 @@ fn a_corrupt_file_costs_one_clip_and_names_its_line() {
     fs::write(run.join("notes.txt"), "jogging").unwrap();
     fs::write(tmp.0.join("README.md"), "motion").unwrap();
 
-    let lib = load_library(&tmp.0, FPS).unwrap();
+    let lib = load_library(&tmp.0, FPS, Mirroring::Off).unwrap();
     assert_eq!(lib.clips.len(), 1);
     assert_eq!(lib.clips[0].name, "16_36");
     assert_eq!(lib.problems.len(), 1);
@@ -245,18 +250,21 @@ fn a_corrupt_file_costs_one_clip_and_names_its_line() {
 
     // Only the good file counts toward the fingerprint.
     fs::remove_file(run.join("broken.bvh")).unwrap();
-    assert_eq!(load_library(&tmp.0, FPS).unwrap().source, lib.source);
+    assert_eq!(
+        load_library(&tmp.0, FPS, Mirroring::Off).unwrap().source,
+        lib.source
+    );
 }
 
 #[test]
 fn nothing_to_load_is_an_error_that_keeps_the_problems() {
     let tmp = TempDir::new("empty");
-    let err = load_library(&tmp.0.join("missing"), FPS).unwrap_err();
+    let err = load_library(&tmp.0.join("missing"), FPS, Mirroring::Off).unwrap_err();
     assert!(matches!(err, LibraryError::Unreadable { .. }), "{err}");
 
     fs::create_dir(tmp.0.join("run")).unwrap();
     fs::write(tmp.0.join("run/only_pose.bvh"), "HIERARCHY\nROOT Hips\n{\n").unwrap();
-    match load_library(&tmp.0, FPS).unwrap_err() {
+    match load_library(&tmp.0, FPS, Mirroring::Off).unwrap_err() {
         LibraryError::Empty { problems, .. } => {
             assert_eq!(problems.len(), 1);
             assert_eq!(problems[0].line, Some(3));
@@ -267,7 +275,7 @@ fn nothing_to_load_is_an_error_that_keeps_the_problems() {
 
 #[test]
 fn a_bad_frame_rate_is_reported_per_clip() {
-    let err = load_library(&mocap_dir(), 0.0).unwrap_err();
+    let err = load_library(&mocap_dir(), 0.0, Mirroring::Off).unwrap_err();
     let LibraryError::Empty { problems, .. } = err else {
         panic!("{err}")
     };
