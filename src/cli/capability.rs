@@ -3,10 +3,10 @@
 
 use super::basketball::CapabilityArgs;
 use clap::Args;
+use fieldhouse::basketball::human::{self, probe, Check, SYMMETRY_FRAMES, TARGETS};
 use fieldhouse::basketball::{Mover, StateMap};
 use fieldhouse::costmap::{root_speed, BuildParams, CostMap, Method};
 use fieldhouse::motion::{Jump, MotionLibrary};
-use glam::DVec2;
 use serde_json::{json, Map, Value};
 use std::io::Write;
 
@@ -38,35 +38,6 @@ const POINTS: [(&str, f64, f64); 9] = [
     ("behind_3m", -3.0, 0.0),
     ("behind_5m", -5.0, 0.0),
 ];
-
-/// What people need, in frames at 30 fps, with where the figure comes from.
-const HUMAN: [(&str, u32, &str); 3] = [
-    (
-        "ahead_5m",
-        32,
-        "5 m sprint from standing, 1.0–1.1 s (field-sport sprint tests)",
-    ),
-    (
-        "behind_5m",
-        60,
-        "about half the 5-0-5 agility test (5 m in, 180° turn, 5 m out: 2.2–2.9 s); estimate",
-    ),
-    (
-        "right_1m",
-        15,
-        "one defensive slide step to either side, about 0.5 s; estimate",
-    ),
-];
-
-/// The cell a point `d` metres out counts as: the one just beyond it, in the row or
-/// column on the +side of the agent's axis.
-fn probe(x: f64, z: f64) -> DVec2 {
-    const NUDGE: f64 = 0.01;
-    DVec2::new(
-        x + NUDGE * if x < 0.0 { -1.0 } else { 1.0 },
-        z + NUDGE * if z < 0.0 { -1.0 } else { 1.0 },
-    )
-}
 
 fn frames_to(map: &CostMap) -> Map<String, Value> {
     POINTS
@@ -134,12 +105,29 @@ pub(super) fn run(args: CapabilityCmdArgs, out: &mut impl Write) -> anyhow::Resu
     let caps = args.capability.build(&library)?;
     let movers = [&caps.dribble, &caps.run, &caps.defense];
     let behaviours: Vec<Value> = movers.iter().map(|m| behaviour_json(m, &library)).collect();
+    let fps = caps.run.map().fps;
+    let checks = human::check(&movers, fps);
+    let symmetry: Vec<Value> = human::symmetry(&movers)
+        .into_iter()
+        .map(|(behaviour, d, left, right)| {
+            json!({
+                "behaviour": behaviour,
+                "distance_m": d,
+                "left_frames": left,
+                "right_frames": right,
+                "within": left.zip(right).is_some_and(|(l, r)| l.abs_diff(r) <= SYMMETRY_FRAMES),
+            })
+        })
+        .collect();
     if args.json {
         let doc = json!({
-            "fps": caps.run.map().fps,
+            "fps": fps,
             "motion_source": caps.source.to_string(),
             "behaviours": behaviours,
-            "human_reference_frames": HUMAN.iter().map(|(k, f, why)| json!({"key": k, "frames": f, "source": why})).collect::<Vec<_>>(),
+            "targets": checks,
+            "stance_below_m_s": human::STANCE_M_S,
+            "symmetry": symmetry,
+            "symmetry_frames": SYMMETRY_FRAMES,
         });
         writeln!(out, "{doc}")?;
         return Ok(());
@@ -185,14 +173,70 @@ pub(super) fn run(args: CapabilityCmdArgs, out: &mut impl Write) -> anyhow::Resu
             )?;
         }
     }
+    print_targets(out, &checks, fps)?;
     writeln!(
         out,
-        "people: {}",
-        HUMAN
-            .iter()
-            .map(|(k, f, why)| format!("{k} ≈ {f} ({why})"))
-            .collect::<Vec<_>>()
-            .join("; ")
+        "\nleft against right from each stance (within {SYMMETRY_FRAMES} frames):"
     )?;
+    for s in &symmetry {
+        writeln!(
+            out,
+            "  {:<8} {} m: left {}, right {}{}",
+            s["behaviour"].as_str().unwrap_or(""),
+            s["distance_m"],
+            cell(&s["left_frames"]),
+            cell(&s["right_frames"]),
+            if s["within"].as_bool() == Some(true) {
+                ""
+            } else {
+                "  (not symmetric)"
+            }
+        )?;
+    }
+    Ok(())
+}
+
+/// The targets against people, each with its source; a target not met shows the walk
+/// the behaviour takes (the clips it plays), which says what motion is missing.
+fn print_targets(out: &mut impl Write, checks: &[Check], fps: f64) -> anyhow::Result<()> {
+    writeln!(
+        out,
+        "\nfrom a stance (slower than {} m/s), against people:",
+        human::STANCE_M_S
+    )?;
+    for c in checks {
+        let took = c.frames.map_or("beyond the horizon".to_string(), |f| {
+            format!("{:.2} s ({f} frames)", f64::from(f) / fps)
+        });
+        writeln!(
+            out,
+            "  {:<8} {:<32} {:<22} target ≤ {} s, people {} s  {}",
+            c.behaviour,
+            c.what,
+            took,
+            c.target_s,
+            c.people,
+            if c.met { "met" } else { "NOT MET" }
+        )?;
+        if c.state_speed_m_s >= human::STANCE_M_S {
+            writeln!(
+                out,
+                "           from {} at {:.2} m/s: the capture has no stance",
+                c.state, c.state_speed_m_s
+            )?;
+        }
+        if !c.met && !c.walk.is_empty() {
+            let walk: Vec<String> = c
+                .walk
+                .iter()
+                .map(|(clip, f)| format!("{clip} {f}"))
+                .collect();
+            writeln!(out, "           the walk: {}", walk.join(" → "))?;
+        }
+    }
+    writeln!(out, "sources:")?;
+    for t in &TARGETS {
+        writeln!(out, "  {} ({} s): {}", t.what, t.people, t.source)?;
+    }
     Ok(())
 }

@@ -5,6 +5,7 @@
 //! * [`shot`]: shot success against distance.
 //! * [`capability`]: each behaviour's motion graph and cost map (the physical
 //!   capability model), embedded at an agent's pose; moves play a map's stored path.
+//!   [`human`]: what people do, the targets the capability model is held to.
 //!   `footprint`: the ground a stored path covers, to keep moves on the court.
 //! * [`decision`]: opponent modelling, `C_o > C_d + T_s + ε`.
 //! * [`agent`], `brain`, [`game`]: the game as a deterministic state machine; the
@@ -21,6 +22,7 @@ pub mod eval;
 pub mod event;
 mod footprint;
 pub mod game;
+pub mod human;
 pub mod params;
 pub mod safe;
 pub mod shot;

@@ -8,7 +8,8 @@
 //! `transitions` finds where clips can cut into each other (`alignment` is the ground
 //! alignment it uses), `graph` turns clips and transitions into a [`MotionGraph`], and
 //! `playback` plays a walk on it as a body, blending across transitions; `poses` is a
-//! graph's poses and running loops as a spectator draws them.
+//! graph's poses and running loops as a spectator draws them; `turn` is how soon a body
+//! can turn around on the spot, which a cost map (positions only) cannot say.
 
 mod alignment;
 mod bvh;
@@ -25,6 +26,7 @@ mod resample;
 mod skeleton;
 mod step;
 mod transitions;
+mod turn;
 mod walker;
 
 pub use clip::Clip;
@@ -42,6 +44,7 @@ pub use loader::parse_clip;
 pub use playback::{Blend, PlaybackFrame};
 pub use poses::{PoseLibrary, StrideCycle, MAX_FOOT_SLIDE_M};
 pub use step::{wrap_angle, Node, RootStep};
+pub use turn::{turn_around, TurnAround, TurnParams};
 pub use walker::Walker;
 
 /// The frame rate everything downstream works at: the paper plays motion at 30 fps.

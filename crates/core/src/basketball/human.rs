@@ -1,0 +1,228 @@
+//! What people do, beside what the capture lets the agents do: the capability model's
+//! targets, each with the human figure it stands for and where that figure comes from.
+//!
+//! The maps are only as good as the capture: a clip that never steps left gives a
+//! defender that cannot, and an offense that models it with those maps wins by an
+//! artefact. So each behaviour is held to what people do from a stance, and where it
+//! falls short the report shows the walk it takes, which says what motion the capture
+//! lacks.
+
+use super::capability::{Mover, StateMap};
+use crate::costmap::root_speed;
+use crate::motion::{turn_around, TurnParams};
+use glam::DVec2;
+use serde::Serialize;
+
+/// Below this root speed a body is in a stance, m/s: the targets are measured from one.
+pub const STANCE_M_S: f64 = 0.3;
+
+/// How a target is measured.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Measure {
+    /// Frames to the map cell just beyond this point of the agent's frame (+x ahead, +z
+    /// right), m.
+    Point(f64, f64),
+    /// Frames to face the other way within 1 m of where it stood ([`turn_around`]).
+    TurnAround,
+}
+
+/// One target: what is measured, for which behaviours, the most it may take, and what
+/// people take with the source of that figure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Target {
+    /// Its key in reports, e.g. `left_1m`.
+    pub key: &'static str,
+    /// In words.
+    pub what: &'static str,
+    /// The behaviours held to it.
+    pub behaviours: &'static [&'static str],
+    /// The most it may take, s.
+    pub target_s: f64,
+    /// What people take, s (a range, as sources give it).
+    pub people: &'static str,
+    /// Where `people` comes from; an estimate says so.
+    pub source: &'static str,
+    /// How it is measured.
+    pub measure: Measure,
+}
+
+const SLIDE: &str = "an estimate: one or two slide steps from a defensive stance \
+    (no timed 1 m side step in the literature we found)";
+
+/// The targets, in the order reports list them.
+pub const TARGETS: [Target; 5] = [
+    Target {
+        key: "left_1m",
+        what: "1 m to the left",
+        behaviours: &["dribble", "defense"],
+        target_s: 0.8,
+        people: "0.4–0.6",
+        source: SLIDE,
+        measure: Measure::Point(0.0, -1.0),
+    },
+    Target {
+        key: "right_1m",
+        what: "1 m to the right",
+        behaviours: &["dribble", "defense"],
+        target_s: 0.8,
+        people: "0.4–0.6",
+        source: SLIDE,
+        measure: Measure::Point(0.0, 1.0),
+    },
+    Target {
+        key: "ahead_5m",
+        what: "5 m ahead",
+        behaviours: &["run"],
+        target_s: 1.5,
+        people: "0.98–1.09",
+        source: "Altmann et al. 2015, J Strength Cond Res 29(8): 5 m sprints of 13 sports \
+            students, starting 1.0 to 0.3 m behind the first timing gate",
+        measure: Measure::Point(5.0, 0.0),
+    },
+    Target {
+        key: "behind_5m",
+        what: "5 m behind",
+        behaviours: &["run", "defense"],
+        target_s: 2.6,
+        people: "1.5–2.0",
+        source: "an estimate from the 5-0-5 test (Draper & Lancaster 1985): 5 m in, a 180° \
+            turn and 5 m out take 2.2–2.9 s with a run-up; from a stance, a turn and a 5 m \
+            sprint",
+        measure: Measure::Point(-5.0, 0.0),
+    },
+    Target {
+        key: "turn_around",
+        what: "a 180° turn, ending within 1 m",
+        behaviours: &["dribble", "run", "defense"],
+        target_s: 1.0,
+        people: "0.5–0.7",
+        source: "an estimate: a pivot or a jump turn on the spot",
+        measure: Measure::TurnAround,
+    },
+];
+
+/// Left and right from a stance may differ by at most this many frames: a body is
+/// symmetric, and so is a mirrored capture.
+pub const SYMMETRY_FRAMES: u32 = 2;
+
+/// One behaviour measured against one target, from its stance.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Check {
+    /// The target's key.
+    pub key: &'static str,
+    /// In words.
+    pub what: &'static str,
+    /// The behaviour measured.
+    pub behaviour: &'static str,
+    /// The start state it is measured from (the slowest the capture has).
+    pub state: String,
+    /// Its root speed, m/s: a stance only below [`STANCE_M_S`].
+    pub state_speed_m_s: f64,
+    /// Frames it takes; `None` beyond the horizon (or no turn found).
+    pub frames: Option<u32>,
+    /// The target, s.
+    pub target_s: f64,
+    /// What people take, s.
+    pub people: &'static str,
+    /// Where that figure comes from.
+    pub source: &'static str,
+    /// Met: within the target, from a real stance.
+    pub met: bool,
+    /// The walk it takes, as the clips it plays in order with frames in each: where a
+    /// target is not met, this says what motion the capture lacks.
+    pub walk: Vec<(String, u32)>,
+}
+
+/// Measures every behaviour held to a target (`movers` by name), from each one's
+/// slowest start state.
+pub fn check(movers: &[&Mover], fps: f64) -> Vec<Check> {
+    let mut checks = Vec::new();
+    for target in &TARGETS {
+        for &behaviour in target.behaviours {
+            let Some(mover) = movers.iter().find(|m| m.behaviour == behaviour) else {
+                continue;
+            };
+            let standing = &mover.states[0];
+            let speed = root_speed(&mover.graph.nodes[standing.state.node as usize]);
+            let (frames, nodes) = measure(mover, standing, target.measure);
+            checks.push(Check {
+                key: target.key,
+                what: target.what,
+                behaviour: mover.behaviour,
+                state: standing.state.name.clone(),
+                state_speed_m_s: speed,
+                frames,
+                target_s: target.target_s,
+                people: target.people,
+                source: target.source,
+                met: speed < STANCE_M_S
+                    && frames.is_some_and(|f| f64::from(f) / fps <= target.target_s + 1e-9),
+                walk: clips_played(mover, &nodes),
+            });
+        }
+    }
+    checks
+}
+
+/// Frames to meet `measure` from `state`'s map, and the nodes the walk plays.
+fn measure(mover: &Mover, state: &StateMap, measure: Measure) -> (Option<u32>, Vec<u32>) {
+    match measure {
+        Measure::Point(x, z) => {
+            let map = &state.map;
+            match map.grid.cell_of(probe(x, z)) {
+                Some(cell) if map.costs[cell].is_some() => {
+                    (map.costs[cell], mover.path_nodes(&state.map, cell))
+                }
+                _ => (None, Vec::new()),
+            }
+        }
+        Measure::TurnAround => {
+            match turn_around(&mover.graph, state.state.node, &TurnParams::default()) {
+                Some(turn) => (Some(turn.frames), turn.nodes),
+                None => (None, Vec::new()),
+            }
+        }
+    }
+}
+
+/// The cell a point `d` metres out counts as: the one just beyond it, in the row or
+/// column on the +side of the agent's axis, so "1 m ahead" is the cell from 1.0 to 1.5 m.
+pub fn probe(x: f64, z: f64) -> DVec2 {
+    const NUDGE: f64 = 0.01;
+    DVec2::new(
+        x + NUDGE * if x < 0.0 { -1.0 } else { 1.0 },
+        z + NUDGE * if z < 0.0 { -1.0 } else { 1.0 },
+    )
+}
+
+/// The clips `nodes` play, in order, with the frames spent in each.
+fn clips_played(mover: &Mover, nodes: &[u32]) -> Vec<(String, u32)> {
+    let mut walk: Vec<(String, u32)> = Vec::new();
+    for &n in nodes {
+        let clip = &mover.graph.clip_names[mover.graph.nodes[n as usize].clip];
+        match walk.last_mut() {
+            Some((last, frames)) if last == clip => *frames += 1,
+            _ => walk.push((clip.clone(), 1)),
+        }
+    }
+    walk
+}
+
+/// Left against right from each behaviour's stance, 1 m and 3 m out: (behaviour,
+/// distance m, frames left, frames right).
+pub fn symmetry(movers: &[&Mover]) -> Vec<(&'static str, f64, Option<u32>, Option<u32>)> {
+    movers
+        .iter()
+        .flat_map(|m| {
+            let map = &m.states[0].map;
+            [1.0, 3.0].map(|d| {
+                (
+                    m.behaviour,
+                    d,
+                    map.cost(probe(0.0, -d)),
+                    map.cost(probe(0.0, d)),
+                )
+            })
+        })
+        .collect()
+}
