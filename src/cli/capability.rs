@@ -3,7 +3,7 @@
 
 use super::basketball::CapabilityArgs;
 use clap::Args;
-use fieldhouse::basketball::human::{self, probe, Check, SYMMETRY_FRAMES, TARGETS};
+use fieldhouse::basketball::human::{self, probe, Check, Stance, SYMMETRY_FRAMES, TARGETS};
 use fieldhouse::basketball::{Mover, StateMap};
 use fieldhouse::costmap::{root_speed, BuildParams, CostMap, Method};
 use fieldhouse::motion::{Jump, MotionLibrary};
@@ -106,8 +106,9 @@ pub(super) fn run(args: CapabilityCmdArgs, out: &mut impl Write) -> anyhow::Resu
     let movers = [&caps.dribble, &caps.run, &caps.defense];
     let behaviours: Vec<Value> = movers.iter().map(|m| behaviour_json(m, &library)).collect();
     let fps = caps.run.map().fps;
-    let checks = human::check(&movers, fps);
-    let symmetry: Vec<Value> = human::symmetry(&movers)
+    let stances: Vec<Stance> = movers.iter().map(|m| Stance::of(m)).collect();
+    let checks = human::check(&stances, fps);
+    let symmetry: Vec<Value> = human::symmetry(&stances)
         .into_iter()
         .map(|(behaviour, d, left, right)| {
             json!({

@@ -3,6 +3,9 @@
 
 use anyhow::Context;
 use clap::Args;
+use fieldhouse::basketball::capability::HORIZON_FRAMES;
+use fieldhouse::basketball::human::{self, Stance};
+use fieldhouse::costmap::{root_speed, start_states, BuildParams, CostMap};
 use fieldhouse::motion::{GraphParams, Mirroring, MotionGraph, MotionLibrary, AUTO_WINDOWS, FPS};
 use fieldhouse::words::{figure, plural};
 use serde_json::json;
@@ -115,6 +118,13 @@ impl GraphArgs {
 pub(super) struct MotionGraphArgs {
     #[command(flatten)]
     graph: GraphArgs,
+    /// Build every graph the automatic choice considers (each window and threshold) and
+    /// print, for each, what it keeps, how good its cuts are (the blends' foot slide and
+    /// root acceleration) and what the behaviour can do from its stance (frames to 1 m
+    /// left and right, 5 m ahead and behind, a turn around), so the choice can be seen
+    /// against both. Takes a minute or more: each graph gets a cost map.
+    #[arg(long, conflicts_with_all = ["threshold", "window"])]
+    sweep: bool,
     /// Print one JSON document, with the pruned graph's edges as [from, to] node ids and
     /// each node's [clip, frame].
     #[arg(long)]
@@ -122,6 +132,9 @@ pub(super) struct MotionGraphArgs {
 }
 
 pub(super) fn run(args: MotionGraphArgs, out: &mut impl Write) -> anyhow::Result<()> {
+    if args.sweep {
+        return sweep(&args.graph, args.json, out);
+    }
     let (library, graph) = args.graph.build()?;
     let s = &graph.stats;
     if args.json {
@@ -203,6 +216,99 @@ pub(super) fn run(args: MotionGraphArgs, out: &mut impl Write) -> anyhow::Result
             out,
             "    {:<10} {:>5} of {:<5} {:>4} / {:<4}{left_out}",
             c.name, c.kept, c.frames, c.transitions_in, c.transitions_out
+        )?;
+    }
+    Ok(())
+}
+
+/// `motion-graph --sweep`: every candidate graph with its cut quality and what the
+/// behaviour can do from its stance, and which one the automatic choice takes.
+fn sweep(args: &GraphArgs, json: bool, out: &mut impl Write) -> anyhow::Result<()> {
+    let library = args.source.load()?;
+    let owned = library.ground_clips(&args.behaviour);
+    let clips: Vec<_> = owned.iter().collect();
+    anyhow::ensure!(
+        !clips.is_empty(),
+        "no clips of behaviour \"{}\" in {}",
+        args.behaviour,
+        library.source
+    );
+    let chosen = MotionGraph::build_auto(&args.behaviour, &clips, &AUTO_WINDOWS)?.params;
+    let mut rows = Vec::new();
+    MotionGraph::each_candidate(&args.behaviour, &clips, &AUTO_WINDOWS, |graph| {
+        let joined = graph.coverage.iter().filter(|c| c.joined()).count();
+        let standing = start_states(&graph)[0].clone();
+        let map = CostMap::build(
+            &graph,
+            &BuildParams {
+                depth: HORIZON_FRAMES,
+                start_node: Some(standing.node),
+                ..BuildParams::default()
+            },
+            &mut |_| {},
+        );
+        let stance = Stance {
+            behaviour: &args.behaviour,
+            graph: &graph,
+            state: &standing.name,
+            map: &map,
+        };
+        let s = &graph.stats;
+        rows.push(json!({
+            "window": graph.params.window,
+            "threshold_m": graph.params.threshold_m,
+            "chosen": graph.params == chosen,
+            "clips_joined": joined,
+            "clips": clips.len(),
+            "nodes": graph.node_count(),
+            "transition_p95_m": s.transition_p95_m,
+            "foot_slide_p95_m": s.foot_slide_p95_m,
+            "root_accel_p95_m_s2": s.root_accel_p95_m_s2,
+            "capture_root_accel_p95_m_s2": s.capture_root_accel_p95_m_s2,
+            "stance_m_s": root_speed(&graph.nodes[standing.node as usize]),
+            "frames": human::measure_all(&stance).into_iter().map(|(k, f)| (k.to_string(), json!(f))).collect::<serde_json::Map<_, _>>(),
+        }));
+        std::ops::ControlFlow::Continue(())
+    })?;
+    if json {
+        writeln!(
+            out,
+            "{}",
+            json!({"behaviour": args.behaviour, "motion_source": library.source.to_string(), "candidates": rows})
+        )?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "motion graphs of \"{}\" ({}): cut quality against what it can do from its stance (frames at 30 fps; * the automatic choice)",
+        args.behaviour, library.source
+    )?;
+    writeln!(
+        out,
+        "window threshold joined  nodes  RMS p95  foot slide p95  root accel p95 (capture)  stance m/s  left 1m right 1m ahead 5m behind 5m turn"
+    )?;
+    let cell = |v: &serde_json::Value| v.as_u64().map_or("–".to_string(), |f| f.to_string());
+    for r in &rows {
+        let f = &r["frames"];
+        writeln!(
+            out,
+            "{}{:>5} {:>9.2} {:>3}/{:<3} {:>6} {:>7.3} m {:>12.3} m {:>9.1} ({:.1}) m/s² {:>11.2} {:>7} {:>8} {:>8} {:>9} {:>5}",
+            if r["chosen"].as_bool() == Some(true) { "*" } else { " " },
+            r["window"],
+            r["threshold_m"].as_f64().unwrap_or(0.0),
+            r["clips_joined"],
+            r["clips"],
+            r["nodes"],
+            r["transition_p95_m"].as_f64().unwrap_or(0.0),
+            r["foot_slide_p95_m"].as_f64().unwrap_or(0.0),
+            r["root_accel_p95_m_s2"].as_f64().unwrap_or(0.0),
+            r["capture_root_accel_p95_m_s2"].as_f64().unwrap_or(0.0),
+            r["stance_m_s"].as_f64().unwrap_or(0.0),
+            cell(&f["left_1m"]),
+            cell(&f["right_1m"]),
+            cell(&f["ahead_5m"]),
+            cell(&f["behind_5m"]),
+            cell(&f["turn_around"]),
         )?;
     }
     Ok(())

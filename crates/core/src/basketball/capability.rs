@@ -214,14 +214,6 @@ impl Mover {
         std::iter::once(start).chain(self.play(&map.paths[cell], at))
     }
 
-    /// The nodes the stored path to `cell` of `map` plays, after the map's start node.
-    pub(crate) fn path_nodes(&self, map: &CostMap, cell: usize) -> Vec<u32> {
-        map.paths[cell]
-            .iter()
-            .map(|&e| self.graph.edges[e as usize].to)
-            .collect()
-    }
-
     /// The strides of `edges` played from `at` (not including `at`).
     fn play<'a>(&'a self, edges: &'a [u32], at: Walker) -> impl Iterator<Item = Stride> + 'a {
         let steps = edges.iter().flat_map(move |&id| {

@@ -7,14 +7,11 @@
 //! falls short the report shows the walk it takes, which says what motion the capture
 //! lacks.
 
-use super::capability::{Mover, StateMap};
-use crate::costmap::root_speed;
-use crate::motion::{turn_around, TurnParams};
+use super::capability::Mover;
+use crate::costmap::{root_speed, CostMap};
+use crate::motion::{turn_around, MotionGraph, TurnParams};
 use glam::DVec2;
 use serde::Serialize;
-
-/// Below this root speed a body is in a stance, m/s: the targets are measured from one.
-pub const STANCE_M_S: f64 = 0.3;
 
 /// How a target is measured.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -48,6 +45,9 @@ pub struct Target {
 
 const SLIDE: &str = "an estimate: one or two slide steps from a defensive stance \
     (no timed 1 m side step in the literature we found)";
+
+/// Below this root speed a body is in a stance, m/s: the targets are measured from one.
+pub const STANCE_M_S: f64 = 0.3;
 
 /// The targets, in the order reports list them.
 pub const TARGETS: [Target; 5] = [
@@ -113,7 +113,7 @@ pub struct Check {
     /// In words.
     pub what: &'static str,
     /// The behaviour measured.
-    pub behaviour: &'static str,
+    pub behaviour: String,
     /// The start state it is measured from (the slowest the capture has).
     pub state: String,
     /// Its root speed, m/s: a stance only below [`STANCE_M_S`].
@@ -133,23 +133,47 @@ pub struct Check {
     pub walk: Vec<(String, u32)>,
 }
 
-/// Measures every behaviour held to a target (`movers` by name), from each one's
-/// slowest start state.
-pub fn check(movers: &[&Mover], fps: f64) -> Vec<Check> {
+/// A behaviour at its stance: its graph and the map from its slowest start state.
+#[derive(Debug, Clone, Copy)]
+pub struct Stance<'a> {
+    /// The behaviour's name.
+    pub behaviour: &'a str,
+    /// Its motion graph.
+    pub graph: &'a MotionGraph,
+    /// The name of the start state (the slowest the capture has).
+    pub state: &'a str,
+    /// The map from it; its start node is the stance.
+    pub map: &'a CostMap,
+}
+
+impl<'a> Stance<'a> {
+    /// A mover's stance: its first start state, the slowest.
+    pub fn of(mover: &'a Mover) -> Stance<'a> {
+        let standing = &mover.states[0];
+        Stance {
+            behaviour: mover.behaviour,
+            graph: &mover.graph,
+            state: &standing.state.name,
+            map: &standing.map,
+        }
+    }
+}
+
+/// Measures every behaviour held to a target (`stances` by name), from its stance.
+pub fn check(stances: &[Stance], fps: f64) -> Vec<Check> {
     let mut checks = Vec::new();
     for target in &TARGETS {
         for &behaviour in target.behaviours {
-            let Some(mover) = movers.iter().find(|m| m.behaviour == behaviour) else {
+            let Some(stance) = stances.iter().find(|s| s.behaviour == behaviour) else {
                 continue;
             };
-            let standing = &mover.states[0];
-            let speed = root_speed(&mover.graph.nodes[standing.state.node as usize]);
-            let (frames, nodes) = measure(mover, standing, target.measure);
+            let speed = root_speed(&stance.graph.nodes[stance.map.start_node as usize]);
+            let (frames, nodes) = measure(stance, target.measure);
             checks.push(Check {
                 key: target.key,
                 what: target.what,
-                behaviour: mover.behaviour,
-                state: standing.state.name.clone(),
+                behaviour: behaviour.to_string(),
+                state: stance.state.to_string(),
                 state_speed_m_s: speed,
                 frames,
                 target_s: target.target_s,
@@ -157,27 +181,38 @@ pub fn check(movers: &[&Mover], fps: f64) -> Vec<Check> {
                 source: target.source,
                 met: speed < STANCE_M_S
                     && frames.is_some_and(|f| f64::from(f) / fps <= target.target_s + 1e-9),
-                walk: clips_played(mover, &nodes),
+                walk: clips_played(stance.graph, &nodes),
             });
         }
     }
     checks
 }
 
-/// Frames to meet `measure` from `state`'s map, and the nodes the walk plays.
-fn measure(mover: &Mover, state: &StateMap, measure: Measure) -> (Option<u32>, Vec<u32>) {
+/// Every target's measure from `stance`, whichever behaviours the targets are for:
+/// (key, frames), `None` beyond the horizon.
+pub fn measure_all(stance: &Stance) -> Vec<(&'static str, Option<u32>)> {
+    TARGETS
+        .iter()
+        .map(|t| (t.key, measure(stance, t.measure).0))
+        .collect()
+}
+
+/// Frames to meet `measure` from the stance, and the nodes the walk plays.
+fn measure(stance: &Stance, measure: Measure) -> (Option<u32>, Vec<u32>) {
+    let map = stance.map;
     match measure {
-        Measure::Point(x, z) => {
-            let map = &state.map;
-            match map.grid.cell_of(probe(x, z)) {
-                Some(cell) if map.costs[cell].is_some() => {
-                    (map.costs[cell], mover.path_nodes(&state.map, cell))
-                }
-                _ => (None, Vec::new()),
+        Measure::Point(x, z) => match map.grid.cell_of(probe(x, z)) {
+            Some(cell) if map.costs[cell].is_some() => {
+                let nodes = map.paths[cell]
+                    .iter()
+                    .map(|&e| stance.graph.edges[e as usize].to)
+                    .collect();
+                (map.costs[cell], nodes)
             }
-        }
+            _ => (None, Vec::new()),
+        },
         Measure::TurnAround => {
-            match turn_around(&mover.graph, state.state.node, &TurnParams::default()) {
+            match turn_around(stance.graph, map.start_node, &TurnParams::default()) {
                 Some(turn) => (Some(turn.frames), turn.nodes),
                 None => (None, Vec::new()),
             }
@@ -196,10 +231,10 @@ pub fn probe(x: f64, z: f64) -> DVec2 {
 }
 
 /// The clips `nodes` play, in order, with the frames spent in each.
-fn clips_played(mover: &Mover, nodes: &[u32]) -> Vec<(String, u32)> {
+fn clips_played(graph: &MotionGraph, nodes: &[u32]) -> Vec<(String, u32)> {
     let mut walk: Vec<(String, u32)> = Vec::new();
     for &n in nodes {
-        let clip = &mover.graph.clip_names[mover.graph.nodes[n as usize].clip];
+        let clip = &graph.clip_names[graph.nodes[n as usize].clip];
         match walk.last_mut() {
             Some((last, frames)) if last == clip => *frames += 1,
             _ => walk.push((clip.clone(), 1)),
@@ -210,17 +245,16 @@ fn clips_played(mover: &Mover, nodes: &[u32]) -> Vec<(String, u32)> {
 
 /// Left against right from each behaviour's stance, 1 m and 3 m out: (behaviour,
 /// distance m, frames left, frames right).
-pub fn symmetry(movers: &[&Mover]) -> Vec<(&'static str, f64, Option<u32>, Option<u32>)> {
-    movers
+pub fn symmetry<'a>(stances: &[Stance<'a>]) -> Vec<(&'a str, f64, Option<u32>, Option<u32>)> {
+    stances
         .iter()
-        .flat_map(|m| {
-            let map = &m.states[0].map;
+        .flat_map(|s| {
             [1.0, 3.0].map(|d| {
                 (
-                    m.behaviour,
+                    s.behaviour,
                     d,
-                    map.cost(probe(0.0, -d)),
-                    map.cost(probe(0.0, d)),
+                    s.map.cost(probe(0.0, -d)),
+                    s.map.cost(probe(0.0, d)),
                 )
             })
         })

@@ -1,7 +1,10 @@
 //! The ground alignment of two weighted point clouds (Kovar, Gleicher & Pighin 2002): how
 //! far apart they are after the rotation about the vertical axis and the translation on
-//! the ground that best map one onto the other, in closed form. Transitions need only
-//! that distance; the tests recover the transform itself and check the two agree.
+//! the ground that best map one onto the other, in closed form. Finding transitions needs
+//! only that distance; judging a cut (`cuts`) needs the transform itself, and the tests
+//! check the two agree.
+
+use glam::{DVec2, DVec3};
 
 /// Weighted sums over pairs of points (p, p′) that the closed form needs. The same sums
 /// give the aligned distance without a second pass over the points.
@@ -57,69 +60,72 @@ impl Moments {
     }
 }
 
+/// A rigid motion of the ground: rotate by `theta` about +y, then translate by `offset`
+/// (x, z). It maps (x, z) to (x·cos θ + z·sin θ + x₀, −x·sin θ + z·cos θ + z₀): the
+/// rotation is by θ about +y in a right-handed, y-up frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct GroundTransform {
+    /// The rotation about +y, rad.
+    pub(crate) theta: f64,
+    /// The translation on the ground, (x, z) in m.
+    pub(crate) offset: DVec2,
+}
+
+impl GroundTransform {
+    /// The point moved.
+    pub(crate) fn apply(&self, p: DVec3) -> DVec3 {
+        let (sin, cos) = self.theta.sin_cos();
+        DVec3::new(
+            p.x * cos + p.z * sin + self.offset.x,
+            p.y,
+            -p.x * sin + p.z * cos + self.offset.y,
+        )
+    }
+
+    /// A ground vector (x, z) turned, not moved.
+    pub(crate) fn rotate(&self, v: DVec2) -> DVec2 {
+        let (sin, cos) = self.theta.sin_cos();
+        DVec2::new(v.x * cos + v.y * sin, -v.x * sin + v.y * cos)
+    }
+}
+
+impl Moments {
+    /// Adds the pair (p, p′) with weight w; p′ is the cloud to be moved onto p.
+    pub(crate) fn add(&mut self, w: f64, p: DVec3, q: DVec3) {
+        self.w += w;
+        self.x += w * p.x;
+        self.z += w * p.z;
+        self.x2 += w * q.x;
+        self.z2 += w * q.z;
+        self.dot += w * (p.x * q.x + p.z * q.z);
+        self.cross += w * (p.x * q.z - q.x * p.z);
+        self.norm += w * p.length_squared();
+        self.norm2 += w * q.length_squared();
+        self.yy += w * p.y * q.y;
+    }
+
+    /// The transform that best maps the p′ cloud onto the p cloud (least weighted
+    /// squares).
+    pub(crate) fn alignment(&self) -> GroundTransform {
+        let w = self.w;
+        let theta = (self.cross - (self.x * self.z2 - self.x2 * self.z) / w)
+            .atan2(self.dot - (self.x * self.x2 + self.z * self.z2) / w);
+        let (sin, cos) = theta.sin_cos();
+        GroundTransform {
+            theta,
+            offset: DVec2::new(
+                (self.x - self.x2 * cos - self.z2 * sin) / w,
+                (self.z + self.x2 * sin - self.z2 * cos) / w,
+            ),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::{DVec2, DVec3};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
-
-    // The transform itself: the oracle the aligned distance is checked against (the
-    // library needs only the distance).
-
-    /// A rigid motion of the ground: rotate by `theta` about +y, then translate by
-    /// `offset` (x, z). It maps (x, z) to (x·cos θ + z·sin θ + x₀, −x·sin θ + z·cos θ + z₀): the
-    /// rotation is by θ about +y in a right-handed, y-up frame.
-    #[derive(Debug, Clone, Copy, PartialEq)]
-    struct GroundTransform {
-        /// The rotation about +y, rad.
-        theta: f64,
-        /// The translation on the ground, (x, z) in m.
-        offset: DVec2,
-    }
-
-    impl GroundTransform {
-        fn apply(&self, p: DVec3) -> DVec3 {
-            let (sin, cos) = self.theta.sin_cos();
-            DVec3::new(
-                p.x * cos + p.z * sin + self.offset.x,
-                p.y,
-                -p.x * sin + p.z * cos + self.offset.y,
-            )
-        }
-    }
-
-    impl Moments {
-        /// Adds the pair (p, p′) with weight w; p′ is the cloud to be moved onto p.
-        fn add(&mut self, w: f64, p: DVec3, q: DVec3) {
-            self.w += w;
-            self.x += w * p.x;
-            self.z += w * p.z;
-            self.x2 += w * q.x;
-            self.z2 += w * q.z;
-            self.dot += w * (p.x * q.x + p.z * q.z);
-            self.cross += w * (p.x * q.z - q.x * p.z);
-            self.norm += w * p.length_squared();
-            self.norm2 += w * q.length_squared();
-            self.yy += w * p.y * q.y;
-        }
-
-        /// The transform that best maps the p′ cloud onto the p cloud (least weighted
-        /// squares).
-        fn alignment(&self) -> GroundTransform {
-            let w = self.w;
-            let theta = (self.cross - (self.x * self.z2 - self.x2 * self.z) / w)
-                .atan2(self.dot - (self.x * self.x2 + self.z * self.z2) / w);
-            let (sin, cos) = theta.sin_cos();
-            GroundTransform {
-                theta,
-                offset: DVec2::new(
-                    (self.x - self.x2 * cos - self.z2 * sin) / w,
-                    (self.z + self.x2 * sin - self.z2 * cos) / w,
-                ),
-            }
-        }
-    }
 
     fn cloud(rng: &mut ChaCha8Rng, n: usize) -> Vec<(f64, DVec3)> {
         (0..n)

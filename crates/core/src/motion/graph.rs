@@ -2,6 +2,7 @@
 //! steps plus the transitions found between similar frames as edges, pruned to its
 //! largest strongly connected component so that no walk gets stuck.
 
+use super::cuts;
 use super::step::{Node, RootStep};
 use super::transitions::{self, Transition};
 use super::Clip;
@@ -9,6 +10,7 @@ use glam::DVec3;
 use petgraph::algo::tarjan_scc;
 use petgraph::graph::{DiGraph, NodeIndex};
 use serde::Serialize;
+use std::ops::ControlFlow;
 use thiserror::Error;
 
 /// How a motion graph is built.
@@ -98,6 +100,14 @@ pub struct GraphStats {
     pub transition_worst_m: f64,
     /// See `transition_worst_m`: the 95th percentile, m.
     pub transition_p95_m: f64,
+    /// How far the blends of the kept transitions drag a planted foot, m: the 95th
+    /// percentile over transitions (see `cuts`).
+    pub foot_slide_p95_m: f64,
+    /// The root's acceleration across the kept transitions, m/s²: the 95th percentile.
+    pub root_accel_p95_m_s2: f64,
+    /// The capture's own root accelerations over the same span, m/s²: the 95th
+    /// percentile over every span of the clips, what a cut is held against.
+    pub capture_root_accel_p95_m_s2: f64,
 }
 
 /// How much of one clip the graph kept, and how it is joined to the rest.
@@ -166,24 +176,70 @@ pub struct MotionGraph {
 }
 
 impl MotionGraph {
-    /// Builds the graph with the lowest threshold of [`AUTO_THRESHOLDS_M`] (trying each of
-    /// `windows`; a longer window wins a tie) at which *every* clip keeps at least half
-    /// its frames in the largest strongly connected component. How similar two frames
-    /// must be depends on the data (three short footwork clips need a far looser
-    /// threshold than fourteen dribbles), and a bar on the total would let a behaviour
-    /// drop its rarest motion — the fastest runs, the sideways shuffle — which is the
-    /// motion that matters most. If no threshold joins every clip, the graph that joins
-    /// the most clips (then keeps the most frames) is built, and
-    /// [`MotionGraph::coverage`] says which clip is left out and its best transition.
+    /// Builds the graph whose cuts are as smooth as the capture, with as many of them as
+    /// that allows: of the windows and thresholds tried ([`AUTO_THRESHOLDS_M`] ×
+    /// `windows`), those at which *every* clip keeps at least half its frames in the
+    /// largest strongly connected component, the loosest whose transitions change the
+    /// root's velocity no faster than the clips themselves do (95th percentiles of
+    /// [`GraphStats::root_accel_p95_m_s2`] against
+    /// [`GraphStats::capture_root_accel_p95_m_s2`]).
+    ///
+    /// A looser threshold adds transitions, so walks get more places sooner (what a body
+    /// can do, the cost maps, improves) and cuts get rougher; `fieldhouse motion-graph
+    /// --sweep` shows both for every candidate. Joining every clip comes first, since a
+    /// bar on the total would let a behaviour drop its rarest motion (the fastest runs,
+    /// the sideways shuffle), which matters most. If no graph that joins every clip has
+    /// cuts as smooth as the capture, the smoothest that joins them all is built; if none
+    /// joins them all, the one that joins the most clips (then keeps the most frames),
+    /// and [`MotionGraph::coverage`] says which clip is left out and its best transition.
     pub fn build_auto(
         behaviour: &str,
         clips: &[&Clip],
         windows: &[usize],
     ) -> Result<MotionGraph, GraphError> {
+        let mut most_joined: Option<(usize, MotionGraph)> = None;
+        let mut smoothest_joining_all = None;
+        let mut loosest_smooth = None;
+        Self::each_candidate(behaviour, clips, windows, |graph| {
+            let joined = graph.coverage.iter().filter(|c| c.joined()).count();
+            if joined == clips.len() {
+                let s = &graph.stats;
+                if s.root_accel_p95_m_s2 <= s.capture_root_accel_p95_m_s2 {
+                    loosest_smooth = Some(graph);
+                } else if smoothest_joining_all.is_none() {
+                    smoothest_joining_all = Some(graph);
+                }
+                return ControlFlow::Continue(());
+            }
+            let better = most_joined
+                .as_ref()
+                .is_none_or(|(j, b)| (joined, graph.stats.largest_scc) > (*j, b.stats.largest_scc));
+            if better {
+                most_joined = Some((joined, graph));
+            }
+            ControlFlow::Continue(())
+        })?;
+        loosest_smooth
+            .or(smoothest_joining_all)
+            .or(most_joined.map(|(_, g)| g))
+            .ok_or(GraphError::TooShort {
+                behaviour: behaviour.to_string(),
+                window: windows.iter().copied().max().unwrap_or(0),
+            })
+    }
+
+    /// Every graph [`MotionGraph::build_auto`] considers, smoothest first (each threshold
+    /// of [`AUTO_THRESHOLDS_M`], and at each every one of `windows` in the order given),
+    /// handed to `visit` until it breaks. The transitions are found once for all of them.
+    pub fn each_candidate(
+        behaviour: &str,
+        clips: &[&Clip],
+        windows: &[usize],
+        mut visit: impl FnMut(MotionGraph) -> ControlFlow<()>,
+    ) -> Result<(), GraphError> {
         require_clips(behaviour, clips)?;
         let loosest = AUTO_THRESHOLDS_M[AUTO_THRESHOLDS_M.len() - 1];
         let by_window = transitions::find_windows(clips, windows, loosest);
-        let mut best: Option<(usize, MotionGraph)> = None;
         for threshold_m in AUTO_THRESHOLDS_M {
             for (&window, all) in windows.iter().zip(&by_window) {
                 let found: Vec<Transition> = all
@@ -199,22 +255,12 @@ impl MotionGraph {
                     continue;
                 };
                 set_best_transitions(&mut graph.coverage, all);
-                let joined = graph.coverage.iter().filter(|c| c.joined()).count();
-                if joined == clips.len() {
-                    return Ok(graph);
-                }
-                let better = best.as_ref().is_none_or(|(j, b)| {
-                    (joined, graph.stats.largest_scc) > (*j, b.stats.largest_scc)
-                });
-                if better {
-                    best = Some((joined, graph));
+                if visit(graph).is_break() {
+                    return Ok(());
                 }
             }
         }
-        best.map(|(_, g)| g).ok_or(GraphError::TooShort {
-            behaviour: behaviour.to_string(),
-            window: windows.iter().copied().max().unwrap_or(0),
-        })
+        Ok(())
     }
 
     /// Builds the graph of `behaviour` from its clips (one subject's, so one skeleton).
@@ -309,10 +355,23 @@ impl MotionGraph {
             .flat_map(|r| local_pose(clips[r.clip], r.frame))
             .collect();
         let kept_at = |c: usize, f: usize| keep[offsets[c] + f].is_some();
-        let kept_rms: Vec<f64> = found
+        let kept: Vec<&Transition> = found
             .iter()
             .filter(|t| kept_at(t.from_clip, t.from) && kept_at(t.to_clip, t.to))
-            .map(|t| t.rms_m)
+            .collect();
+        let kept_rms: Vec<f64> = kept.iter().map(|t| t.rms_m).collect();
+        let feet: Vec<cuts::Feet> = clips.iter().map(|c| cuts::Feet::of(c)).collect();
+        let quality: Vec<cuts::CutQuality> = kept
+            .iter()
+            .map(|t| {
+                cuts::quality(
+                    (clips[t.from_clip], &feet[t.from_clip]),
+                    t.from,
+                    (clips[t.to_clip], &feet[t.to_clip]),
+                    t.to,
+                    params.window,
+                )
+            })
             .collect();
         let coverage = clips
             .iter()
@@ -345,6 +404,21 @@ impl MotionGraph {
                 .fold(0.0, f64::max),
             transition_worst_m: kept_rms.iter().copied().fold(0.0, f64::max),
             transition_p95_m: percentile(&kept_rms, 0.95),
+            foot_slide_p95_m: percentile(
+                &quality.iter().map(|q| q.foot_slide_m).collect::<Vec<_>>(),
+                0.95,
+            ),
+            root_accel_p95_m_s2: percentile(
+                &quality
+                    .iter()
+                    .map(|q| q.root_accel_m_s2)
+                    .collect::<Vec<_>>(),
+                0.95,
+            ),
+            capture_root_accel_p95_m_s2: percentile(
+                &cuts::capture_accelerations(clips, params.window),
+                0.95,
+            ),
         };
         Ok(MotionGraph {
             behaviour: behaviour.to_string(),

@@ -41,6 +41,20 @@ pub(super) fn counterpart(name: &str) -> Option<String> {
     })
 }
 
+/// For each joint of a skeleton named `names`, the joint on the other side of the body
+/// (itself for a joint on the midline, or one whose counterpart the skeleton lacks).
+fn counterparts(names: &[String]) -> Vec<usize> {
+    names
+        .iter()
+        .enumerate()
+        .map(|(j, name)| {
+            counterpart(name)
+                .and_then(|other| names.iter().position(|n| *n == other))
+                .unwrap_or(j)
+        })
+        .collect()
+}
+
 /// The reflection in the vertical plane z = 0.
 fn reflect(p: DVec3) -> DVec3 {
     DVec3::new(p.x, p.y, -p.z)
@@ -52,15 +66,7 @@ impl Clip {
     /// A joint whose counterpart the skeleton lacks keeps its own position, reflected.
     pub(crate) fn mirrored(&self) -> Clip {
         let names = &self.joint_names;
-        let source: Vec<usize> = names
-            .iter()
-            .enumerate()
-            .map(|(j, name)| {
-                counterpart(name)
-                    .and_then(|other| names.iter().position(|n| *n == other))
-                    .unwrap_or(j)
-            })
-            .collect();
+        let source = counterparts(names);
         let positions = (0..self.frame_count())
             .flat_map(|f| {
                 let frame = self.frame(f);

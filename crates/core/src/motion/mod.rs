@@ -14,6 +14,7 @@
 mod alignment;
 mod bvh;
 mod clip;
+mod cuts;
 mod embedded;
 mod graph;
 mod jump;
