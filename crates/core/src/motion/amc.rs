@@ -5,8 +5,9 @@
 //! Read against its skeleton, strictly: frames are numbered one by one, every bone with
 //! values appears exactly once in every frame with exactly as many values as its dofs,
 //! and every value is a finite number, or the file is refused at the line that breaks
-//! the rule. Values are not range-checked, like BVH's: real captures have the odd glitch
-//! spike, and root angles run past ±360° (CMU does not wrap them). Bounded: lines are
+//! the rule. Angles are not range-checked, like BVH's: real captures have the odd glitch
+//! spike, and root angles run past ±360° (CMU does not wrap them). Only the root's
+//! position is, to a distance no capture comes near, so no position can overflow. Bounded: lines are
 //! capped as in `asf`, and so is the number of frames (by [`MAX_JOINT_FRAMES`]), so a
 //! short hostile file cannot make forward kinematics allocate without limit.
 //!
@@ -25,6 +26,10 @@ pub(super) const CMU_FRAME_RATE: f64 = 120.0;
 /// minutes at 120 Hz; CMU's longest trials last a few minutes). The positions forward
 /// kinematics makes of them take at most 100 MB.
 pub(super) const MAX_JOINT_FRAMES: usize = 1 << 22;
+/// The farthest the root may stand from the origin, in file units (56 km in CMU's): a
+/// capture volume is metres across. Beyond some 1e307, sums and interpolation of
+/// positions would overflow to infinity.
+const MAX_TRANSLATION: f64 = 1e6;
 /// Capture runs at 1 Hz to 10 kHz, as for BVH's frame time.
 const SAMPLE_RATES: std::ops::RangeInclusive<f64> = 1.0..=10_000.0;
 
@@ -161,7 +166,20 @@ pub(super) fn parse(text: &str, skeleton: &Skeleton) -> Result<Motion, ParseErro
         }
         for (k, (text, &angle)) in texts.iter().zip(&s.angles).enumerate() {
             let v = number(line, text, "a value")?;
-            current[s.offset + k] = if angle { angle_unit.to_radians(v) } else { v };
+            current[s.offset + k] = if angle {
+                angle_unit.to_radians(v)
+            } else if v.abs() <= MAX_TRANSLATION {
+                v
+            } else {
+                return Err(ParseError {
+                    line,
+                    kind: ParseErrorKind::OutOfRange {
+                        what: "the root's position",
+                        value: v,
+                        range: "±1000000",
+                    },
+                });
+            };
         }
     }
     let Some(last) = frame else {

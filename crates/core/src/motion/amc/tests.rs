@@ -68,7 +68,7 @@ fn the_header_may_give_the_rate_and_the_angle_unit() {
 #[test]
 fn mistakes_name_their_line() {
     let two = amc(&[STILL, STILL]);
-    let cases: [(String, usize, &str); 11] = [
+    let cases: [(String, usize, &str); 12] = [
         // A frame with the wrong number of values: line 9 is frame 2's `b`.
         (two.replace("2\nroot 0 0 0 0 0 0\na 0\nb 0 0", "2\nroot 0 0 0 0 0 0\na 0\nb 0"), 10, "`b` takes 2 values, found 1"),
         // A bone the skeleton does not have.
@@ -81,6 +81,7 @@ fn mistakes_name_their_line() {
         (two.replace(":DEGREES", ":DEGREES\n:DEGREES"), 3, ":DEGREES (or its opposite) is given twice"),
         (two.replace(":DEGREES", ":FPS 30"), 2, "expected :FULLY-SPECIFIED, :DEGREES, :RADIANS or :SAMPLES-PER-SECOND N, found `:FPS 30`"),
         (two.replace(":DEGREES", ":SAMPLES-PER-SECOND 1e6"), 2, ":SAMPLES-PER-SECOND 1000000 is outside 1 to 10000"),
+        (two.replacen("root 0 0 0", "root 0 -2e6 0", 1), 4, "the root's position -2000000 is outside ±1000000"),
         (String::from(":FULLY-SPECIFIED\n\n# nothing\n"), 3, "no frames"),
     ];
     for (text, line, message) in cases {
