@@ -29,7 +29,7 @@ enum ClipFileError {
     Acclaim(#[from] asf::ParseError),
     #[error("only the reference pose: no captured frames follow it")]
     NoCapturedFrames,
-    #[error("no skeleton: neither {wanted} nor a folder with a single .asf file")]
+    #[error("no skeleton: no {wanted}, and not exactly one .asf file beside the clip")]
     NoSkeleton { wanted: String },
     /// The skeleton `rel` (below the library's root) failed; the problem is reported at
     /// its line, naming the clip it costs.

@@ -497,7 +497,7 @@ fn a_missing_or_bad_skeleton_costs_the_clips_that_need_it() {
     assert_eq!(solo.line, None);
     assert_eq!(
         solo.message,
-        "no skeleton: neither solo/102.asf nor a folder with a single .asf file"
+        "no skeleton: no solo/102.asf, and not exactly one .asf file beside the clip"
     );
     assert!(problem_at(&lib, &tmp.0.join("two/102_12.amc"))
         .message
