@@ -69,14 +69,22 @@ fn the_motion_graph_of_real_running_is_strongly_connected() {
 
 #[test]
 fn the_embedded_capture_is_the_default_and_a_directory_replaces_it() {
-    let clips_on_disk = |behaviour: &str| {
-        std::fs::read_dir(repository_mocap().join(behaviour))
+    // A clip is a BVH or AMC file; an ASF file is the skeleton of the AMC files beside it.
+    let clips_on_disk = |behaviour: &std::path::Path| {
+        std::fs::read_dir(behaviour)
             .unwrap()
+            .filter(|f| {
+                let name = f.as_ref().unwrap().file_name();
+                let name = name.to_string_lossy();
+                name.ends_with(".bvh") || name.ends_with(".amc")
+            })
             .count()
     };
-    let all: usize = ["run", "dribble", "defense"]
-        .iter()
-        .map(|b| clips_on_disk(b))
+    let all: usize = std::fs::read_dir(repository_mocap())
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .filter(|path| path.is_dir())
+        .map(|behaviour| clips_on_disk(&behaviour))
         .sum();
     let embedded = json("motion-graph --behaviour dribble --json");
     assert_eq!(
@@ -85,7 +93,7 @@ fn the_embedded_capture_is_the_default_and_a_directory_replaces_it() {
     );
     assert_eq!(
         embedded["clips"].as_array().unwrap().len(),
-        clips_on_disk("dribble")
+        clips_on_disk(&repository_mocap().join("dribble"))
     );
     // A user's directory replaces it, by flag or by environment, named without its path.
     let dir = Scratch::new("user-mocap");

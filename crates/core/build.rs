@@ -1,5 +1,5 @@
-//! Packs the repository's motion capture (`data/mocap/<behaviour>/*.bvh`) into one zstd
-//! stream that the binary includes (`src/motion/embedded.rs` reads it back), so every
+//! Packs the repository's motion capture (`data/mocap/<behaviour>/*.bvh`, and CMU's
+//! native `*.asf` skeletons and `*.amc` motions) into one zstd stream that the binary includes (`src/motion/embedded.rs` reads it back), so every
 //! command moves with real human motion with nothing beside the binary.
 //!
 //! The pack is a plain sequence of records, in sorted path order:
@@ -21,12 +21,14 @@ fn main() {
     // crate, where users and scripts/sync-mocap find it.
     let root = PathBuf::from(std::env::var_os("CARGO_MANIFEST_DIR").expect("set by cargo"));
     let data = root.join("../../data/mocap");
+    // A directory here makes cargo rerun this script when anything under it changes: a
+    // file added, removed or edited in any behaviour folder, whatever its kind.
     println!("cargo:rerun-if-changed=../../data/mocap");
-    let files = bvh_files(&data);
+    let files = motion_files(&data);
     if files.is_empty() {
         panic!(
             "no motion capture in {}: the repository carries it as data/mocap/<behaviour>/*.bvh \
-             (scripts/sync-mocap fills it)",
+             (and *.asf, *.amc; scripts/sync-mocap fills it)",
             data.display()
         );
     }
@@ -51,8 +53,9 @@ fn main() {
         .unwrap_or_else(|e| panic!("writing {}: {e}", out.display()));
 }
 
-/// Every `<behaviour>/*.bvh` under `data`, sorted, so the pack is the same on any machine.
-fn bvh_files(data: &Path) -> Vec<PathBuf> {
+/// Every `<behaviour>/*.bvh`, `*.asf` and `*.amc` under `data` (the kinds the loader
+/// reads), sorted, so the pack is the same on any machine.
+fn motion_files(data: &Path) -> Vec<PathBuf> {
     let mut files = Vec::new();
     let Ok(behaviours) = fs::read_dir(data) else {
         return files;
@@ -64,9 +67,11 @@ fn bvh_files(data: &Path) -> Vec<PathBuf> {
         for file in fs::read_dir(&behaviour).into_iter().flatten().flatten() {
             let path = file.path();
             if path.is_file()
-                && path
-                    .extension()
-                    .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
+                && path.extension().is_some_and(|e| {
+                    ["bvh", "asf", "amc"]
+                        .iter()
+                        .any(|kind| e.eq_ignore_ascii_case(kind))
+                })
             {
                 files.push(path);
             }

@@ -14,10 +14,11 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug, Clone)]
 pub(super) struct MotionSourceArgs {
-    /// Your own BVH motion capture instead of the CMU capture built into fieldhouse: a
-    /// directory with one folder per behaviour (DIR/run/*.bvh, DIR/dribble/*.bvh,
-    /// DIR/defense/*.bvh). Default: the CMU capture embedded in the binary (data/mocap in
-    /// the repository lists its clips, sources and terms).
+    /// Your own motion capture instead of the CMU capture built into fieldhouse: a
+    /// directory with one folder per behaviour (DIR/run/, DIR/dribble/, DIR/defense/) of
+    /// BVH files, or of CMU's ASF/AMC files (each NN_MM.amc with the folder's NN.asf).
+    /// Default: the CMU capture embedded in the binary (data/mocap in the repository
+    /// lists its clips, sources and terms).
     #[arg(long, value_name = "DIR", env = "FIELDHOUSE_MOCAP_DIR")]
     pub mocap: Option<PathBuf>,
     /// Use the clips only as captured. By default every clip is also played mirrored
@@ -39,8 +40,8 @@ impl MotionSourceArgs {
             Some(dir) => MotionLibrary::load(dir, FPS, mirroring).with_context(|| {
                 format!(
                     "--mocap (or FIELDHOUSE_MOCAP_DIR) {} is not a usable motion directory. \
-                     It takes your own capture: one folder per behaviour of BVH files \
-                     (run/, dribble/, defense/). Leave it out to use the CMU motion capture \
+                     It takes your own capture: one folder per behaviour of BVH files, or of \
+                     ASF/AMC files (run/, dribble/, defense/). Leave it out to use the CMU motion capture \
                      built into fieldhouse",
                     dir.display()
                 )

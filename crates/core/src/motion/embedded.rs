@@ -1,5 +1,5 @@
 //! The CMU motion capture compiled into the binary: `build.rs` packs the repository's
-//! `data/mocap/<behaviour>/*.bvh` into one zstd stream, and this module unpacks it and
+//! `data/mocap/<behaviour>/*.{bvh,asf,amc}` into one zstd stream, and this module unpacks it and
 //! hands the files to the same loader a directory goes through. So the embedded library
 //! and `--mocap data/mocap` give the same clips and the same fingerprint.
 

@@ -31,7 +31,7 @@ pub enum MotionSource {
         /// See [`MotionSource::fingerprint`].
         fingerprint: String,
     },
-    /// A user's own capture, read from `dir`.
+    /// A user's own capture (BVH, or CMU's ASF/AMC), read from `dir`.
     Directory {
         /// The directory given (`--mocap DIR`).
         dir: PathBuf,
@@ -125,7 +125,10 @@ pub enum LibraryError {
         source: std::io::Error,
     },
     /// Not one clip loaded.
-    #[error("no BVH clip could be loaded from {} (looked for DIR/<behaviour>/*.bvh)", dir.display())]
+    #[error(
+        "no motion clip could be loaded from {} (looked for DIR/<behaviour>/*.bvh, and *.amc with their .asf skeleton)",
+        dir.display()
+    )]
     Empty {
         /// The directory given.
         dir: PathBuf,
@@ -148,9 +151,11 @@ pub struct MotionLibrary {
 }
 
 impl MotionLibrary {
-    /// Loads every `DIR/<behaviour>/*.bvh`, resampled to `fps`, with `mirroring`. A clip
-    /// that fails to parse is reported in `problems` and the rest still load; it is an
-    /// error only if nothing loads.
+    /// Loads every `DIR/<behaviour>/*.bvh`, and every `DIR/<behaviour>/*.amc` with its
+    /// skeleton (the folder's `<subject>.asf` for `<subject>_<trial>.amc`, or its only
+    /// `.asf`), resampled to `fps`, with `mirroring`. A clip that fails to parse is
+    /// reported in `problems` and the rest still load; it is an error only if nothing
+    /// loads.
     pub fn load(dir: &Path, fps: f64, mirroring: Mirroring) -> Result<MotionLibrary, LibraryError> {
         loader::load_library(dir, fps, mirroring)
     }
