@@ -135,14 +135,15 @@ fn the_unit_gives_adult_hip_heights_and_thighs() {
             "{behaviour}: hips at {hip_height:.3} m"
         );
     }
-    // Thighs measure 0.371/0.376 m (102), 0.401/0.413 m (6) and 0.397/0.402 m (16).
+    // Thighs measure 0.371/0.376 m (102), 0.401/0.413 m (6), 0.397/0.402 m (16) and up
+    // to 0.426 m (127, a taller runner); adult thighs run 0.35–0.48 m.
     for clip in &lib.clips {
         for (hip, knee) in [("LeftUpLeg", "LeftLeg"), ("RightUpLeg", "RightLeg")] {
             let (hip, knee) = (joint(clip, hip), joint(clip, knee));
             for f in 0..clip.frame_count() {
                 let thigh = (clip.frame(f)[hip] - clip.frame(f)[knee]).length();
                 assert!(
-                    (0.37..=0.42).contains(&thigh),
+                    (0.37..=0.45).contains(&thigh),
                     "{}: thigh {thigh:.3} m",
                     clip.name
                 );
@@ -174,7 +175,7 @@ fn runners_run_at_jogging_speeds() {
             "{}: starts at {start:.2} m/s",
             clip.name
         );
-        if clip.name == "16_57" {
+        if clip.name.starts_with("16_57") {
             assert!(end < 0.3, "the sudden stop ends at {end:.2} m/s");
         } else {
             assert!(
@@ -206,7 +207,9 @@ fn the_heading_is_the_way_the_runner_travels() {
 
 #[test]
 fn the_heading_is_the_way_the_toes_point() {
-    // A check of the facing convention that needs no movement: feet point forward.
+    // A check of the facing convention that needs no movement: feet point forward. A
+    // mistaken sign or axis would be 90° or 180° off; in a sharp running turn the toes
+    // lead the hips, by 36° on average over 127_15 (Run Turn Left).
     let lib = library();
     for clip in &lib.clips {
         let (lf, lt) = (joint(clip, "LeftFoot"), joint(clip, "LeftToeBase"));
@@ -221,7 +224,7 @@ fn the_heading_is_the_way_the_toes_point() {
             .sum::<f64>()
             / frames as f64;
         assert!(
-            mean < 30f64.to_radians(),
+            mean < 40f64.to_radians(),
             "{}: {:.1}° off",
             clip.name,
             mean.to_degrees()
@@ -434,7 +437,7 @@ fn a_broken_amc_costs_its_clip_and_names_its_line() {
             ("defense/102_93.amc", with_line(64, "4")),
         ],
     );
-    let lib = load_library(&tmp.0, FPS).unwrap();
+    let lib = load_library(&tmp.0, FPS, Mirroring::Off).unwrap();
     assert_eq!(lib.clips.len(), 1, "{:?}", lib.problems);
     assert_eq!(lib.clips[0].name, "102_12");
     assert_eq!(lib.problems.len(), 4);
@@ -458,12 +461,12 @@ fn a_broken_amc_costs_its_clip_and_names_its_line() {
     }
     // The clip's skeleton counts toward the fingerprint, the broken clips do not.
     let alone = amc_library("amc-alone", &[]);
-    let clean = load_library(&alone.0, FPS).unwrap();
+    let clean = load_library(&alone.0, FPS, Mirroring::Off).unwrap();
     assert_eq!(clean.source.fingerprint(), lib.source.fingerprint());
     let mut skeleton = fs::read(alone.0.join("defense/102.asf")).unwrap();
     skeleton.extend_from_slice(b"# a comment changes the file, not the clip\n");
     fs::write(alone.0.join("defense/102.asf"), skeleton).unwrap();
-    let commented = load_library(&alone.0, FPS).unwrap();
+    let commented = load_library(&alone.0, FPS, Mirroring::Off).unwrap();
     assert_eq!(commented.clips[0].frame(5), clean.clips[0].frame(5));
     assert_ne!(commented.source.fingerprint(), clean.source.fingerprint());
 }
@@ -493,7 +496,7 @@ fn a_missing_or_bad_skeleton_costs_the_clips_that_need_it() {
             ("bad/102_13.amc", clip),
         ],
     );
-    let lib = load_library(&tmp.0, FPS).unwrap();
+    let lib = load_library(&tmp.0, FPS, Mirroring::Off).unwrap();
     let loaded: Vec<(&str, &str)> = lib
         .clips
         .iter()
@@ -536,7 +539,7 @@ fn an_empty_library_says_what_it_looked_for() {
     let tmp = TempDir::new("nothing");
     fs::create_dir(tmp.0.join("run")).unwrap();
     fs::write(tmp.0.join("run/notes.txt"), "nothing to load").unwrap();
-    let err = load_library(&tmp.0, FPS).unwrap_err();
+    let err = load_library(&tmp.0, FPS, Mirroring::Off).unwrap_err();
     assert_eq!(
         err.to_string(),
         format!(
