@@ -1,7 +1,7 @@
-//! `fieldhouse basketball-decide` (one opponent-modelling decision, every square shown)
-//! and `fieldhouse basketball-eval` (the paper's possession experiment).
+//! `fieldhouse basketball-decide`: one opponent-modelling decision, every square shown;
+//! and where the basketball commands get their motion and cached maps.
 
-use super::args::{ground_pose, non_negative, parse_str, positive};
+use super::args::{ground_pose, non_negative, parse_str};
 use super::canvas::{hot, text_width, Canvas, Rgb, INK, LINE_PX};
 use super::costmap::CacheArgs;
 use super::heatmap::UNREACHABLE;
@@ -9,8 +9,8 @@ use super::motion::MotionSourceArgs;
 use anyhow::Context;
 use clap::Args;
 use fieldhouse::basketball::{
-    compare, evaluate, Brain, Capabilities, Court, Decision, DecisionParams, DefenderModel,
-    DefenderMotion, GameParams, Motion, Mover, Opponent, ShotModel, Situation,
+    Capabilities, Court, Decision, DecisionParams, DefenderMotion, GameParams, Motion, Mover,
+    Opponent, ShotModel, Situation,
 };
 use fieldhouse::costmap::AgentPose;
 use fieldhouse::words::{figure, plural};
@@ -46,17 +46,33 @@ impl CapabilityArgs {
         &self,
         library: &fieldhouse::motion::MotionLibrary,
     ) -> anyhow::Result<Capabilities> {
+        self.build_with(library, &[])
+    }
+
+    /// [`CapabilityArgs::build`], with `captures` (other behaviours of the library, such
+    /// as `run-127`) built too.
+    pub(super) fn build_with(
+        &self,
+        library: &fieldhouse::motion::MotionLibrary,
+        captures: &[String],
+    ) -> anyhow::Result<Capabilities> {
         let started = Instant::now();
         let cache = self.cache.dir();
         // A line per stage: on first start the graphs and maps take seconds, and a user
         // (or a container's log) should see what is happening.
-        let caps = Capabilities::build(library, cache.as_deref(), &mut |stage| {
+        let mut progress = |stage: fieldhouse::basketball::capability::Stage| {
             tracing::info!(
                 elapsed_s = %figure(started.elapsed().as_secs_f64(), 2),
                 "{stage}"
             );
-        })
-        .context("building the basketball behaviours (run, dribble, defense)")?;
+        };
+        let mut caps = Capabilities::build(library, cache.as_deref(), &mut progress)
+            .context("building the basketball behaviours (run, dribble, defense)")?;
+        for name in captures {
+            caps = caps
+                .with_capture(library, name, cache.as_deref(), &mut progress)
+                .with_context(|| format!("building the behaviour {name}"))?;
+        }
         tracing::info!(
             elapsed_s = %figure(started.elapsed().as_secs_f64(), 2),
             cache = %cache.map_or_else(|| "none".to_string(), |d| d.display().to_string()),
@@ -138,6 +154,7 @@ pub(super) fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<(
     let params = DecisionParams {
         shot_time_s: args.shot_time,
         epsilon_s: args.epsilon,
+        ..DecisionParams::default()
     };
     let model = caps.defender(args.defender_model);
     let defenders = standing(model, &args.defender);
@@ -148,6 +165,7 @@ pub(super) fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<(
         params: &params,
         shooter: caps.dribble.reach(&args.shooter, Motion::Still),
         defenders: &defenders,
+        shot_clock_s: GameParams::default().shot_clock_s,
     }
     .decide();
     if let Some(file) = &args.png {
@@ -394,177 +412,4 @@ fn annotate(panels: Canvas, panel: (f64, f64), horizon_s: f64, params: &Decision
         ],
     );
     canvas
-}
-
-#[derive(Args, Debug)]
-#[command(
-    after_help = "Possession k starts from the same random positions whatever the offense (seeded by --seed and k): \
-        the ball handler at x 8–12 m, z ±5 m; the teammate 5–10 m out on the other side; the defender 3 m \
-        from the ball handler toward the basket.\n\
-        Example: fieldhouse basketball-eval --offense both --possessions 2000 --seed 1"
-)]
-pub(super) struct EvalArgs {
-    /// simple, costmap, or both (the same possessions for each, with the same random
-    /// draws, compared possession by possession).
-    #[arg(long, default_value = "both")]
-    offense: String,
-    /// How the defender moves: defense (footwork) or run.
-    #[arg(long, default_value = "defense", value_parser = parse_str::<DefenderMotion>)]
-    defense: DefenderMotion,
-    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
-    possessions: u64,
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// The defender's reach, m.
-    #[arg(long, value_name = "M", default_value_t = GameParams::default().defender.reach_m, value_parser = positive)]
-    reach: f64,
-    /// How the cost-map offense models the defender when it picks where to shoot: own
-    /// (the defender's own maps at its own state), paper (the shooter's run maps at the
-    /// defender's state, as the paper), isotropic (--reaction-s + distance /
-    /// --isotropic-speed, every direction alike), none (every square in range is safe).
-    #[arg(long, default_value = "own")]
-    shot_model: String,
-    /// The same for deciding whether it is pressed and passes: own and isotropic pass
-    /// when the modelled defender reaches the ball within 1 s; paper when it is within
-    /// the radius the run maps cover in 1 s; none by the simple offense's fixed radius.
-    #[arg(long, default_value = "own")]
-    pass_model: String,
-    /// The isotropic model's reaction time, s.
-    #[arg(long, value_name = "S", default_value_t = 0.3, value_parser = non_negative)]
-    reaction_s: f64,
-    /// The isotropic model's speed, m/s.
-    #[arg(long, value_name = "M/S", default_value_t = 7.0, value_parser = positive)]
-    isotropic_speed: f64,
-    /// The simple offense shoots from this close to the basket, m.
-    #[arg(long, value_name = "M", default_value_t = GameParams::default().simple.shoot_range_m, value_parser = positive)]
-    simple_range: f64,
-    /// Print one JSON document.
-    #[arg(long)]
-    json: bool,
-    #[command(flatten)]
-    capability: CapabilityArgs,
-}
-
-pub(super) fn eval(args: EvalArgs, out: &mut impl Write) -> anyhow::Result<()> {
-    let brains: Vec<Brain> = match args.offense.as_str() {
-        "both" => vec![Brain::Simple, Brain::Costmap],
-        one => vec![parse_str::<Brain>(one).map_err(|e| anyhow::anyhow!("{e}; or both"))?],
-    };
-    let model = |name: &str| {
-        DefenderModel::parse(name, args.reaction_s, args.isotropic_speed)
-            .map_err(anyhow::Error::msg)
-    };
-    let (shot_model, pass_model) = (model(&args.shot_model)?, model(&args.pass_model)?);
-    let caps = args.capability.load()?;
-    let started = Instant::now();
-    let reports: Vec<_> = std::thread::scope(|scope| {
-        let runs: Vec<_> = brains
-            .iter()
-            .map(|&offense| {
-                let caps = caps.clone();
-                let mut params = GameParams {
-                    offense,
-                    seed: args.seed,
-                    ..GameParams::default()
-                };
-                params.defender.motion = args.defense;
-                params.defender.reach_m = args.reach;
-                params.shot_model = shot_model;
-                params.pass_model = pass_model;
-                params.simple.shoot_range_m = args.simple_range;
-                scope.spawn(move || evaluate(caps, params, args.possessions))
-            })
-            .collect();
-        runs.into_iter()
-            .map(|r| r.join().expect("an evaluation panicked"))
-            .collect()
-    });
-    let elapsed_s = started.elapsed().as_secs_f64();
-    // Per possession, and the models used, in the JSON: anyone can redo the statistics.
-    let comparison = (reports.len() == 2).then(|| compare(&reports[1], &reports[0]));
-    if args.json {
-        let doc = match (&reports[..], comparison) {
-            ([one], _) => {
-                let mut v = serde_json::to_value(one)?;
-                v["elapsed_s"] = json!(elapsed_s);
-                v["shot_model"] = json!(shot_model);
-                v["pass_model"] = json!(pass_model);
-                v["simple_range_m"] = json!(args.simple_range);
-                v["defense"] = json!(args.defense.name());
-                v["seed"] = json!(args.seed);
-                v["motion_source"] = json!(caps.source.to_string());
-                v
-            }
-            (all, c) => json!({
-                "reports": all,
-                "comparison": c,
-                "shot_model": shot_model,
-                "pass_model": pass_model,
-                "simple_range_m": args.simple_range,
-                "defense": args.defense.name(),
-                "seed": args.seed,
-                "elapsed_s": elapsed_s,
-                "motion_source": caps.source.to_string(),
-            }),
-        };
-        writeln!(out, "{doc}")?;
-        return Ok(());
-    }
-    writeln!(
-        out,
-        "{}, seed {}, defender moving with {} (motion: {})",
-        plural(args.possessions, "possession"),
-        args.seed,
-        args.defense.name(),
-        caps.source
-    )?;
-    writeln!(
-        out,
-        "the cost-map offense models the defender with the {} model to shoot and the {} model to pass; the simple offense shoots from {:.1} m",
-        shot_model.name(),
-        pass_model.name(),
-        args.simple_range
-    )?;
-    writeln!(
-        out,
-        "{:<8} {:>8} {:>7} {:>6} {:>6} {:>8} {:>8} {:>9} {:>7} {:>8} {:>9}",
-        "offense",
-        "pts/poss",
-        "± se",
-        "shots",
-        "made",
-        "blocked",
-        "stolen",
-        "shotclock",
-        "passes",
-        "shot m",
-        "poss s"
-    )?;
-    for r in &reports {
-        let n = r.possessions as f64;
-        writeln!(
-            out,
-            "{:<8} {:>8.3} {:>7.3} {:>5.0}% {:>5.0}% {:>7.1}% {:>7.1}% {:>8.1}% {:>7.2} {:>8.2} {:>9.2}",
-            r.offense,
-            r.points_per_possession,
-            r.standard_error,
-            100.0 * r.shots as f64 / n,
-            100.0 * r.made as f64 / r.shots.max(1) as f64,
-            100.0 * r.blocked as f64 / n,
-            100.0 * r.stolen as f64 / n,
-            100.0 * r.shot_clock_violations as f64 / n,
-            r.passes as f64 / n,
-            r.mean_shot_distance_m,
-            r.mean_possession_s
-        )?;
-    }
-    if let Some(c) = comparison {
-        writeln!(
-            out,
-            "costmap − simple, paired over the same {} possessions: {:+.3} ± {:.3} points per possession (95 % CI {:+.3} to {:+.3}), z = {:.2}, two-sided p = {:.2e}",
-            c.possessions, c.difference, c.standard_error, c.ci95[0], c.ci95[1], c.z, c.p_two_sided
-        )?;
-    }
-    writeln!(out, "({elapsed_s:.2} s)")?;
-    Ok(())
 }

@@ -9,6 +9,7 @@ mod canvas;
 mod capability;
 mod catch;
 mod costmap;
+mod eval;
 mod glyphs;
 mod heatmap;
 mod loadgen;
@@ -58,7 +59,7 @@ enum Command {
     /// Where would a shooter shoot from? Opponent modelling on every square: C_o > C_d + T_s + ε.
     BasketballDecide(basketball::DecideArgs),
     /// The paper's experiment: points per possession of the simple and cost-map offenses.
-    BasketballEval(basketball::EvalArgs),
+    BasketballEval(eval::EvalArgs),
     /// The reference bot: connect to a match and play one agent.
     Bot(bot::BotArgs),
     /// Play a scenario file headless, as fast as possible, into a replay file.
@@ -95,7 +96,7 @@ pub(crate) fn main() -> ExitCode {
         Command::Costmap(args) => costmap::run(args, &mut out),
         Command::Capability(args) => capability::run(args, &mut out),
         Command::BasketballDecide(args) => basketball::decide(args, &mut out),
-        Command::BasketballEval(args) => basketball::eval(args, &mut out),
+        Command::BasketballEval(args) => eval::run(args, &mut out),
         Command::Serve(args) => serve::run(args),
         Command::Bot(args) => bot::run(args, &mut out),
         Command::Run(args) => run::run(args, &mut out),

@@ -30,6 +30,23 @@ pub fn lookup<T: Copy>(
         })
 }
 
+/// `name` as a string that lives as long as the program: one copy per distinct name,
+/// kept for good. For the handful of behaviour names a motion library has (folder names,
+/// such as `run-127`), which label players in every frame, as the built-in ones do.
+pub fn intern(name: &str) -> &'static str {
+    static NAMES: std::sync::Mutex<std::collections::BTreeSet<&'static str>> =
+        std::sync::Mutex::new(std::collections::BTreeSet::new());
+    let mut names = NAMES
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    if let Some(&known) = names.get(name) {
+        return known;
+    }
+    let leaked: &'static str = Box::leak(name.to_owned().into_boxed_str());
+    names.insert(leaked);
+    leaked
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -42,5 +59,13 @@ mod tests {
             "unknown colour \"mauve\"; expected one of red, green"
         );
         assert_eq!(lookup("colour", "green", &["red", "green"], &[1, 2]), Ok(2));
+    }
+
+    #[test]
+    fn a_name_is_interned_once() {
+        let a = intern("run-127");
+        let b = intern(&String::from("run-127"));
+        assert_eq!(a, "run-127");
+        assert!(std::ptr::eq(a, b));
     }
 }

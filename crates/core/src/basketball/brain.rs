@@ -363,13 +363,19 @@ impl Game {
             params: &self.params.decision,
             shooter,
             defenders: &defenders,
+            shot_clock_s: self.shot_clock_s,
         }
         .decide_into(&mut candidates, Keep::Qualifying);
         self.candidates = candidates;
         let why = |c: &Chosen| {
+            // A map's horizon is a bound, not a time: the defender needs longer.
+            let needs = if c.beyond_horizon {
+                format!("beyond {:.0} s", c.c_o)
+            } else {
+                format!("{:.1} s", c.c_o)
+            };
             format!(
-                "defender needs {:.1} s ({} model) > {:.1} s dribble + {:.1} s shot + {:.1} s margin",
-                c.c_o,
+                "defender needs {needs} ({} model) > {:.1} s dribble + {:.1} s shot + {:.1} s margin",
                 shot_model.name(),
                 c.c_d,
                 c.t_s,
@@ -421,21 +427,19 @@ impl Game {
         self.defenders()
             .map(|d| {
                 let pose = &self.agents[d].pose;
+                let map =
+                    |mover: &'c Mover| Opponent::Map(mover.reach(pose, self.motion_of(d, mover)));
                 match model {
-                    DefenderModel::Own => {
-                        let own = caps.defender(self.params.defender.motion);
-                        Opponent::Map(own.reach(pose, self.motion_of(d, own)))
-                    }
-                    DefenderModel::Paper => {
-                        Opponent::Map(caps.run.reach(pose, self.motion_of(d, &caps.run)))
-                    }
-                    DefenderModel::Isotropic {
-                        reaction_s,
-                        speed_m_s,
-                    } => Opponent::Isotropic {
+                    DefenderModel::Own => map(caps.defender(self.params.defender.motion)),
+                    DefenderModel::Maps { behaviour } => map(caps.defender(behaviour)),
+                    DefenderModel::Kinematic(model) => Opponent::Kinematic {
+                        frame: pose.frame(),
+                        velocity: self.velocity_of(d),
+                        model,
+                    },
+                    DefenderModel::Isotropic(model) => Opponent::Isotropic {
                         at: pose.position,
-                        reaction_s,
-                        speed_m_s,
+                        model,
                     },
                     DefenderModel::None => Opponent::Ignored,
                 }
@@ -443,45 +447,52 @@ impl Game {
             .collect()
     }
 
-    /// Whether the ball handler `k` is pressed, by the pass model, and why in words.
-    ///
-    /// * `paper` (as shipped): a defender within the radius the `run` maps cover in
-    ///   `pass_pressure_s`, the same in every direction.
-    /// * `own` and `isotropic`: a defender whose modelled time to the handler's square is
-    ///   within `pass_pressure_s` (a defender facing away needs longer).
-    /// * `none`: the `simple` offense's fixed radius.
+    /// Agent `k`'s velocity in its own frame (+x ahead, +z right), m/s: how the node it
+    /// plays moves (zero before it has moved).
+    fn velocity_of(&self, k: usize) -> DVec2 {
+        let a = &self.agents[k];
+        a.node
+            .zip(a.playing)
+            .and_then(|(n, b)| {
+                self.caps
+                    .by_behaviour(b)?
+                    .graph
+                    .nodes
+                    .get(n as usize)
+                    .copied()
+            })
+            .map_or(DVec2::ZERO, |n| {
+                DVec2::new(n.forward_speed, n.lateral_speed)
+            })
+    }
+
+    /// Whether the ball handler `k` is pressed, by the pass model, and why in words: a
+    /// defender the model says reaches the ball's square within `pass_pressure_s`; with
+    /// no model, one inside the `simple` offense's fixed radius.
     fn pressed(&self, k: usize, caps: &Capabilities) -> Option<String> {
         let p = &self.params;
-        let nearest = self.openness(k);
-        match p.pass_model {
-            DefenderModel::Paper => (nearest <= self.pass_radius_m).then(|| {
-                format!(
-                    "the defender is {nearest:.1} m away, within the {:.1} m it covers in {:.1} s (paper model)",
-                    self.pass_radius_m, p.pass_pressure_s
-                )
-            }),
-            DefenderModel::None => (nearest <= p.simple.pass_radius_m).then(|| {
+        if p.pass_model == DefenderModel::None {
+            let nearest = self.openness(k);
+            return (nearest <= p.simple.pass_radius_m).then(|| {
                 format!(
                     "the defender is {nearest:.1} m away, inside the fixed {:.1} m radius (no model)",
                     p.simple.pass_radius_m
                 )
-            }),
-            model => {
-                let at = self.agents[k].pose.position;
-                let arrives = self
-                    .opponents(caps, model)
-                    .iter()
-                    .map(|o| o.seconds(at))
-                    .fold(f64::INFINITY, f64::min);
-                (arrives <= p.pass_pressure_s).then(|| {
-                    format!(
-                        "the defender reaches the ball in {arrives:.1} s ({} model), within {:.1} s",
-                        model.name(),
-                        p.pass_pressure_s
-                    )
-                })
-            }
+            });
         }
+        let at = self.agents[k].pose.position;
+        let arrives = self
+            .opponents(caps, p.pass_model)
+            .iter()
+            .map(|o| o.seconds(at))
+            .fold(f64::INFINITY, f64::min);
+        (arrives <= p.pass_pressure_s).then(|| {
+            format!(
+                "the defender reaches the ball in {arrives:.1} s ({} model), within {:.1} s",
+                p.pass_model.name(),
+                p.pass_pressure_s
+            )
+        })
     }
 
     /// Ready for a pass: toward the goal, to the spot by the basket farthest from the

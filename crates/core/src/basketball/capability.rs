@@ -134,6 +134,50 @@ impl Mover {
         mover
     }
 
+    /// The mover of `behaviour` in `library`: its graph (the automatic choice) and a
+    /// `search` map per start state, read from the cache under `cache_dir` if it holds
+    /// them, telling `progress` what it is doing.
+    pub fn build(
+        library: &MotionLibrary,
+        behaviour: &'static str,
+        cache_dir: Option<&Path>,
+        progress: &mut dyn FnMut(Stage),
+    ) -> Result<Mover, GraphError> {
+        let owned = library.ground_clips(behaviour);
+        let clips: Vec<_> = owned.iter().collect();
+        progress(Stage::Graph {
+            behaviour,
+            frames: clips.iter().map(|c| c.frame_count()).sum(),
+        });
+        let graph = MotionGraph::build_auto(behaviour, &clips, &AUTO_WINDOWS)?;
+        let params = BuildParams {
+            depth: HORIZON_FRAMES,
+            ..BuildParams::default()
+        };
+        let states = start_states(&graph);
+        let starts: Vec<u32> = states.iter().map(|s| s.node).collect();
+        let mut searching = false;
+        let (maps, cached) = cache::build_or_load(
+            cache_dir,
+            library.source.fingerprint(),
+            &graph,
+            &params,
+            &starts,
+            &mut |_| {
+                if !searching {
+                    searching = true;
+                    progress(Stage::Map { behaviour });
+                }
+            },
+        );
+        progress(Stage::Ready { behaviour, cached });
+        Ok(Mover::new(
+            behaviour,
+            graph,
+            states.into_iter().zip(maps).collect(),
+        ))
+    }
+
     /// The map of the most common running state: the one shown to people.
     pub fn map(&self) -> &CostMap {
         &self.states[self.moving].map
@@ -226,23 +270,6 @@ impl Mover {
             *at = at.after(&step, turn);
             Some(Stride { at: *at, node, cut })
         })
-    }
-
-    /// The farthest an agent with this behaviour gets from where it stands within
-    /// `seconds`, from any start state, in any direction, m: a danger radius read off the
-    /// maps rather than fixed.
-    pub fn radius_within(&self, seconds: f64) -> f64 {
-        self.states
-            .iter()
-            .flat_map(|s| {
-                let map = &s.map;
-                map.costs
-                    .iter()
-                    .enumerate()
-                    .filter(move |(_, c)| c.is_some_and(|f| f64::from(f) / map.fps <= seconds))
-                    .map(move |(cell, _)| map.grid.centre(cell).length())
-            })
-            .fold(0.0, f64::max)
     }
 }
 
@@ -434,13 +461,16 @@ fn leads(graph: &MotionGraph, starts: &[u32]) -> Vec<Lead> {
 
 /// Which behaviour a defender moves with: the paper's defender "can use any form of
 /// nondribbling movement".
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DefenderMotion {
     /// Defensive footwork: the `defense` clips.
     Defense,
     /// Running, as an offensive player without the ball does.
     Run,
+    /// Another capture of the motion library, by its behaviour (folder) name, such as a
+    /// second running subject (`run-127`): a defender whose motion the offense has no
+    /// maps of, for experiments ([`Capabilities::with_capture`] must have built it).
+    Capture(&'static str),
 }
 
 impl DefenderMotion {
@@ -449,7 +479,27 @@ impl DefenderMotion {
         match self {
             DefenderMotion::Defense => "defense",
             DefenderMotion::Run => "run",
+            DefenderMotion::Capture(name) => name,
         }
+    }
+
+    /// `defense`, `run`, or any other behaviour of a motion library (a capture).
+    pub fn any(name: &str) -> DefenderMotion {
+        name.parse()
+            .unwrap_or_else(|_| DefenderMotion::Capture(crate::names::intern(name)))
+    }
+}
+
+impl serde::Serialize for DefenderMotion {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for DefenderMotion {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        Ok(DefenderMotion::any(&name))
     }
 }
 
@@ -513,7 +563,7 @@ impl std::fmt::Display for Stage {
     }
 }
 
-/// The three behaviours of the basketball domain.
+/// The three behaviours of the basketball domain, and any other captures asked for.
 #[derive(Debug, Clone)]
 pub struct Capabilities {
     /// The ball handler's.
@@ -523,6 +573,9 @@ pub struct Capabilities {
     pub run: Mover,
     /// Defensive footwork.
     pub defense: Mover,
+    /// Other behaviours of the library, built on request ([`Capabilities::with_capture`]):
+    /// another subject's running, say, as a defender the offense has no maps of.
+    pub captures: Vec<Mover>,
     /// Where the motion capture came from (the embedded CMU clips or a user's
     /// directory), as runs report it.
     pub source: MotionSource,
@@ -536,64 +589,57 @@ impl Capabilities {
         cache_dir: Option<&Path>,
         progress: &mut dyn FnMut(Stage),
     ) -> Result<Capabilities, GraphError> {
-        let mut mover = |behaviour: &'static str| -> Result<Mover, GraphError> {
-            let owned = library.ground_clips(behaviour);
-            let clips: Vec<_> = owned.iter().collect();
-            progress(Stage::Graph {
-                behaviour,
-                frames: clips.iter().map(|c| c.frame_count()).sum(),
-            });
-            let graph = MotionGraph::build_auto(behaviour, &clips, &AUTO_WINDOWS)?;
-            let params = BuildParams {
-                depth: HORIZON_FRAMES,
-                ..BuildParams::default()
-            };
-            let states = start_states(&graph);
-            let starts: Vec<u32> = states.iter().map(|s| s.node).collect();
-            let mut searching = false;
-            let (maps, cached) = cache::build_or_load(
-                cache_dir,
-                library.source.fingerprint(),
-                &graph,
-                &params,
-                &starts,
-                &mut |_| {
-                    if !searching {
-                        searching = true;
-                        progress(Stage::Map { behaviour });
-                    }
-                },
-            );
-            progress(Stage::Ready { behaviour, cached });
-            Ok(Mover::new(
-                behaviour,
-                graph,
-                states.into_iter().zip(maps).collect(),
-            ))
-        };
         Ok(Capabilities {
-            dribble: mover("dribble")?,
-            run: mover("run")?,
-            defense: mover("defense")?,
+            dribble: Mover::build(library, "dribble", cache_dir, progress)?,
+            run: Mover::build(library, "run", cache_dir, progress)?,
+            defense: Mover::build(library, "defense", cache_dir, progress)?,
+            captures: Vec::new(),
             source: library.source.clone(),
         })
     }
 
-    /// The mover of a behaviour by name (`dribble`, `run`, `defense`).
+    /// These capabilities with the behaviour `name` of `library` built too (graph and
+    /// maps, cached like the others), for a defender that moves with it
+    /// ([`DefenderMotion::Capture`]) or a model made of its maps. Built once: asking
+    /// again for a behaviour already there changes nothing.
+    pub fn with_capture(
+        mut self,
+        library: &MotionLibrary,
+        name: &str,
+        cache_dir: Option<&Path>,
+        progress: &mut dyn FnMut(Stage),
+    ) -> Result<Capabilities, GraphError> {
+        if self.by_behaviour(name).is_none() {
+            let name = crate::names::intern(name);
+            self.captures
+                .push(Mover::build(library, name, cache_dir, progress)?);
+        }
+        Ok(self)
+    }
+
+    /// The mover of a behaviour by name (`dribble`, `run`, `defense`, or a capture built
+    /// with [`Capabilities::with_capture`]).
     pub fn by_behaviour(&self, behaviour: &str) -> Option<&Mover> {
         match behaviour {
             "dribble" => Some(&self.dribble),
             "run" => Some(&self.run),
             "defense" => Some(&self.defense),
-            _ => None,
+            _ => self.captures.iter().find(|m| m.behaviour == behaviour),
         }
     }
 
     /// The mover a defender moving with `motion` uses.
+    ///
+    /// # Panics
+    /// For a [`DefenderMotion::Capture`] these capabilities were not built with: callers
+    /// check with [`Capabilities::by_behaviour`] when they take the name.
     pub fn defender(&self, motion: DefenderMotion) -> &Mover {
         match motion {
             DefenderMotion::Defense => &self.defense,
             DefenderMotion::Run => &self.run,
+            DefenderMotion::Capture(name) => self.by_behaviour(name).unwrap_or_else(|| {
+                panic!("the capture \"{name}\" was not built (Capabilities::with_capture)")
+            }),
         }
     }
 }

@@ -3,6 +3,7 @@
 //! x runs from the baseline (x = 0) to the half-court line (x = 14 m); z runs across the
 //! court, from −7.5 m to 7.5 m, with the basket on z = 0. The offense attacks toward −x.
 
+use super::shot::ShotModel;
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
@@ -13,6 +14,9 @@ use serde::{Deserialize, Serialize};
 /// listed them ([`crate::tags`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Court {
+    /// The backboard's face, m from the baseline (FIBA: 1.2, the ring's centre 0.375 m in
+    /// front of it): no shot goes in from behind its plane.
+    pub backboard_m: f64,
     /// The centre of the ring above the floor, projected onto it, [x, z], m.
     #[schemars(with = "[f64; 2]")]
     pub basket: DVec2,
@@ -29,6 +33,7 @@ pub struct Court {
 impl Default for Court {
     fn default() -> Self {
         Court {
+            backboard_m: 1.2,
             length_m: 14.0,
             width_m: 15.0,
             basket: DVec2::new(1.575, 0.0),
@@ -58,6 +63,16 @@ impl Court {
 
     pub(crate) fn distance_to_basket(&self, p: DVec2) -> f64 {
         p.distance(self.basket)
+    }
+
+    /// The chance a shot from `p` goes in: `shot`'s, by the distance to the basket, and
+    /// none from behind the backboard's plane (the board is between the ball and the
+    /// ring) or off the court.
+    pub fn shot_success(&self, shot: &ShotModel, p: DVec2) -> f64 {
+        if !self.contains(p) || p.x < self.backboard_m {
+            return 0.0;
+        }
+        shot.success(self.distance_to_basket(p))
     }
 
     /// Points a made shot from `p` scores.
@@ -118,6 +133,22 @@ mod tests {
         }
         assert_eq!(court.square_of(DVec2::new(-0.1, 0.0)), None);
         assert_eq!(court.square_of(DVec2::new(1.0, 7.6)), None);
+    }
+
+    /// Behind the backboard's plane a shot cannot go in, however near the ring; just in
+    /// front of it, the shot model's chance; off the court, none.
+    #[test]
+    fn no_shot_goes_in_from_behind_the_backboard() {
+        let court = Court::default();
+        let shot = ShotModel::default();
+        let behind = DVec2::new(court.backboard_m - 0.05, 0.8);
+        assert!(court.basket.distance(behind) < 1.0);
+        assert_eq!(court.shot_success(&shot, behind), 0.0);
+        let front = DVec2::new(court.backboard_m + 0.05, 0.8);
+        assert_eq!(court.shot_success(&shot, front), shot.cap);
+        assert_eq!(court.shot_success(&shot, DVec2::new(5.0, 7.6)), 0.0);
+        let far = DVec2::new(9.0, 0.0);
+        assert_eq!(court.shot_success(&shot, far), shot.success(9.0 - 1.575));
     }
 
     #[test]

@@ -10,7 +10,9 @@
 
 use super::capability::Reach;
 use super::court::Court;
+use super::parametric::{Isotropic, Kinematic};
 use super::shot::ShotModel;
+use crate::costmap::LocalFrame;
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
@@ -18,6 +20,8 @@ use serde::{Deserialize, Serialize};
 /// `field.decision` has always listed them: [`crate::tags`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct DecisionParams {
+    /// What a square the defender's model does not reach within its horizon counts as.
+    pub beyond_horizon: BeyondHorizon,
     /// ε: the margin the defender must be late by, s.
     pub epsilon_s: f64,
     /// T_s: from the decision to shoot until the ball leaves the hands, s.
@@ -27,9 +31,44 @@ pub struct DecisionParams {
 impl Default for DecisionParams {
     fn default() -> Self {
         DecisionParams {
+            beyond_horizon: BeyondHorizon::Horizon,
             shot_time_s: 0.4,
             epsilon_s: 0.2,
         }
+    }
+}
+
+/// A square a defender's map does not reach (farther in time than its horizon, or
+/// outside the map) is not proof the defender cannot get there: how the rule counts it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum BeyondHorizon {
+    /// C_o is the horizon: the defender needs at least that long, which the maps do say
+    /// of a square within their extent.
+    Horizon,
+    /// Never safe: what the maps do not show is not counted on.
+    Unsafe,
+}
+
+impl BeyondHorizon {
+    /// The policy's name, as users write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            BeyondHorizon::Horizon => "horizon",
+            BeyondHorizon::Unsafe => "unsafe",
+        }
+    }
+}
+
+impl std::str::FromStr for BeyondHorizon {
+    type Err = crate::names::UnknownName;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        crate::names::lookup(
+            "beyond-horizon policy",
+            s,
+            &["horizon", "unsafe"],
+            &[BeyondHorizon::Horizon, BeyondHorizon::Unsafe],
+        )
     }
 }
 
@@ -39,8 +78,11 @@ pub struct Candidate {
     /// The square's centre on the court, m.
     pub cell: [f64; 2],
     /// C_o, s. Where the defender's map does not reach, its horizon (the defender needs
-    /// at least that long).
+    /// at least that long): see `beyond_horizon`.
     pub c_o: f64,
+    /// True when C_o is the horizon of a map that does not reach the square: the
+    /// defender needs *at least* that long.
+    pub beyond_horizon: bool,
     /// C_d, s (0 for the square the shooter stands on, and for the map's start cell
     /// beside it: the shooter need not move to shoot from either).
     pub c_d: f64,
@@ -49,9 +91,11 @@ pub struct Candidate {
 }
 
 impl Candidate {
-    /// The paper's inequality: the defender arrives after the shot is away, by ε.
+    /// The paper's inequality: the defender arrives after the shot is away, by ε (and,
+    /// with [`BeyondHorizon::Unsafe`], the maps show it).
     pub fn qualifies(&self, params: &DecisionParams) -> bool {
-        self.c_o > self.c_d + params.shot_time_s + params.epsilon_s
+        !(self.beyond_horizon && params.beyond_horizon == BeyondHorizon::Unsafe)
+            && self.c_o > self.c_d + params.shot_time_s + params.epsilon_s
     }
 }
 
@@ -64,6 +108,8 @@ pub struct Chosen {
     pub success: f64,
     /// C_o: the defenders' soonest time to the square, s.
     pub c_o: f64,
+    /// True when `c_o` is a map's horizon: the defender needs at least that long.
+    pub beyond_horizon: bool,
     /// C_d: the shooter's dribbling time to the square, s.
     pub c_d: f64,
     /// T_s: from the decision to shoot until the ball leaves the hands, s.
@@ -97,22 +143,31 @@ pub struct Situation<'a> {
     pub shooter: Reach<'a>,
     /// What the shooter believes each defender needs to reach a square.
     pub defenders: &'a [Opponent<'a>],
+    /// What is left of the shot clock, s: a square the shooter cannot dribble to and
+    /// shoot from before it runs out is not considered.
+    pub shot_clock_s: f64,
 }
 
 /// What the shooter believes a defender needs to reach a square, s: C_o.
 pub enum Opponent<'a> {
-    /// A cost map embedded at the defender's pose and state (its own maps, or the
-    /// shooter's `run` maps); beyond the map, the map's horizon (it needs at least that).
+    /// A cost map embedded at the defender's pose and state (its own maps, or another
+    /// behaviour's); beyond the map, the map's horizon (it needs at least that).
     Map(Reach<'a>),
-    /// `reaction_s` + distance / `speed_m_s` from where the defender stands, the same in
-    /// every direction.
+    /// A kinematic model from the defender's pose and velocity.
+    Kinematic {
+        /// The defender's frame on the court.
+        frame: LocalFrame,
+        /// Its velocity in its own frame (+x ahead, +z right), m/s.
+        velocity: DVec2,
+        /// The model.
+        model: Kinematic,
+    },
+    /// One speed in every direction from where the defender stands.
     Isotropic {
         /// Where the defender stands on the court, (x, z), m.
         at: DVec2,
-        /// Time before it sets off, s.
-        reaction_s: f64,
-        /// Its speed once moving, m/s.
-        speed_m_s: f64,
+        /// The model.
+        model: Isotropic,
     },
     /// No model: never in time.
     Ignored,
@@ -120,17 +175,29 @@ pub enum Opponent<'a> {
 
 impl Opponent<'_> {
     /// C_o for the world point `world`: the seconds this model says the defender needs
-    /// to get there (infinite for [`Opponent::Ignored`]).
+    /// to get there (infinite for [`Opponent::Ignored`]); for a map that does not reach
+    /// it, the map's horizon.
     #[inline]
     pub fn seconds(&self, world: DVec2) -> f64 {
+        self.reaches(world).0
+    }
+
+    /// [`Opponent::seconds`], and whether that is a map's horizon (the defender needs at
+    /// least that long) rather than a time the model gives.
+    #[inline]
+    pub fn reaches(&self, world: DVec2) -> (f64, bool) {
         match self {
-            Opponent::Map(reach) => reach.seconds(world).unwrap_or_else(|| reach.horizon_s()),
-            Opponent::Isotropic {
-                at,
-                reaction_s,
-                speed_m_s,
-            } => reaction_s + at.distance(world) / speed_m_s,
-            Opponent::Ignored => f64::INFINITY,
+            Opponent::Map(reach) => match reach.seconds(world) {
+                Some(s) => (s, false),
+                None => (reach.horizon_s(), true),
+            },
+            Opponent::Kinematic {
+                frame,
+                velocity,
+                model,
+            } => (model.seconds(frame.to_local(world), *velocity), false),
+            Opponent::Isotropic { at, model } => (model.seconds(world - *at), false),
+            Opponent::Ignored => (f64::INFINITY, false),
         }
     }
 }
@@ -168,27 +235,30 @@ impl Situation<'_> {
                     0.0
                 } else {
                     match self.shooter.seconds(centre) {
-                        Some(s) => s,
-                        None => continue,
+                        // No time to get there and shoot before the shot clock runs out.
+                        Some(s) if s + self.params.shot_time_s <= self.shot_clock_s => s,
+                        _ => continue,
                     }
                 };
                 // The map's own start cell costs nothing too: no need to move.
                 let is_here = c_d == 0.0;
-                let c_o = self
+                let (c_o, beyond_horizon) = self
                     .defenders
                     .iter()
-                    .map(|d| d.seconds(centre))
-                    .fold(f64::INFINITY, f64::min);
-                let qualifies = c_o > c_d + self.params.shot_time_s + self.params.epsilon_s;
-                if !qualifies && keep == Keep::Qualifying {
-                    continue;
-                }
+                    .map(|d| d.reaches(centre))
+                    .fold((f64::INFINITY, false), |a, b| if b.0 < a.0 { b } else { a });
                 let c = Candidate {
                     cell: centre.to_array(),
                     c_o,
+                    beyond_horizon,
                     c_d,
-                    success: self.shot.success(court.distance_to_basket(centre)),
+                    success: court.shot_success(self.shot, centre),
                 };
+                // A square no shot goes in from (behind the backboard) is never chosen.
+                let qualifies = c.qualifies(self.params) && c.success > 0.0;
+                if !qualifies && keep == Keep::Qualifying {
+                    continue;
+                }
                 if qualifies {
                     let better = best.is_none_or(|(b, _)| {
                         let b = &candidates[b];
@@ -207,6 +277,7 @@ impl Situation<'_> {
                 cell: c.cell,
                 success: c.success,
                 c_o: c.c_o,
+                beyond_horizon: c.beyond_horizon,
                 c_d: c.c_d,
                 t_s: self.params.shot_time_s,
                 epsilon: self.params.epsilon_s,

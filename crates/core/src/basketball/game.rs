@@ -77,9 +77,6 @@ pub struct Game {
     /// Defenders that have tried to block the shot being taken.
     blocks_tried: u64,
     rng: ChaCha8Rng,
-    /// The `costmap` offense's passing radius: as far as the modelled defender (its own
-    /// `run` map) gets in the pressure time, m. Read off the map once.
-    pub(super) pass_radius_m: f64,
     /// Reused by every decision, so deciding does not allocate.
     pub(super) candidates: Vec<Candidate>,
     /// Each agent's last decision (action, square), to report only changes.
@@ -130,9 +127,7 @@ impl Game {
     pub fn named(caps: Arc<Capabilities>, params: GameParams, names: Vec<String>) -> Game {
         let agents = params.offense_players + params.defenders;
         assert_eq!(names.len(), agents, "one name per agent");
-        let pass_radius_m = caps.run.radius_within(params.pass_pressure_s);
         let mut game = Game {
-            pass_radius_m,
             caps,
             params,
             agents: Vec::new(),
@@ -335,7 +330,7 @@ impl Game {
         let at = self.agents[shooter].pose.position;
         let court = self.params.court;
         let distance_m = court.distance_to_basket(at);
-        let success = self.params.shot.success(distance_m);
+        let success = court.shot_success(&self.params.shot, at);
         let shot_event = |made: bool, blocked: bool, points: u32, id: &str| Event::Shot {
             by: id.to_string(),
             from: at.to_array(),

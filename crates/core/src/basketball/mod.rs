@@ -7,7 +7,9 @@
 //!   capability model), embedded at an agent's pose; moves play a map's stored path.
 //!   [`human`]: what people do, the targets the capability model is held to.
 //!   `footprint`: the ground a stored path covers, to keep moves on the court.
-//! * [`decision`]: opponent modelling, `C_o > C_d + T_s + ε`.
+//! * [`decision`]: opponent modelling, `C_o > C_d + T_s + ε`; [`parametric`]: the
+//!   kinematic and isotropic models of an opponent, fitted to its maps, that the human
+//!   model is compared with.
 //! * [`agent`], `brain`, [`game`]: the game as a deterministic state machine; the
 //!   offense's `simple` and `costmap` brains; the defender.
 //! * [`event`]: what a game reports; [`safe`]: a decision's safe squares as a bitmap.
@@ -23,6 +25,7 @@ pub mod event;
 mod footprint;
 pub mod game;
 pub mod human;
+pub mod parametric;
 pub mod params;
 pub mod safe;
 pub mod shot;
@@ -31,7 +34,9 @@ pub use agent::{Action, Team};
 pub use brain::RUN_OFF_M;
 pub use capability::{Capabilities, DefenderMotion, Motion, Mover, Reach, StateMap, Stride};
 pub use court::Court;
-pub use decision::{Candidate, Chosen, Decision, DecisionParams, Keep, Opponent, Situation};
+pub use decision::{
+    BeyondHorizon, Candidate, Chosen, Decision, DecisionParams, Keep, Opponent, Situation,
+};
 pub use eval::{compare, evaluate, Comparison, EvalReport};
 pub use event::{BallState, BallView, ChosenView, Event, Outcome, PlayerView, PoseBlend};
 pub use game::{Game, Order};

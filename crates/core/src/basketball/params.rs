@@ -4,6 +4,7 @@
 use super::capability::DefenderMotion;
 use super::court::Court;
 use super::decision::DecisionParams;
+use super::parametric::{Isotropic, Kinematic};
 use super::shot::ShotModel;
 use crate::names::{lookup, UnknownName};
 use serde::{Deserialize, Serialize};
@@ -50,52 +51,38 @@ impl FromStr for Brain {
 #[serde(tag = "kind", rename_all = "lowercase")]
 pub enum DefenderModel {
     /// The defender's own maps (the behaviour it moves with), from the state it is in:
-    /// the truth, as far as the maps know it.
+    /// exact by construction, since the defender moves on that very graph. An upper
+    /// bound: a real opponent is never known that well.
     Own,
-    /// The paper's: the shooter's own non-dribbling (`run`) maps, embedded at the
-    /// defender's pose and state ("without prior knowledge of the defender").
-    Paper,
-    /// No motion model: `reaction_s` + distance / `speed_m_s`, the same in every
-    /// direction (a defender that turns for free).
-    Isotropic {
-        /// Time before the defender sets off, s.
-        reaction_s: f64,
-        /// Its speed once moving, m/s.
-        speed_m_s: f64,
+    /// Another behaviour's maps, embedded at the defender's pose and state: `run` is the
+    /// paper's ("without prior knowledge of the defender", the shooter's own
+    /// non-dribbling maps); another subject's are another human's capability.
+    Maps {
+        /// The behaviour whose maps model the defender.
+        behaviour: DefenderMotion,
     },
+    /// Reaction, turn, acceleration and a top speed each way ([`Kinematic`]), from the
+    /// defender's pose and velocity: what a game AI would use, fitted to maps.
+    Kinematic(Kinematic),
+    /// A reaction time and one speed in every direction ([`Isotropic`]): a defender that
+    /// turns for free.
+    Isotropic(Isotropic),
     /// No model at all: every square in range is safe (shoot from the best one), and
     /// the pass falls back to the `simple` offense's fixed radius.
     None,
 }
 
 impl DefenderModel {
-    /// The model's name, as users write it (`own`, `paper`, `isotropic`, `none`).
-    pub fn name(self) -> &'static str {
+    /// The model's name, as reports print it: `own`, `maps:BEHAVIOUR`, `kinematic`,
+    /// `isotropic`, `none`.
+    pub fn name(self) -> String {
         match self {
-            DefenderModel::Own => "own",
-            DefenderModel::Paper => "paper",
-            DefenderModel::Isotropic { .. } => "isotropic",
-            DefenderModel::None => "none",
+            DefenderModel::Own => "own".into(),
+            DefenderModel::Maps { behaviour } => format!("maps:{}", behaviour.name()),
+            DefenderModel::Kinematic(_) => "kinematic".into(),
+            DefenderModel::Isotropic(_) => "isotropic".into(),
+            DefenderModel::None => "none".into(),
         }
-    }
-
-    /// Reads `own`, `paper`, `none` or `isotropic` (with the reaction time and speed
-    /// given apart).
-    pub fn parse(name: &str, reaction_s: f64, speed_m_s: f64) -> Result<Self, UnknownName> {
-        lookup(
-            "defender model",
-            name,
-            &["own", "paper", "isotropic", "none"],
-            &[
-                DefenderModel::Own,
-                DefenderModel::Paper,
-                DefenderModel::Isotropic {
-                    reaction_s,
-                    speed_m_s,
-                },
-                DefenderModel::None,
-            ],
-        )
     }
 }
 
