@@ -57,6 +57,7 @@ fn decision(c: &mut Criterion) {
         params: &params,
         shooter: caps.dribble.reach(&shooter, Motion::Still),
         defenders: &defenders,
+        shot_clock_s: 24.0,
     };
     let mut candidates = Vec::new();
     for (name, keep) in [("all", Keep::All), ("qualifying", Keep::Qualifying)] {

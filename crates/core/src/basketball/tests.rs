@@ -44,6 +44,7 @@ fn decide(mover: &Mover, shooter: AgentPose, defender: AgentPose) -> Decision {
         params: &DecisionParams::default(),
         shooter: mover.reach(&shooter, Motion::Still),
         defenders: &defenders,
+        shot_clock_s: 24.0,
     }
     .decide()
 }
@@ -124,6 +125,7 @@ fn a_shooter_with_no_defender_takes_the_best_shot_it_can_reach() {
         params: &DecisionParams::default(),
         shooter: mover.reach(&pose(9.0, 0.0, 180.0), Motion::Still),
         defenders: &[],
+        shot_clock_s: 24.0,
     }
     .decide();
     let chosen = d.chosen.unwrap();
@@ -156,6 +158,7 @@ fn an_isotropic_model_gives_every_square_the_formulas_time_and_no_model_the_best
         params: &DecisionParams::default(),
         shooter: mover.reach(&pose(9.0, 0.0, 180.0), Motion::Still),
         defenders: &defenders,
+        shot_clock_s: 24.0,
     }
     .decide();
     for c in &modelled.candidates {
@@ -170,6 +173,7 @@ fn an_isotropic_model_gives_every_square_the_formulas_time_and_no_model_the_best
         params: &DecisionParams::default(),
         shooter,
         defenders: &[Opponent::Ignored],
+        shot_clock_s: 24.0,
     }
     .decide();
     let best = unmodelled
