@@ -39,6 +39,11 @@ pub struct EvalReport {
     pub mean_shot_distance_m: f64,
     /// Mean time from a possession's start to its outcome, s.
     pub mean_possession_s: f64,
+    /// Decisions of the cost-map offense that chose a square to shoot from.
+    pub chosen_squares: u64,
+    /// Of those, the squares whose C_o was a map's horizon: the defender's model did
+    /// not reach them, and the rule counted on "at least the horizon".
+    pub chosen_beyond_horizon: u64,
     pub(crate) ticks: u64,
     /// Every possession's outcome, in order: possession k of two reports began from the
     /// same positions with the same random draws, so they pair.
@@ -76,6 +81,8 @@ pub fn evaluate(caps: Arc<Capabilities>, params: GameParams, possessions: u64) -
         three_pointers: 0,
         mean_shot_distance_m: 0.0,
         mean_possession_s: 0.0,
+        chosen_squares: 0,
+        chosen_beyond_horizon: 0,
         ticks: 0,
         by_possession: Vec::with_capacity(usize::try_from(possessions).unwrap_or(0)),
     };
@@ -87,6 +94,12 @@ pub fn evaluate(caps: Arc<Capabilities>, params: GameParams, possessions: u64) -
         r.ticks += 1;
         for e in &events {
             match e {
+                Event::Decision {
+                    chosen: Some(c), ..
+                } => {
+                    r.chosen_squares += 1;
+                    r.chosen_beyond_horizon += u64::from(c.beyond_horizon);
+                }
                 Event::Shot {
                     distance_m, points, ..
                 } => {

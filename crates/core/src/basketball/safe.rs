@@ -79,6 +79,7 @@ mod tests {
         Candidate {
             cell: court.square_centre(square).to_array(),
             c_o: 3.0,
+            beyond_horizon: false,
             c_d: 1.0,
             success: 0.5,
         }
