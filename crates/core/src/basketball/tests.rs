@@ -581,9 +581,9 @@ fn a_move_to_keeps_going_until_the_agent_gets_there() {
         seed: 5,
         ..GameParams::default()
     };
-    // A defender facing the half-court line, the target 3 m behind it: the first
-    // place nearer the line where the map's way straight there leaves the court (which depends on the
-    // capture, so the test looks for it rather than assume it).
+    // A defender facing the half-court line, the target 3 m behind it: the first place,
+    // nearing the line, where the map's way straight there leaves the court (that
+    // depends on the capture, so the test looks for it rather than assume it).
     let (mut game, mut events, goal) = [12.0, 13.0, 13.3, 13.6, 13.8]
         .into_iter()
         .find_map(|x| {
