@@ -291,7 +291,9 @@ function explain(d, rule, now, byBot) {
     // Numbers are coerced: a replay's frames are whatever its file holds.
     const [co, cd, ts, eps] = [c.c_o, c.c_d, rule.shot_time_s, rule.epsilon_s].map(Number);
     const margin = co - (cd + ts + eps);
-    text += `<br>C<sub>o</sub> ${co.toFixed(1)} s ${margin > 0 ? "&gt;" : "≤"} C<sub>d</sub> ${cd.toFixed(1)} s + ` +
+    // A map's horizon is a bound: the defender needs at least that long, not that long.
+    const needs = c.beyond_horizon === true ? `beyond ${co.toFixed(0)} s` : `${co.toFixed(1)} s`;
+    text += `<br>C<sub>o</sub> ${needs} ${margin > 0 ? "&gt;" : "≤"} C<sub>d</sub> ${cd.toFixed(1)} s + ` +
       `T<sub>s</sub> ${ts.toFixed(1)} s + ε ${eps.toFixed(1)} s; shot success ${(100 * Number(c.success)).toFixed(0)} %`;
   }
   const n = Number(d.safe.length);

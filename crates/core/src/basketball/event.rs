@@ -173,6 +173,10 @@ impl Serialize for Event {
 /// (the hello's `field.decision`) and the same in every decision.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
 pub struct ChosenView {
+    /// Present, as `true`, when `c_o` is the horizon of a map that does not reach the
+    /// square: the defender needs at least that long.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub beyond_horizon: bool,
     /// C_d: the shooter's dribbling time to the square, s.
     pub c_d: f64,
     /// C_o: the defenders' soonest time to the square, s.
@@ -188,6 +192,7 @@ pub struct ChosenView {
 impl From<Chosen> for ChosenView {
     fn from(c: Chosen) -> ChosenView {
         ChosenView {
+            beyond_horizon: c.beyond_horizon,
             c_d: c.c_d,
             c_o: c.c_o,
             cell: c.cell,
