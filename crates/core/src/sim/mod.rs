@@ -30,7 +30,12 @@ pub use crate::protocol::Action;
 /// 2. Fielders estimate the ball's path by a least-squares fit over their looks instead
 ///    of differencing the last two or three (baseball and cricket play differently;
 ///    basketball does not).
-pub const VERSION: u32 = 2;
+/// 3. Basketball players move with more of the capture (every clip mirrored, subject
+///    102's stance-to-stance slide, zigzag, spin, go-right and pivoting) on graphs whose
+///    cuts are held to the capture's own smoothness; no shot goes in from behind the
+///    backboard, and no square the shot clock cannot allow is chosen (fly balls play as
+///    in version 2).
+pub const VERSION: u32 = 3;
 
 use crate::basketball::{Capabilities, Order};
 use crate::protocol::{Agent, AgentInfo, Ball, Event, Field, MatchInfo, Score, Sensed};
