@@ -5,7 +5,7 @@ use anyhow::Context;
 use clap::Args;
 use fieldhouse::basketball::capability::HORIZON_FRAMES;
 use fieldhouse::basketball::human::{self, Stance};
-use fieldhouse::costmap::{root_speed, start_states, BuildParams, CostMap};
+use fieldhouse::costmap::{root_speed, start_states, BuildParams, CostMap, STANDING_MIRRORED};
 use fieldhouse::motion::{GraphParams, Mirroring, MotionGraph, MotionLibrary, AUTO_WINDOWS, FPS};
 use fieldhouse::words::{figure, plural};
 use serde_json::json;
@@ -238,21 +238,30 @@ fn sweep(args: &GraphArgs, json: bool, out: &mut impl Write) -> anyhow::Result<(
     let mut rows = Vec::new();
     MotionGraph::each_candidate(&args.behaviour, &clips, &AUTO_WINDOWS, |graph| {
         let joined = graph.coverage.iter().filter(|c| c.joined()).count();
-        let standing = start_states(&graph)[0].clone();
-        let map = CostMap::build(
+        // The stance and, in a mirrored capture, its mirror image (start_states lists
+        // them first).
+        let states = start_states(&graph);
+        let standing = &states[0];
+        let stances: Vec<u32> = states
+            .iter()
+            .take_while(|s| s.name == "standing" || s.name == STANDING_MIRRORED)
+            .map(|s| s.node)
+            .collect();
+        let maps = CostMap::build_from(
             &graph,
             &BuildParams {
                 depth: HORIZON_FRAMES,
-                start_node: Some(standing.node),
                 ..BuildParams::default()
             },
+            &stances,
             &mut |_| {},
         );
         let stance = Stance {
             behaviour: &args.behaviour,
             graph: &graph,
             state: &standing.name,
-            map: &map,
+            map: &maps[0],
+            twin: maps.get(1),
         };
         let s = &graph.stats;
         rows.push(json!({

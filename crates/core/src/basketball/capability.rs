@@ -23,6 +23,9 @@ pub struct Mover {
     pub states: Vec<StateMap>,
     /// Which of `states` is the most common running state: the map shown to people.
     moving: usize,
+    /// Which of `states` is the mirror image of the stance (`states[0]`), if the capture
+    /// is mirrored: a standing agent gets the better of the two, cell by cell.
+    stance_twin: Option<usize>,
     /// Per graph node, the walk to the start state a body playing it reaches soonest.
     leads: Vec<Lead>,
     /// Per graph edge, how it is played: one root step (with its turn as cos, sin) per
@@ -107,11 +110,15 @@ impl Mover {
             .iter()
             .position(|(s, _)| Some(s.node) == moving_node)
             .unwrap_or(0);
+        let stance_twin = maps
+            .iter()
+            .position(|(s, _)| s.name == crate::costmap::STANDING_MIRRORED);
         let mut mover = Mover {
             behaviour,
             graph,
             states: Vec::new(),
             moving,
+            stance_twin,
             leads,
             edge_frames,
         };
@@ -212,6 +219,11 @@ impl Mover {
             }
             Motion::Still => (0, None),
         };
+        // A standing body may set off on either foot.
+        let twin = match motion {
+            Motion::Still => self.stance_twin,
+            _ => None,
+        };
         let start = Walker {
             position: pose.position,
             facing: DVec2::from_angle(pose.heading),
@@ -231,6 +243,7 @@ impl Mover {
         Reach {
             mover: self,
             state,
+            twin,
             lead,
             start,
             node: match motion {
@@ -280,6 +293,9 @@ impl Mover {
 pub struct Reach<'a> {
     mover: &'a Mover,
     state: usize,
+    /// For a standing agent, the stance's mirror image: each cell is reached by whichever
+    /// of the two stances gets there sooner.
+    twin: Option<usize>,
     lead: Option<&'a Lead>,
     /// The agent as it is, and the node it plays.
     start: Walker,
@@ -292,6 +308,23 @@ pub struct Reach<'a> {
 impl Reach<'_> {
     fn map(&self) -> &CostMap {
         &self.mover.states[self.state].map
+    }
+
+    /// The state whose map reaches `cell` soonest: the agent's, or for a standing agent
+    /// the stance's mirror image when that is quicker.
+    #[inline]
+    fn state_for(&self, cell: usize) -> usize {
+        let cost = |s: usize| self.mover.states[s].map.costs[cell].unwrap_or(u32::MAX);
+        match self.twin {
+            Some(t) if cost(t) < cost(self.state) => t,
+            _ => self.state,
+        }
+    }
+
+    /// Frames to `cell` by its map (the lead not included), if either stance reaches it.
+    #[inline]
+    fn frames_to(&self, cell: usize) -> Option<u32> {
+        self.mover.states[self.state_for(cell)].map.costs[cell]
     }
 
     fn lead_frames(&self) -> u32 {
@@ -313,7 +346,8 @@ impl Reach<'_> {
     #[inline]
     pub fn seconds(&self, world: DVec2) -> Option<f64> {
         let map = self.map();
-        map.cost_in(&self.frame, world)
+        let cell = map.grid.cell_of(self.frame.to_local(world))?;
+        self.frames_to(cell)
             .map(|frames| f64::from(frames + self.lead_frames()) / map.fps)
     }
 
@@ -324,23 +358,28 @@ impl Reach<'_> {
 
     /// The map cell holding `world`, if the map reaches it.
     pub fn cell(&self, world: DVec2) -> Option<usize> {
-        let map = self.map();
-        let cell = map.grid.cell_of(self.frame.to_local(world))?;
-        map.costs[cell].map(|_| cell)
+        let cell = self.map().grid.cell_of(self.frame.to_local(world))?;
+        self.frames_to(cell).map(|_| cell)
     }
 
     /// The move to map cell `cell`: one stride per data frame, starting with the agent as
     /// it is, through the lead, then the stored path.
     pub fn strides(&self, cell: usize) -> Vec<Stride> {
+        let state = &self.mover.states[self.state_for(cell)];
         let first = Stride {
             at: self.start,
-            node: self.node,
+            // A standing agent sets off in the stance the path starts from.
+            node: if self.lead.is_none() && self.twin.is_some() {
+                state.state.node
+            } else {
+                self.node
+            },
             cut: false,
         };
         let lead = self.lead.map_or(&[][..], |l| &l.edges[..]);
         std::iter::once(first)
             .chain(self.mover.play(lead, self.start))
-            .chain(self.mover.play(&self.map().paths[cell], self.origin))
+            .chain(self.mover.play(&state.map.paths[cell], self.origin))
             .collect()
     }
 
@@ -361,7 +400,11 @@ impl Reach<'_> {
 
     /// Whether the stored path to `cell`, after the lead, keeps the body on `court`.
     fn path_on_court(&self, cell: usize, court: &Court, margin_m: f64) -> bool {
-        self.mover.states[self.state].footprints[cell].within(&self.frame, court, margin_m)
+        self.mover.states[self.state_for(cell)].footprints[cell].within(
+            &self.frame,
+            court,
+            margin_m,
+        )
     }
 
     /// Of the cells this agent reaches along a move that stays on `court` (within
@@ -384,8 +427,10 @@ impl Reach<'_> {
             return None;
         }
         let mut best: Option<(f64, usize)> = None;
-        for (cell, cost) in map.costs.iter().enumerate() {
-            let Some(frames) = cost else { continue };
+        for cell in 0..map.costs.len() {
+            let Some(frames) = self.frames_to(cell) else {
+                continue;
+            };
             let world = self.frame.to_world(grid.centre(cell));
             let remaining = world.distance(goal);
             let eta = f64::from(frames + self.lead_frames()) / map.fps + remaining / speed;

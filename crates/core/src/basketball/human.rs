@@ -133,7 +133,9 @@ pub struct Check {
     pub walk: Vec<(String, u32)>,
 }
 
-/// A behaviour at its stance: its graph and the map from its slowest start state.
+/// A behaviour at its stance: its graph and the maps from its slowest start state and,
+/// if the capture is mirrored, that stance's mirror image (a body standing still may set
+/// off on either foot, as a standing agent does).
 #[derive(Debug, Clone, Copy)]
 pub struct Stance<'a> {
     /// The behaviour's name.
@@ -144,10 +146,12 @@ pub struct Stance<'a> {
     pub state: &'a str,
     /// The map from it; its start node is the stance.
     pub map: &'a CostMap,
+    /// The map from the stance's mirror image, if there is one.
+    pub twin: Option<&'a CostMap>,
 }
 
 impl<'a> Stance<'a> {
-    /// A mover's stance: its first start state, the slowest.
+    /// A mover's stance: its first start state, the slowest, and its mirror image.
     pub fn of(mover: &'a Mover) -> Stance<'a> {
         let standing = &mover.states[0];
         Stance {
@@ -155,7 +159,25 @@ impl<'a> Stance<'a> {
             graph: &mover.graph,
             state: &standing.state.name,
             map: &standing.map,
+            twin: mover
+                .states
+                .iter()
+                .find(|s| s.state.name == crate::costmap::STANDING_MIRRORED)
+                .map(|s| &s.map),
         }
+    }
+
+    /// The stance's maps: its own, then its mirror image's.
+    fn maps(&self) -> impl Iterator<Item = &'a CostMap> {
+        std::iter::once(self.map).chain(self.twin)
+    }
+
+    /// Frames to the map cell holding `local` (the body's frame), from whichever stance
+    /// gets there sooner, and that map.
+    fn cost(&self, local: DVec2) -> Option<(u32, &'a CostMap)> {
+        self.maps()
+            .filter_map(|m| m.cost(local).map(|c| (c, m)))
+            .min_by_key(|(c, _)| *c)
     }
 }
 
@@ -199,24 +221,23 @@ pub fn measure_all(stance: &Stance) -> Vec<(&'static str, Option<u32>)> {
 
 /// Frames to meet `measure` from the stance, and the nodes the walk plays.
 fn measure(stance: &Stance, measure: Measure) -> (Option<u32>, Vec<u32>) {
-    let map = stance.map;
     match measure {
-        Measure::Point(x, z) => match map.grid.cell_of(probe(x, z)) {
-            Some(cell) if map.costs[cell].is_some() => {
+        Measure::Point(x, z) => match stance.cost(probe(x, z)) {
+            Some((frames, map)) => {
+                let cell = map.grid.cell_of(probe(x, z)).expect("the map has it");
                 let nodes = map.paths[cell]
                     .iter()
                     .map(|&e| stance.graph.edges[e as usize].to)
                     .collect();
-                (map.costs[cell], nodes)
+                (Some(frames), nodes)
             }
-            _ => (None, Vec::new()),
+            None => (None, Vec::new()),
         },
-        Measure::TurnAround => {
-            match turn_around(stance.graph, map.start_node, &TurnParams::default()) {
-                Some(turn) => (Some(turn.frames), turn.nodes),
-                None => (None, Vec::new()),
-            }
-        }
+        Measure::TurnAround => stance
+            .maps()
+            .filter_map(|m| turn_around(stance.graph, m.start_node, &TurnParams::default()))
+            .min_by_key(|turn| turn.frames)
+            .map_or((None, Vec::new()), |turn| (Some(turn.frames), turn.nodes)),
     }
 }
 
@@ -253,8 +274,8 @@ pub fn symmetry<'a>(stances: &[Stance<'a>]) -> Vec<(&'a str, f64, Option<u32>, O
                 (
                     s.behaviour,
                     d,
-                    s.map.cost(probe(0.0, -d)),
-                    s.map.cost(probe(0.0, d)),
+                    s.cost(probe(0.0, -d)).map(|(f, _)| f),
+                    s.cost(probe(0.0, d)).map(|(f, _)| f),
                 )
             })
         })

@@ -18,7 +18,7 @@ mod start;
 pub use crate::motion::Walker;
 pub use grid::{AgentPose, Grid, LocalFrame, Obstacle};
 pub use search::SearchParams;
-pub use start::{root_speed, start_states, Start, StartState};
+pub use start::{root_speed, start_states, Start, StartState, STANDING_MIRRORED};
 
 use crate::motion::{Constraints, MotionGraph};
 use crate::names::{lookup, UnknownName};

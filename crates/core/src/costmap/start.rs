@@ -163,13 +163,25 @@ fn moving(graph: &MotionGraph) -> u32 {
         .unwrap_or_else(|| graph.default_start())
 }
 
-/// The start states the capability model keeps a map for: `standing`, then every moving
-/// state of the data with at least 3 % of its nodes, most common first.
+/// The name of the stance that mirrors `standing`.
+pub const STANDING_MIRRORED: &str = "standing-mirrored";
+
+/// The start states the capability model keeps a map for: `standing`, its mirror image
+/// (when the capture is mirrored: a body standing still may set off on either foot, so
+/// a standing agent gets the better of the two), then every moving state of the data
+/// with at least 3 % of its nodes, most common first.
 pub fn start_states(graph: &MotionGraph) -> Vec<StartState> {
+    let stance = standing(graph);
     let mut states = vec![StartState {
         name: "standing".into(),
-        node: standing(graph),
+        node: stance,
     }];
+    if let Some(twin) = graph.mirror_twin(stance) {
+        states.push(StartState {
+            name: STANDING_MIRRORED.into(),
+            node: twin,
+        });
+    }
     states.extend(moving_states(graph));
     states
 }

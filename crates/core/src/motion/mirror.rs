@@ -14,7 +14,7 @@
 //! Everything derived from positions (the heading, root steps, turn rates) follows: a
 //! reflection reverses handedness, so a right turn becomes a left turn.
 
-use super::Clip;
+use super::{Clip, MotionGraph};
 use glam::DVec3;
 
 /// What a mirrored clip's name ends with: `102_27` becomes `102_27-mirror`.
@@ -85,6 +85,24 @@ impl Clip {
     }
 }
 
+impl MotionGraph {
+    /// The node that is `node`'s mirror image: the same frame of the mirrored clip
+    /// (`X` ↔ `X-mirror`), if the graph has both and kept it.
+    pub fn mirror_twin(&self, node: u32) -> Option<u32> {
+        let n = self.nodes.get(node as usize)?;
+        let name = &self.clip_names[n.clip];
+        let twin_name = match name.strip_suffix(MIRROR_SUFFIX) {
+            Some(original) => original.to_string(),
+            None => format!("{name}{MIRROR_SUFFIX}"),
+        };
+        let clip = self.clip_names.iter().position(|c| *c == twin_name)?;
+        self.nodes
+            .iter()
+            .position(|m| m.clip == clip && m.frame == n.frame)
+            .map(|i| i as u32)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -144,6 +162,26 @@ mod tests {
     /// What the graph reads of a mirrored clip is the original's with sides exchanged:
     /// headings and turns change sign, sideways steps go the other way, forward ones
     /// stay. The synthetic circle turns right; its mirror image turns left.
+    /// Every node of a mirrored CMU graph that has a twin is its twin's twin, and its
+    /// twin turns the other way at the same speed.
+    #[test]
+    fn a_node_and_its_mirror_twin_are_mirror_images() {
+        let graph = crate::fixtures::cmu_graph("defense");
+        let mut twins = 0;
+        for n in 0..graph.node_count() as u32 {
+            let Some(t) = graph.mirror_twin(n) else {
+                continue;
+            };
+            twins += 1;
+            assert_ne!(t, n);
+            assert_eq!(graph.mirror_twin(t), Some(n));
+            let (a, b) = (graph.nodes[n as usize], graph.nodes[t as usize]);
+            assert!((a.turn_rate + b.turn_rate).abs() < 1e-9);
+            assert!((a.lateral_speed + b.lateral_speed).abs() < 1e-9);
+        }
+        assert!(twins > graph.node_count() / 2, "{twins} twins");
+    }
+
     #[test]
     fn mirroring_turns_right_into_left() {
         let right = clip("right", 3.0, circle(3.0, 5.0));
