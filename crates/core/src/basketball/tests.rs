@@ -609,3 +609,146 @@ fn a_move_to_keeps_going_until_the_agent_gets_there() {
         );
     }
 }
+
+/// Behind the backboard's plane no shot goes in: the rule never chooses a square there,
+/// however near the ring and however safe, and over a long game no shot is taken from
+/// there (nor from off the court).
+#[test]
+fn no_square_behind_the_backboard_is_chosen_and_no_shot_is_taken_from_there() {
+    let mover = isotropic();
+    let court = Court::default();
+    // A shooter near the baseline beside the basket, nobody defending: the squares
+    // behind the board are the nearest to the ring it can reach.
+    let d = Situation {
+        court: &court,
+        shot: &ShotModel::default(),
+        params: &DecisionParams::default(),
+        shooter: mover.reach(&pose(0.75, 1.25, 90.0), Motion::Still),
+        defenders: &[],
+        shot_clock_s: 24.0,
+    }
+    .decide();
+    let behind: Vec<_> = d
+        .candidates
+        .iter()
+        .filter(|c| c.cell[0] < court.backboard_m)
+        .collect();
+    assert!(!behind.is_empty() && behind.iter().all(|c| c.success == 0.0));
+    assert!(d.chosen.unwrap().cell[0] > court.backboard_m);
+
+    let caps = fixtures::cmu_capabilities();
+    for shot_model in [DefenderModel::Own, DefenderModel::None] {
+        let params = GameParams {
+            shot_model,
+            seed: 3,
+            ..GameParams::default()
+        };
+        let mut game = Game::new(caps.clone(), params);
+        let mut events = Vec::new();
+        let mut shots = 0;
+        while game.possessions() < 150 {
+            events.clear();
+            game.step(&mut events);
+            for e in &events {
+                if let Event::Shot { from, success, .. } = e {
+                    shots += 1;
+                    let at = DVec2::from_array(*from);
+                    assert!(court.contains(at), "a shot from off the court: {at}");
+                    assert!(
+                        at.x >= court.backboard_m || *success == 0.0,
+                        "a shot from behind the backboard at {at} had {success}"
+                    );
+                }
+                if let Event::Decision {
+                    chosen: Some(c), ..
+                } = e
+                {
+                    assert!(c.cell[0] > court.backboard_m, "{c:?}");
+                }
+            }
+        }
+        assert!(shots > 100);
+    }
+}
+
+/// A square the shooter can reach but not shoot from before the shot clock runs out is
+/// not considered: with 2 s left, no candidate needs more than 2 s − T_s to reach.
+#[test]
+fn no_square_takes_longer_than_the_shot_clock_allows() {
+    let mover = isotropic();
+    let params = DecisionParams::default();
+    for clock in [24.0, 2.0, 1.0] {
+        let d = Situation {
+            court: &Court::default(),
+            shot: &ShotModel::default(),
+            params: &params,
+            shooter: mover.reach(&pose(9.0, 0.0, 180.0), Motion::Still),
+            defenders: &[],
+            shot_clock_s: clock,
+        }
+        .decide();
+        assert!(!d.candidates.is_empty());
+        for c in &d.candidates {
+            assert!(c.c_d + params.shot_time_s <= clock, "{clock} s: {c:?}");
+        }
+        let farthest = d.candidates.iter().map(|c| c.c_d).fold(0.0, f64::max);
+        if clock == 24.0 {
+            assert!(farthest > 2.0, "the test needs far squares: {farthest}");
+        }
+    }
+}
+
+/// Where the defender's map does not reach a square, C_o is its horizon and the square
+/// says so: counted as the horizon it may be safe; counted unsafe, it never is.
+#[test]
+fn a_square_beyond_the_defenders_horizon_is_marked_and_follows_the_policy() {
+    let mover = isotropic();
+    let horizon = mover.horizon_s();
+    // The defender 9 m from the half-court corner: squares more than 10 m from it are
+    // outside its map.
+    let defenders = [Opponent::Map(
+        mover.reach(&pose(3.0, -6.0, 0.0), Motion::Still),
+    )];
+    let decide = |policy| {
+        Situation {
+            court: &Court::default(),
+            shot: &ShotModel::default(),
+            params: &DecisionParams {
+                beyond_horizon: policy,
+                ..DecisionParams::default()
+            },
+            shooter: mover.reach(&pose(13.0, 6.5, 180.0), Motion::Still),
+            defenders: &defenders,
+            shot_clock_s: 24.0,
+        }
+        .decide()
+    };
+    let counted = decide(BeyondHorizon::Horizon);
+    let beyond: Vec<_> = counted
+        .candidates
+        .iter()
+        .filter(|c| c.beyond_horizon)
+        .collect();
+    assert!(!beyond.is_empty());
+    for c in &beyond {
+        assert_eq!(c.c_o, horizon);
+        let reached = defenders[0].seconds(DVec2::from_array(c.cell));
+        assert_eq!(reached, horizon);
+    }
+    assert!(beyond
+        .iter()
+        .any(|c| c.qualifies(&DecisionParams::default())));
+    let strict = decide(BeyondHorizon::Unsafe);
+    let params = DecisionParams {
+        beyond_horizon: BeyondHorizon::Unsafe,
+        ..DecisionParams::default()
+    };
+    assert!(strict
+        .candidates
+        .iter()
+        .filter(|c| c.beyond_horizon)
+        .all(|c| !c.qualifies(&params)));
+    if let Some(c) = strict.chosen {
+        assert!(!c.beyond_horizon);
+    }
+}
