@@ -223,7 +223,7 @@ fn one_possession_is_counted_in_the_singular() {
         "basketball-eval --offense simple --possessions 1 --seed 2 {}",
         source()
     ));
-    assert!(text.starts_with("1 possession, seed 2"), "{text}");
+    assert!(text.starts_with("1 possession on seed 2,"), "{text}");
     assert_reads_well(&text);
     let (text, _) = success(&format!(
         "basketball-decide --shooter 10,3,200 --defender 5,-1,20 {}",

@@ -89,11 +89,12 @@ fn the_embedded_capture_is_the_default_and_a_directory_replaces_it() {
     let embedded = json("motion-graph --behaviour dribble --json");
     assert_eq!(
         embedded["motion_source"],
-        format!("CMU motion capture, embedded: {all} clips")
+        format!("CMU motion capture, embedded: {all} clips and their mirror images")
     );
     assert_eq!(
         embedded["clips"].as_array().unwrap().len(),
-        clips_on_disk(&repository_mocap().join("dribble"))
+        2 * clips_on_disk(&repository_mocap().join("dribble")),
+        "each clip and its mirror image"
     );
     // A user's directory replaces it, by flag or by environment, named without its path.
     let dir = Scratch::new("user-mocap");
@@ -111,11 +112,27 @@ fn the_embedded_capture_is_the_default_and_a_directory_replaces_it() {
     ));
     let source = by_flag["motion_source"].as_str().unwrap();
     assert!(
-        source.starts_with("user capture: 2 clips, fingerprint "),
+        source.starts_with("user capture: 2 clips and their mirror images, fingerprint "),
         "{source}"
     );
     assert!(!source.contains(&*dir.0.to_string_lossy()), "{source}");
-    assert_eq!(by_flag["clips"], serde_json::json!(["16_36", "16_45"]));
+    assert_eq!(
+        by_flag["clips"],
+        serde_json::json!(["16_36", "16_36-mirror", "16_45", "16_45-mirror"])
+    );
+    // --no-mirror plays the clips only as captured, which is other motion: another
+    // fingerprint.
+    let captured = json(&format!(
+        "motion-graph --behaviour run --json --no-mirror --mocap {}",
+        dir.0.display()
+    ));
+    let plain = captured["motion_source"].as_str().unwrap();
+    assert!(
+        plain.starts_with("user capture: 2 clips, fingerprint "),
+        "{plain}"
+    );
+    assert_ne!(plain, source);
+    assert_eq!(captured["clips"], serde_json::json!(["16_36", "16_45"]));
     let by_env = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
         .args(["motion-graph", "--behaviour", "run", "--json"])
         .env("FIELDHOUSE_MOCAP_DIR", &dir.0)
@@ -176,7 +193,11 @@ fn a_corrupt_clip_is_reported_and_the_rest_still_load() {
         "{err}"
     );
     let doc: Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(doc["clips"], serde_json::json!(["16_36", "16_45"]));
+    // Each clip that loads is played as captured and mirrored.
+    assert_eq!(
+        doc["clips"],
+        serde_json::json!(["16_36", "16_36-mirror", "16_45", "16_45-mirror"])
+    );
 }
 
 fn costmap(extra: &str, cache: &Path) -> Value {
@@ -405,9 +426,27 @@ fn the_capability_report_covers_every_behaviour_state_and_clip() {
             assert!(g("behind_3m") < g("behind_5m"));
         }
     }
-    // The two jump shots are cut from the dribbling, with the time a shot takes.
+    // The two jump shots (and their mirror images) are cut from the dribbling, with the
+    // time a shot takes.
     let jumps = behaviours[0]["jumps_cut"].as_array().unwrap();
-    assert_eq!(jumps.len(), 2, "{jumps:?}");
+    assert_eq!(jumps.len(), 4, "{jumps:?}");
+    // Every target against people: measured from a stance, with the human figure and its
+    // source, met exactly when the frames are within the target.
+    let fps = doc["fps"].as_f64().unwrap();
+    let targets = doc["targets"].as_array().unwrap();
+    assert!(targets.len() >= 9, "{targets:?}");
+    for t in targets {
+        assert!(!t["source"].as_str().unwrap().is_empty() && t["people"].is_string());
+        let within = t["frames"]
+            .as_u64()
+            .is_some_and(|f| f as f64 / fps <= t["target_s"].as_f64().unwrap() + 1e-9);
+        let stance =
+            t["state_speed_m_s"].as_f64().unwrap() < doc["stance_below_m_s"].as_f64().unwrap();
+        assert_eq!(t["met"].as_bool().unwrap(), within && stance, "{t}");
+        if !within && t["frames"].is_u64() {
+            assert!(!t["walk"].as_array().unwrap().is_empty(), "{t}");
+        }
+    }
 }
 
 #[test]

@@ -351,10 +351,13 @@ fn print_text(
     simple: &[EvalReport],
     arms: &[Arm],
 ) -> anyhow::Result<()> {
+    let seeds: Vec<String> = args.seed.iter().map(u64::to_string).collect();
     writeln!(
         out,
-        "{} a seed, defender moving with {} (motion: {}); beyond a map's horizon counts as {}; the simple offense shoots from {:.1} m",
+        "{} on {} {}, defender moving with {} (motion: {}); beyond a map's horizon counts as {}; the simple offense shoots from {:.1} m",
         plural(args.possessions, "possession"),
+        if seeds.len() == 1 { "seed" } else { "each of seeds" },
+        seeds.join(", "),
         motion.name(),
         caps.source,
         args.beyond_horizon.name(),
