@@ -21,6 +21,10 @@ use std::io::Write;
 pub(super) struct CapabilityCmdArgs {
     #[command(flatten)]
     capability: CapabilityArgs,
+    /// Also measure another behaviour of the motion from its stance (repeatable), such as
+    /// a second running subject (run-127), to compare subjects for a role.
+    #[arg(long, value_name = "BEHAVIOUR")]
+    capture: Vec<String>,
     /// Print one JSON document.
     #[arg(long)]
     json: bool,
@@ -92,6 +96,9 @@ fn behaviour_json(mover: &Mover, library: &MotionLibrary) -> Value {
         "top_speed_m_s": g.stats.top_speed_m_s,
         "transition_p95_m": g.stats.transition_p95_m,
         "transition_worst_m": g.stats.transition_worst_m,
+        "foot_slide_p95_m": g.stats.foot_slide_p95_m,
+        "root_accel_p95_m_s2": g.stats.root_accel_p95_m_s2,
+        "capture_root_accel_p95_m_s2": g.stats.capture_root_accel_p95_m_s2,
         "nodes": g.node_count(),
         "clips": g.coverage,
         "jumps_cut": jumps,
@@ -102,8 +109,31 @@ fn behaviour_json(mover: &Mover, library: &MotionLibrary) -> Value {
 
 pub(super) fn run(args: CapabilityCmdArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let library = args.capability.library()?;
-    let caps = args.capability.build(&library)?;
+    for name in &args.capture {
+        anyhow::ensure!(
+            library.behaviours().contains(&name.as_str()),
+            "no behaviour \"{name}\" in {}; it has: {}",
+            library.source,
+            library.behaviours().join(", ")
+        );
+    }
+    let caps = args.capability.build_with(&library, &args.capture)?;
     let movers = [&caps.dribble, &caps.run, &caps.defense];
+    // Other subjects, each measured from its stance against every target's measure.
+    let captures: Vec<Value> = caps
+        .captures
+        .iter()
+        .map(|m| {
+            let stance = Stance::of(m);
+            json!({
+                "behaviour": m.behaviour,
+                "window": m.graph.params.window,
+                "threshold_m": m.graph.params.threshold_m,
+                "stance_m_s": root_speed(&m.graph.nodes[stance.map.start_node as usize]),
+                "frames": human::measure_all(&stance).into_iter().map(|(k, f)| (k.to_string(), json!(f))).collect::<Map<_, _>>(),
+            })
+        })
+        .collect();
     let behaviours: Vec<Value> = movers.iter().map(|m| behaviour_json(m, &library)).collect();
     let fps = caps.run.map().fps;
     let stances: Vec<Stance> = movers.iter().map(|m| Stance::of(m)).collect();
@@ -129,6 +159,7 @@ pub(super) fn run(args: CapabilityCmdArgs, out: &mut impl Write) -> anyhow::Resu
             "stance_below_m_s": human::STANCE_M_S,
             "symmetry": symmetry,
             "symmetry_frames": SYMMETRY_FRAMES,
+            "captures": captures,
         });
         writeln!(out, "{doc}")?;
         return Ok(());
@@ -175,6 +206,20 @@ pub(super) fn run(args: CapabilityCmdArgs, out: &mut impl Write) -> anyhow::Resu
         }
     }
     print_targets(out, &checks, fps)?;
+    for c in &captures {
+        let f = &c["frames"];
+        writeln!(
+            out,
+            "  {} (from a stance at {:.2} m/s): {}",
+            c["behaviour"].as_str().unwrap_or(""),
+            c["stance_m_s"].as_f64().unwrap_or(0.0),
+            TARGETS
+                .iter()
+                .map(|t| format!("{} {}", t.what, cell(&f[t.key])))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )?;
+    }
     writeln!(
         out,
         "\nleft against right from each stance (within {SYMMETRY_FRAMES} frames):"

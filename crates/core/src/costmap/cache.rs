@@ -1,5 +1,7 @@
 //! Cost maps cached on disk, keyed by everything that decides them: the motion data's
-//! fingerprint, the behaviour, the graph and build parameters, and the code version.
+//! fingerprint, the behaviour, the graph itself (a digest of its nodes and edges, so a
+//! change to how graphs are built can never be served stale maps) and its parameters,
+//! the build parameters, and the code version.
 //!
 //! A map is written to a temporary file, synced, then renamed into place, so an
 //! interrupted build never leaves a half-written map behind; a file that does not parse
@@ -25,26 +27,28 @@ struct Key<'a> {
     motion: &'a str,
     behaviour: &'a str,
     graph: &'a GraphParams,
+    graph_digest: String,
     build: &'a BuildParams,
     starts: &'a [u32],
     search: (usize, usize),
 }
 
-/// The file a map with these inputs lives in under `dir`.
+/// The file the maps of `graph` with these inputs live in under `dir`.
 pub fn path_for(
     dir: &Path,
     motion_fingerprint: &str,
-    behaviour: &str,
-    graph: &GraphParams,
+    graph: &MotionGraph,
     build: &BuildParams,
     starts: &[u32],
 ) -> PathBuf {
+    let behaviour = graph.behaviour.as_str();
     let key = Key {
         format: CACHE_FORMAT,
         version: env!("CARGO_PKG_VERSION"),
         motion: motion_fingerprint,
         behaviour,
-        graph,
+        graph: &graph.params,
+        graph_digest: graph.digest(),
         build,
         starts,
         search: (build.search.heading_bins, build.search.sub_cells),
@@ -79,16 +83,7 @@ pub fn build_or_load(
     starts: &[u32],
     progress: &mut dyn FnMut(u64),
 ) -> (Vec<CostMap>, bool) {
-    let file = dir.map(|d| {
-        path_for(
-            d,
-            motion_fingerprint,
-            &graph.behaviour,
-            &graph.params,
-            params,
-            starts,
-        )
-    });
+    let file = dir.map(|d| path_for(d, motion_fingerprint, graph, params, starts));
     if let Some(maps) = file.as_deref().and_then(load) {
         if maps.len() == starts.len() {
             return (maps, true);
@@ -151,29 +146,25 @@ mod tests {
             ..BuildParams::default()
         };
         let map = CostMap::build(&graph, &params, &mut |_| {});
-        let path = path_for(&dir, "abc", "run", &graph.params, &params, &[3]);
+        let path = path_for(&dir, "abc", &graph, &params, &[3]);
         assert!(load(&path).is_none());
         store(&path, std::slice::from_ref(&map)).unwrap();
         let back = load(&path).unwrap().pop().unwrap();
         assert_eq!(back.costs, map.costs);
         assert_eq!(back.paths, map.paths);
-        assert_ne!(
-            path_for(&dir, "abc", "run", &graph.params, &params, &[4]),
-            path
-        );
+        assert_ne!(path_for(&dir, "abc", &graph, &params, &[4]), path);
         // Any change of input gives another file.
         let other = BuildParams {
             depth: 31,
             ..params.clone()
         };
-        assert_ne!(
-            path_for(&dir, "abc", "run", &graph.params, &other, &[3]),
-            path
-        );
-        assert_ne!(
-            path_for(&dir, "abd", "run", &graph.params, &params, &[3]),
-            path
-        );
+        assert_ne!(path_for(&dir, "abc", &graph, &other, &[3]), path);
+        assert_ne!(path_for(&dir, "abd", &graph, &params, &[3]), path);
+        // So does another graph with the same parameters (here, one clip fewer).
+        let clips = fixtures::library();
+        let fewer: Vec<&crate::motion::Clip> = clips.iter().skip(1).collect();
+        let smaller = MotionGraph::build("run", &fewer, graph.params).unwrap();
+        assert_ne!(path_for(&dir, "abc", &smaller, &params, &[3]), path);
         // A corrupt file is ignored, not trusted.
         std::fs::write(&path, b"{\"method\": \"mc\", \"costs\": [1, 2").unwrap();
         assert!(load(&path).is_none());

@@ -437,6 +437,30 @@ impl MotionGraph {
         })
     }
 
+    /// A digest of the graph's nodes and edges (hex of the first 8 bytes of a SHA-256):
+    /// two graphs with the same digest walk alike, which is what cached maps are keyed by.
+    pub fn digest(&self) -> String {
+        use sha2::{Digest, Sha256};
+        let mut hash = Sha256::new();
+        for n in &self.nodes {
+            hash.update((n.clip as u64).to_le_bytes());
+            hash.update((n.frame as u64).to_le_bytes());
+        }
+        for e in &self.edges {
+            hash.update(e.from.to_le_bytes());
+            hash.update(e.to.to_le_bytes());
+            hash.update(e.frames.to_le_bytes());
+            hash.update([u8::from(e.transition)]);
+            for v in [e.step.dx, e.step.dz, e.step.dheading] {
+                hash.update(v.to_bits().to_le_bytes());
+            }
+        }
+        hash.finalize()[..8]
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect()
+    }
+
     /// Nodes kept: node ids run from 0 to this, exclusive.
     pub fn node_count(&self) -> usize {
         self.nodes.len()

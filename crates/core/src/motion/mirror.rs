@@ -61,6 +61,16 @@ fn reflect(p: DVec3) -> DVec3 {
 }
 
 impl Clip {
+    /// Whether the clip is a mirror image made by [`Clip::mirrored`].
+    pub(crate) fn is_mirror(&self) -> bool {
+        self.name.ends_with(MIRROR_SUFFIX)
+    }
+
+    /// The name of this clip's mirror image: `X-mirror` for `X`, and `X` for `X-mirror`.
+    pub(crate) fn mirror_name(&self) -> String {
+        mirror_name(&self.name)
+    }
+
     /// The clip's mirror image (see the module doc), named with [`MIRROR_SUFFIX`].
     ///
     /// A joint whose counterpart the skeleton lacks keeps its own position, reflected.
@@ -85,16 +95,20 @@ impl Clip {
     }
 }
 
+/// The name of the mirror image of the clip named `name`, or of its original.
+fn mirror_name(name: &str) -> String {
+    match name.strip_suffix(MIRROR_SUFFIX) {
+        Some(original) => original.to_string(),
+        None => format!("{name}{MIRROR_SUFFIX}"),
+    }
+}
+
 impl MotionGraph {
     /// The node that is `node`'s mirror image: the same frame of the mirrored clip
     /// (`X` ↔ `X-mirror`), if the graph has both and kept it.
     pub fn mirror_twin(&self, node: u32) -> Option<u32> {
         let n = self.nodes.get(node as usize)?;
-        let name = &self.clip_names[n.clip];
-        let twin_name = match name.strip_suffix(MIRROR_SUFFIX) {
-            Some(original) => original.to_string(),
-            None => format!("{name}{MIRROR_SUFFIX}"),
-        };
+        let twin_name = mirror_name(&self.clip_names[n.clip]);
         let clip = self.clip_names.iter().position(|c| *c == twin_name)?;
         self.nodes
             .iter()

@@ -33,13 +33,25 @@ pub(super) fn find(clips: &[&Clip], window: usize, threshold_m: f64) -> Vec<Tran
 /// per-frame cross sums (frames² × joints per pair of clips, most of the work) do not
 /// depend on the window, so they are computed once and summed along diagonals into
 /// windows of each length.
+///
+/// A mirrored clip's transitions are its original's, mirrored: the aligned distance
+/// between two windows does not change when both are reflected (a reflection is a rigid
+/// motion of space, and it turns the best rotation about the vertical into its
+/// reverse), so the transitions from a mirror image to any clip are those from its
+/// original to that clip's twin. They are copied rather than computed, which halves the
+/// work and keeps the graph exactly symmetric, where computing them would break ties
+/// in the local minima by rounding.
 pub(super) fn find_windows(
     clips: &[&Clip],
     windows: &[usize],
     threshold_m: f64,
 ) -> Vec<Vec<Transition>> {
+    let twins = mirror_twins(clips);
     let mut found = vec![Vec::new(); windows.len()];
     for (ca, a) in clips.iter().enumerate() {
+        if a.is_mirror() && twins[ca].is_some() {
+            continue;
+        }
         for (cb, b) in clips.iter().enumerate() {
             let Some(cross) = Cross::of(a, b) else {
                 continue;
@@ -61,7 +73,32 @@ pub(super) fn find_windows(
             }
         }
     }
+    for list in &mut found {
+        let mirrored: Vec<Transition> = list
+            .iter()
+            .filter_map(|t| {
+                Some(Transition {
+                    from_clip: twins[t.from_clip]?,
+                    to_clip: twins[t.to_clip]?,
+                    ..*t
+                })
+            })
+            .collect();
+        list.extend(mirrored);
+        list.sort_by_key(|t| (t.from_clip, t.from, t.to_clip, t.to));
+    }
     found
+}
+
+/// Each clip's mirror image among `clips` (by name), if there.
+fn mirror_twins(clips: &[&Clip]) -> Vec<Option<usize>> {
+    clips
+        .iter()
+        .map(|c| {
+            let twin = c.mirror_name();
+            clips.iter().position(|o| o.name == twin)
+        })
+        .collect()
 }
 
 /// Per-frame sums over joints of one frame: Σx, Σz, Σ|p|².
