@@ -69,9 +69,20 @@ pub(super) fn run(args: ReplayArgs, out: &mut impl Write) -> anyhow::Result<()> 
                 Sport::Basketball => {
                     let caps = capability.load()?;
                     let recorded = replay.header["motion"].as_str().unwrap_or_default();
+                    // A replay from another simulation could not re-simulate even with
+                    // its motion: say so first, as for the other sports.
+                    let simulation = replay.header["simulation"].as_u64().unwrap_or(1);
+                    let version = if simulation == u64::from(fieldhouse::sim::VERSION) {
+                        String::new()
+                    } else {
+                        format!(
+                            "; it was also recorded by simulation version {simulation} and this build simulates version {}: only the simulation that recorded a replay can re-simulate it (its frames still play and export)",
+                            fieldhouse::sim::VERSION
+                        )
+                    };
                     anyhow::ensure!(
                         recorded == caps.source.fingerprint(),
-                        "{} was recorded with motion data {recorded}; this run has {} (pass the same --mocap)",
+                        "{} was recorded with motion data {recorded}; this run has {} (pass the same --mocap){version}",
                         file.display(),
                         caps.source.fingerprint()
                     );
