@@ -275,7 +275,7 @@ const BOT_ORDER = "bot order";
  * A decision in words, with the numbers of the rule C_o > C_d + T_s + ε; `byBot`: a
  * connected bot moves the agent now.
  */
-function explain(d, rule, now, byBot) {
+export function explain(d, rule, now, byBot) {
   const age = Math.max(0, now - d.time_s);
   const action = escapeHtml(String(d.action).replaceAll("_", " "));
   if (d.reason === BOT_ORDER) {

@@ -4,7 +4,7 @@
 // tests/browser.rs with `node --test`.
 import assert from "node:assert/strict";
 import { test } from "node:test";
-import { safeSquares } from "../../web/court.js";
+import { explain, safeSquares } from "../../web/court.js";
 import { fitLine } from "../../web/draw.js";
 import { opticalSamples, straightness } from "../../web/eye.js";
 import { Timeline } from "../../web/timeline.js";
@@ -132,6 +132,20 @@ test("a decision's safe squares decode to the centres of exactly the squares who
   assert.equal(bits.length, 140);
   assert.deepEqual(safeSquares(court, { box: [0, 0, rows, columns], bits }), expected);
   assert.deepEqual(safeSquares(court, null), []);
+});
+
+test("a decision reads the defender's horizon as a bound, and its own time as a time", () => {
+  const rule = { shot_time_s: 0.4, epsilon_s: 0.2 };
+  const decision = (chosen) => ({
+    agent: "o1", action: "dribble_to_shot", reason: "dribbles to shoot", time_s: 1,
+    chosen: { cell: [2.25, 0.25], success: 0.6, c_d: 2.5, here: false, ...chosen }, safe: { length: 3 },
+  });
+  const beyond = explain(decision({ c_o: 8, beyond_horizon: true }), rule, 1.5, false);
+  assert.match(beyond, /C<sub>o<\/sub> beyond 8 s &gt; C<sub>d<\/sub> 2\.5 s/);
+  assert.doesNotMatch(beyond, /8\.0 s/);
+  const timed = explain(decision({ c_o: 4.25 }), rule, 1.5, false);
+  assert.match(timed, /C<sub>o<\/sub> 4\.3 s &gt;/);
+  assert.doesNotMatch(timed, /beyond/);
 });
 
 test("a runner's pose is phase-matched to the distance run: one loop later, the same pose", async () => {

@@ -101,7 +101,7 @@ async function main() {
   check(/pts in \d+ possessions/.test(scoreText), `lobby: shows the basketball score: ${scoreText}`);
   // The motion source is named for visitors without any path of the server's.
   const source = await page.locator("#source").textContent();
-  check(/^motion: CMU motion capture, embedded: \d+ clips$/.test(source), `lobby: names the motion source without a path: ${source}`);
+  check(/^motion: CMU motion capture, embedded: \d+ clips and their mirror images$/.test(source), `lobby: names the motion source without a path: ${source}`);
   await shot("lobby");
 
   // Hostile replay files: every string shows as text, nothing runs, and the page's
@@ -197,14 +197,14 @@ async function main() {
   }, 10_000, "court: the cost-map overlay covers the court (green or blue pixels)");
   check(overlay > 0.1, `court: the cost-map overlay covers the court (${(100 * overlay).toFixed(1)} % of pixels green or blue)`);
   // The holder changes with passes: read the text in the same look that finds it.
-  // A decision on a square names the model of the defender it counted on (issue 20).
+  // A decision on a square names the model of the defender it counted on.
   const decision = await (await page.waitForFunction(() => {
     const text = document.getElementById("decision").textContent;
     // A decision to shoot from a square (not a pass when pressed, which has no C_o).
-    return text.includes("safe square") && text.includes("model)") && /Co [\d.]+ s/.test(text) && text;
+    return text.includes("safe square") && text.includes("model)") && /Co (beyond )?[\d.]+ s/.test(text) && text;
   }, null, { timeout: 30_000 })).jsonValue();
   check(/^o\d /.test(decision) && /safe square/.test(decision), `court: the ball holder's decision is explained: ${decision}`);
-  check(/\((own|paper|isotropic|none) model\)/.test(decision) && /Co [\d.]+ s/.test(decision),
+  check(/\((own|maps:[\w-]+|kinematic|isotropic|none) model\)/.test(decision) && /Co (beyond )?[\d.]+ s/.test(decision),
     `court: the decision names the defender model and gives C_o: ${decision}`);
   await shot("basketball");
   await labelsApart(page, "basketball");
