@@ -5,7 +5,9 @@ use anyhow::Context;
 use clap::Args;
 use fieldhouse::basketball::capability::HORIZON_FRAMES;
 use fieldhouse::basketball::human::{self, Stance};
-use fieldhouse::costmap::{root_speed, start_states, BuildParams, CostMap, STANDING_MIRRORED};
+use fieldhouse::costmap::{
+    root_speed, start_states, symmetrise, BuildParams, CostMap, STANDING_MIRRORED,
+};
 use fieldhouse::motion::{GraphParams, Mirroring, MotionGraph, MotionLibrary, AUTO_WINDOWS, FPS};
 use fieldhouse::words::{figure, plural};
 use serde_json::json;
@@ -247,7 +249,7 @@ fn sweep(args: &GraphArgs, json: bool, out: &mut impl Write) -> anyhow::Result<(
             .take_while(|s| s.name == "standing" || s.name == STANDING_MIRRORED)
             .map(|s| s.node)
             .collect();
-        let maps = CostMap::build_from(
+        let mut maps = CostMap::build_from(
             &graph,
             &BuildParams {
                 depth: HORIZON_FRAMES,
@@ -256,6 +258,9 @@ fn sweep(args: &GraphArgs, json: bool, out: &mut impl Write) -> anyhow::Result<(
             &stances,
             &mut |_| {},
         );
+        if let [stance, twin] = &mut maps[..] {
+            symmetrise(&graph, stance, twin);
+        }
         let stance = Stance {
             behaviour: &args.behaviour,
             graph: &graph,

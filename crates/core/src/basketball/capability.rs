@@ -4,7 +4,8 @@
 use super::court::Court;
 use super::footprint::Footprint;
 use crate::costmap::{
-    cache, root_speed, start_states, AgentPose, BuildParams, CostMap, LocalFrame, Start, StartState,
+    cache, root_speed, start_states, symmetrise, AgentPose, BuildParams, CostMap, LocalFrame,
+    Start, StartState, STANDING_MIRRORED,
 };
 use crate::motion::{
     GraphError, MotionGraph, MotionLibrary, MotionSource, RootStep, Walker, AUTO_WINDOWS,
@@ -178,6 +179,13 @@ impl Mover {
             },
         );
         progress(Stage::Ready { behaviour, cached });
+        let mut maps = maps;
+        // The stance and its mirror image reach left and right alike (maps[0] is the
+        // stance; its twin, if any, comes next).
+        if let Some(t) = states.iter().position(|s| s.name == STANDING_MIRRORED) {
+            let (stance, rest) = maps.split_at_mut(1);
+            symmetrise(&graph, &mut stance[0], &mut rest[t - 1]);
+        }
         Ok(Mover::new(
             behaviour,
             graph,

@@ -763,3 +763,23 @@ fn a_square_beyond_the_defenders_horizon_is_marked_and_follows_the_policy() {
         assert!(!c.beyond_horizon);
     }
 }
+
+/// With the capture mirrored, a stance reaches left and right alike: 1 m and 3 m to
+/// either side within two frames of each other, for every behaviour.
+#[test]
+fn left_and_right_from_a_stance_agree_for_every_behaviour() {
+    let caps = fixtures::cmu_capabilities();
+    let stances: Vec<human::Stance> = [&caps.dribble, &caps.run, &caps.defense]
+        .into_iter()
+        .map(human::Stance::of)
+        .collect();
+    let figures = human::symmetry(&stances);
+    assert_eq!(figures.len(), 6);
+    for (behaviour, d, left, right) in figures {
+        let (left, right) = (left.unwrap(), right.unwrap());
+        assert!(
+            left.abs_diff(right) <= human::SYMMETRY_FRAMES,
+            "{behaviour} {d} m: left {left}, right {right}"
+        );
+    }
+}

@@ -4,19 +4,22 @@
 //! builders behind one interface: the paper's Monte Carlo (`mc`), a systematic search
 //! (`search`: backward over per-node cost-to-go maps, one pass for any number of starts,
 //! or forward where obstacles break the pose invariance) and the grassfire distance
-//! baseline (`grassfire`).
+//! baseline (`grassfire`). `mirror` makes a stance's map and its mirror twin's exact
+//! reflections of each other.
 
 mod backward;
 pub mod cache;
 mod grassfire;
 mod grid;
 mod mc;
+mod mirror;
 mod prepared;
 mod search;
 mod start;
 
 pub use crate::motion::Walker;
 pub use grid::{AgentPose, Grid, LocalFrame, Obstacle};
+pub use mirror::symmetrise;
 pub use search::SearchParams;
 pub use start::{root_speed, start_states, Start, StartState, STANDING_MIRRORED};
 
