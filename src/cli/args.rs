@@ -124,6 +124,16 @@ pub(super) fn non_negative(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A probability: a number from 0 to 1.
+pub(super) fn probability(s: &str) -> Result<f64, String> {
+    let x = finite(s)?;
+    if (0.0..=1.0).contains(&x) {
+        Ok(x)
+    } else {
+        Err(format!("{s} is not a probability (0 to 1)"))
+    }
+}
+
 /// A ground position written `X,Z` in metres; either may be negative (`-12.5,40`).
 pub(super) fn ground_point(s: &str) -> Result<DVec2, String> {
     let parts: Vec<&str> = s.split(',').collect();

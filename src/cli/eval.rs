@@ -1,13 +1,13 @@
 //! `fieldhouse basketball-eval`: the paper's possession experiment, with the cost-map
 //! offense's model of the defender chosen for the shot and the pass separately.
 
-use super::args::{non_negative, parse_str, positive};
+use super::args::{non_negative, parse_str, positive, probability};
 use super::basketball::CapabilityArgs;
 use clap::Args;
 use fieldhouse::basketball::parametric::{self, FitQuality, Isotropic};
 use fieldhouse::basketball::{
-    compare, evaluate, BeyondHorizon, Brain, Capabilities, DefenderModel, DefenderMotion,
-    EvalReport, GameParams,
+    compare, evaluate, BeyondHorizon, Brain, Capabilities, DefenderAim, DefenderModel,
+    DefenderMotion, EvalReport, GameParams,
 };
 use fieldhouse::words::plural;
 use serde_json::{json, Value};
@@ -81,6 +81,16 @@ pub(super) struct EvalArgs {
     /// The defender's reach, m.
     #[arg(long, value_name = "M", default_value_t = GameParams::default().defender.reach_m, value_parser = positive)]
     reach: f64,
+    /// The chance the defender blocks a shot it reaches before the ball is away.
+    #[arg(long, value_name = "P", default_value_t = GameParams::default().defender.block_success, value_parser = probability)]
+    block_success: f64,
+    /// Where the defender heads: ball (where the ball is, as the paper's defender does)
+    /// or goal (where the ball handler is dribbling to: a defender that reads the play).
+    #[arg(long, default_value = "ball", value_parser = parse_str::<DefenderAim>)]
+    defender_aim: DefenderAim,
+    /// The chance one steal attempt on a dribbler (or a pass in flight) succeeds.
+    #[arg(long, value_name = "P", default_value_t = GameParams::default().defender.steal_success, value_parser = probability)]
+    steal_success: f64,
     /// How the cost-map offense models the defender when it picks where to shoot (see
     /// below). Several, separated by commas, are each played (with every --pass-model).
     #[arg(long, value_delimiter = ',', default_value = "own", value_parser = ModelSpec::from_str)]
@@ -199,6 +209,9 @@ pub(super) fn run(args: EvalArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let mut params = GameParams::default();
     params.defender.motion = motion;
     params.defender.reach_m = args.reach;
+    params.defender.block_success = args.block_success;
+    params.defender.aim = args.defender_aim;
+    params.defender.steal_success = args.steal_success;
     params.simple.shoot_range_m = args.simple_range;
     params.decision.beyond_horizon = args.beyond_horizon;
     let mut arms: Vec<Arm> = Vec::new();
@@ -254,6 +267,9 @@ pub(super) fn run(args: EvalArgs, out: &mut impl Write) -> anyhow::Result<()> {
     });
     let setting = json!({
         "possessions": args.possessions,
+        "block_success": args.block_success,
+        "defender_aim": args.defender_aim.name(),
+        "steal_success": args.steal_success,
         "simple_range_m": args.simple_range,
         "defense": motion.name(),
         "beyond_horizon": args.beyond_horizon.name(),

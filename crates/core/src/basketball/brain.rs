@@ -9,7 +9,7 @@ use super::capability::{Motion, Mover, Reach};
 use super::decision::{Chosen, Keep, Opponent, Situation};
 use super::event::Event;
 use super::game::{Game, Order};
-use super::params::{Brain, DefenderModel};
+use super::params::{Brain, DefenderAim, DefenderModel};
 use super::safe::SafeSquares;
 use crate::costmap::root_speed;
 use glam::DVec2;
@@ -521,9 +521,17 @@ impl Game {
         defended + spot.distance(ball).min(3.0)
     }
 
-    /// The defender: toward the ball.
+    /// The defender: toward the ball, or where the ball handler is dribbling to.
     fn defend(&mut self, k: usize) {
-        self.defender_head_for(k, self.ball_position());
+        let goal = match self.params.defender.aim {
+            DefenderAim::Ball => None,
+            DefenderAim::Goal => self
+                .holder()
+                .and_then(|h| self.agents[h].movement.as_ref())
+                .filter(|m| m.behaviour == "dribble")
+                .map(|m| m.goal),
+        };
+        self.defender_head_for(k, goal.unwrap_or_else(|| self.ball_position()));
         self.agents[k].action = Action::Defend;
     }
 }

@@ -40,7 +40,7 @@ pub use decision::{
 pub use eval::{compare, evaluate, Comparison, EvalReport};
 pub use event::{BallState, BallView, ChosenView, Event, Outcome, PlayerView, PoseBlend};
 pub use game::{Game, Order};
-pub use params::{Brain, DefenderModel, DefenderParams, GameParams, SimpleParams};
+pub use params::{Brain, DefenderAim, DefenderModel, DefenderParams, GameParams, SimpleParams};
 pub use shot::ShotModel;
 #[cfg(test)]
 mod tests;

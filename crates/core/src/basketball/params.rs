@@ -86,6 +86,42 @@ impl DefenderModel {
     }
 }
 
+/// Where the defender heads.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DefenderAim {
+    /// The ball, where it is: the paper's defender "simply tries to move toward the
+    /// ball".
+    #[default]
+    Ball,
+    /// Where the ball handler is dribbling to (the ball, if it is not dribbling to a
+    /// square): a defender that reads the play, the opponent the shooter's rule assumes,
+    /// one that races it to the square it shoots from.
+    Goal,
+}
+
+impl DefenderAim {
+    /// The aim's name, as users write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            DefenderAim::Ball => "ball",
+            DefenderAim::Goal => "goal",
+        }
+    }
+}
+
+impl FromStr for DefenderAim {
+    type Err = UnknownName;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        lookup(
+            "defender aim",
+            s,
+            &["ball", "goal"],
+            &[DefenderAim::Ball, DefenderAim::Goal],
+        )
+    }
+}
+
 /// The defender's reach and how often it wins the ball.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DefenderParams {
@@ -99,6 +135,9 @@ pub struct DefenderParams {
     pub attempt_every_s: f64,
     /// The behaviour it moves with.
     pub motion: DefenderMotion,
+    /// Where it heads.
+    #[serde(default)]
+    pub aim: DefenderAim,
 }
 
 impl Default for DefenderParams {
@@ -109,6 +148,7 @@ impl Default for DefenderParams {
             block_success: 0.6,
             attempt_every_s: 1.0,
             motion: DefenderMotion::Defense,
+            aim: DefenderAim::Ball,
         }
     }
 }
