@@ -783,3 +783,54 @@ fn left_and_right_from_a_stance_agree_for_every_behaviour() {
         );
     }
 }
+
+/// A defender that reads the play heads where the ball handler is dribbling to; one that
+/// chases the ball heads for the ball handler itself. Counted on the ticks where the two
+/// differ by 3 m or more.
+#[test]
+fn a_defender_reading_the_play_heads_where_the_ball_handler_dribbles_to() {
+    let caps = fixtures::cmu_capabilities();
+    for aim in [DefenderAim::Ball, DefenderAim::Goal] {
+        let mut params = GameParams {
+            seed: 11,
+            ..GameParams::default()
+        };
+        params.defender.aim = aim;
+        params.shot_model = DefenderModel::None;
+        let mut game = Game::new(caps.clone(), params);
+        let mut events = Vec::new();
+        let (mut to_goal, mut to_holder) = (0, 0);
+        for _ in 0..6000 {
+            events.clear();
+            game.step(&mut events);
+            let Some(holder) = game.holder() else {
+                continue;
+            };
+            let agents = game.agents();
+            let (Some(dribble), Some(defense)) = (
+                agents[holder].movement.as_ref(),
+                agents[2].movement.as_ref(),
+            ) else {
+                continue;
+            };
+            let at = agents[holder].pose.position;
+            if dribble.behaviour != "dribble" || dribble.goal.distance(at) < 3.0 {
+                continue;
+            }
+            // A move in progress is kept while its goal stays within 1 m of the new one,
+            // and the ball handler moves up to about 0.6 m between decisions.
+            to_goal += usize::from(defense.goal.distance(dribble.goal) <= 1.0 + 1e-9);
+            to_holder += usize::from(defense.goal.distance(at) <= 2.0);
+        }
+        match aim {
+            DefenderAim::Goal => assert!(
+                to_goal > 200 && to_holder < to_goal / 10,
+                "{to_goal} {to_holder}"
+            ),
+            DefenderAim::Ball => assert!(
+                to_holder > 200 && to_goal < to_holder / 10,
+                "{to_goal} {to_holder}"
+            ),
+        }
+    }
+}
