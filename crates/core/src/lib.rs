@@ -24,17 +24,21 @@
 //!   sub-tick catch test, the catching strategies (Chapman/OAC with Tresilian's lateral
 //!   term, Gillies & Dodgson's LOT, McBeath's optical LOT, trajectory prediction), single
 //!   trials, sweeps, path shapes and the optical signatures.
-//! * [`motion`]: human motion: BVH motion capture (the CMU clips embedded in the binary,
-//!   or a user's own directory) loaded into clips, and the motion graph of a behaviour
-//!   (Kovar et al. 2002): transitions between similar frames, pruned to the largest
-//!   strongly connected component.
+//! * [`motion`]: human motion: motion capture in BVH or CMU's ASF/AMC (the CMU clips
+//!   embedded in the binary, or a user's own directory) loaded into clips, each also
+//!   mirrored, and the motion graph of a behaviour (Kovar et al. 2002): transitions
+//!   between similar frames, as many as the capture's own smoothness allows, pruned to
+//!   the largest strongly connected component; how good each cut is; how soon a body
+//!   turns around.
 //! * [`costmap`]: Sukthankar et al.'s physical capability model: the frames a human needs
-//!   to reach each square around it from a start state (standing, or a way of moving),
-//!   by Monte Carlo walks, search, or grassfire.
+//!   to reach each square around it from a start state (a stance and its mirror image,
+//!   or a way of moving), by Monte Carlo walks, search, or grassfire.
 //! * [`basketball`]: the paper's basketball domain: a half court, agents that move with
 //!   motion capture along cost-map paths that go on from the node each body is playing
-//!   (one continuous walk on the graph), opponent modelling (`C_o > C_d + T_s + ε`),
-//!   the `simple` and `costmap` offenses, and the possession experiment.
+//!   (one continuous walk on the graph), opponent modelling (`C_o > C_d + T_s + ε`) with
+//!   the defender modelled by maps or by kinematic and isotropic models fitted to them,
+//!   the `simple` and `costmap` offenses, the capability targets against people, and
+//!   the possession experiment.
 //! * [`sim`]: a whole match of any sport as one deterministic [`sim::World`]: scenarios
 //!   checked field by field, fly balls with fielders, basketball, bots' commands.
 //! * [`protocol`]: the WebSocket messages (version 3) as Rust types, as the server sends
