@@ -36,12 +36,7 @@ const UNIT_TOLERANCE: f64 = 1e-3;
 const METRES_PER_INCH: f64 = 0.0254;
 
 /// An ASF or AMC file that cannot be read, and the 1-based line where it goes wrong.
-#[derive(Debug, Clone, PartialEq, Error)]
-#[error("line {line}: {kind}")]
-pub(super) struct ParseError {
-    pub line: usize,
-    pub kind: ParseErrorKind,
-}
+pub(super) type ParseError = super::line_error::LineError<ParseErrorKind>;
 
 #[derive(Debug, Clone, PartialEq, Error)]
 pub(super) enum ParseErrorKind {

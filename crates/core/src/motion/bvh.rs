@@ -11,12 +11,7 @@ use glam::DVec3;
 use thiserror::Error;
 
 /// A BVH file that cannot be read, and the 1-based line where it goes wrong.
-#[derive(Debug, Clone, PartialEq, Error)]
-#[error("line {line}: {kind}")]
-pub(super) struct ParseError {
-    pub line: usize,
-    pub kind: ParseErrorKind,
-}
+pub(super) type ParseError = super::line_error::LineError<ParseErrorKind>;
 
 #[derive(Debug, Clone, PartialEq, Error)]
 pub(super) enum ParseErrorKind {

@@ -26,6 +26,7 @@ mod embedded;
 mod graph;
 mod jump;
 mod library;
+mod line_error;
 mod loader;
 mod mirror;
 mod playback;

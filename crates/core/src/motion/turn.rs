@@ -60,7 +60,7 @@ const HEADING_BIN_DEG: f64 = 15.0;
 /// if no walk turns around within `params.max_frames`.
 ///
 /// Walks are followed in frame order, so the first that meets the conditions is the
-/// quickest, up to the binning that keeps the search bounded (see [`POSITION_BIN_M`]).
+/// quickest, up to the binning that keeps the search bounded (0.25 m and 15°).
 /// A walk that strays farther than `stray_m` is dropped, and so is one too far away to
 /// come back within `within_m` by the last frame at the behaviour's top speed.
 pub fn turn_around(graph: &MotionGraph, start: u32, params: &TurnParams) -> Option<TurnAround> {
