@@ -423,7 +423,7 @@ const EXHAUSTIVE_STEPS: f64 = 200_000.0;
 /// The longest horizon (in frames, at most `depth`) within which every walk from `start`
 /// fits in [`EXHAUSTIVE_STEPS`] steps, counted without walking them: the number of walks
 /// of each length, by dynamic programming over the nodes. On CMU running that is 28
-/// frames; a densely connected graph gets a shorter one.
+/// frames, 7 with its mirror images; a densely connected graph gets a shorter one.
 pub(crate) fn exhaustive_horizon(graph: &Prepared, start: u32, nodes: usize, depth: u32) -> u32 {
     // Walks ending at frame t, by node, for the frames an edge can still reach: a ring
     // of rows, so a long horizon costs no more memory than a short one.

@@ -81,10 +81,10 @@ fn no_map_beats_the_straight_line_at_top_speed() {
     }
 }
 
-/// On the CMU running data, search finds costs as good as 50,000 Monte Carlo walks, or
-/// better, in at least 85 % of the cells the walks reach, and within 3 frames (0.1 s) in
-/// at least 98 %, and never worse where the walks need at most 24 frames. (The issue's
-/// target, as good as 200,000 walks in 99 % of cells, is not met yet: see BENCHMARKS.md.)
+/// On the CMU running data (mirrored), search finds costs as good as 50,000 Monte Carlo
+/// walks, or better, in at least 95 % of the cells the walks reach, within 1 frame in at
+/// least 98 %, and never worse within the horizon its exhaustive walks cover. (Against
+/// 200,000 walks, every behaviour and start state: `scripts/search-vs-mc`, BENCHMARKS.md.)
 #[test]
 fn search_keeps_up_with_many_monte_carlo_walks_on_real_running() {
     let graph = fixtures::cmu_graph("run");
@@ -116,7 +116,9 @@ fn search_keeps_up_with_many_monte_carlo_walks_on_real_running() {
         graph.node_count(),
         p.depth,
     );
-    assert!(horizon >= 10, "{horizon}");
+    // The mirror images double the branching, so the exhaustive budget covers 7 frames
+    // (28 without them); enough that the check below means something.
+    assert!(horizon >= 5, "{horizon}");
     let (mut reached, mut close, mut as_good) = (0, 0, 0);
     for (m, s) in mc.costs.iter().zip(&search.costs) {
         if let Some(m) = m {
