@@ -109,6 +109,29 @@ impl Kinematic {
         }
     }
 
+    /// The range each parameter is fitted in, in the order of [`Kinematic::params`]: wide
+    /// round what bodies do (a sprinter accelerates at up to about 10 m/s² and runs
+    /// 10–12 m/s) yet finite, so a map that never shows a movement (no backing up, no
+    /// instant start) pins a parameter at a bound instead of sending it to 0 or infinity.
+    pub const BOUNDS: [(f64, f64); 6] = [
+        (0.01, 3.0),
+        (0.5, 30.0),
+        (0.5, 50.0),
+        (0.05, 12.0),
+        (0.05, 12.0),
+        (0.05, 12.0),
+    ];
+
+    /// The model at `log_params` (logarithms of the parameters), each held within its
+    /// [`Kinematic::BOUNDS`].
+    fn from_log_params(log_params: &[f64; 6]) -> Kinematic {
+        let mut x = [0.0; 6];
+        for (k, (lo, hi)) in Self::BOUNDS.iter().enumerate() {
+            x[k] = log_params[k].exp().clamp(*lo, *hi);
+        }
+        Kinematic::from_params(&x)
+    }
+
     fn params(&self) -> [f64; 6] {
         [
             self.reaction_s,
@@ -244,12 +267,14 @@ pub fn fit_isotropic(samples: &[Sample]) -> (Isotropic, FitQuality) {
 /// Levenberg–Marquardt over the logarithms of the six parameters (so every one stays
 /// positive), from a few starts read off the samples (the time is a minimum over four
 /// ways to move, so the error surface has kinks and more than one valley); the best fit
-/// of all starts is kept. Deterministic: the same samples give the same model.
+/// of all starts is kept. Each parameter is held within [`Kinematic::BOUNDS`]: beyond a
+/// bound the error is flat, so the search stays there. Deterministic: the same samples
+/// give the same model.
 pub fn fit_kinematic(samples: &[Sample]) -> (Kinematic, FitQuality) {
     let (iso, _) = fit_isotropic(samples);
     let speed = iso.speed_m_s.max(0.5);
     let residuals = |x: &[f64; 6]| -> Vec<f64> {
-        let k = Kinematic::from_params(&x.map(f64::exp));
+        let k = Kinematic::from_log_params(x);
         samples
             .iter()
             .map(|s| k.seconds(s.at, s.velocity) - s.seconds)
@@ -270,7 +295,7 @@ pub fn fit_kinematic(samples: &[Sample]) -> (Kinematic, FitQuality) {
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .expect("there are starts")
         .0;
-    let model = Kinematic::from_params(&best.map(f64::exp));
+    let model = Kinematic::from_log_params(&best);
     (model, quality(samples, |s| model.seconds(s.at, s.velocity)))
 }
 
@@ -458,6 +483,35 @@ mod tests {
                 "{fitted:?} against {truth:?}"
             );
         }
+    }
+
+    /// A body that reaches top speed at once (the limit the running capture comes close
+    /// to) has no finite best acceleration: the fit stops at its bound rather than
+    /// running off to infinity, and still reproduces the samples.
+    #[test]
+    fn a_parameter_the_samples_cannot_bound_stops_at_its_bound() {
+        let truth = Kinematic {
+            reaction_s: 0.1,
+            turn_rad_s: 3.0,
+            accel_m_s2: 1e9,
+            forward_m_s: 5.0,
+            sideways_m_s: 2.0,
+            backward_m_s: 1.0,
+        };
+        let samples: Vec<Sample> = (-10..=10)
+            .flat_map(|i| (-10..=10).map(move |j| DVec2::new(f64::from(i), f64::from(j))))
+            .map(|at| Sample {
+                at,
+                velocity: DVec2::ZERO,
+                seconds: truth.seconds(at, DVec2::ZERO),
+            })
+            .collect();
+        let (fitted, q) = fit_kinematic(&samples);
+        for (value, (lo, hi)) in fitted.params().iter().zip(Kinematic::BOUNDS) {
+            assert!((lo..=hi).contains(value), "{fitted:?}");
+        }
+        assert!(fitted.accel_m_s2 > 40.0, "{fitted:?}");
+        assert!(q.rms_s < 0.02, "{q:?} {fitted:?}");
     }
 
     /// Seconds exactly linear in distance are fitted exactly; the isotropic model ignores
