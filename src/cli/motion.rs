@@ -205,6 +205,7 @@ pub(super) fn run(args: MotionGraphArgs, out: &mut impl Write) -> anyhow::Result
         out,
         "  per clip:     frames kept of frames, transitions in / out"
     )?;
+    let name_width = graph.coverage.iter().map(|c| c.name.len()).max().unwrap_or(0);
     for c in &graph.coverage {
         let left_out = if c.joined() {
             String::new()
@@ -218,7 +219,7 @@ pub(super) fn run(args: MotionGraphArgs, out: &mut impl Write) -> anyhow::Result
         };
         writeln!(
             out,
-            "    {:<10} {:>5} of {:<5} {:>4} / {:<4}{left_out}",
+            "    {:<name_width$} {:>5} of {:<5} {:>4} / {}{left_out}",
             c.name, c.kept, c.frames, c.transitions_in, c.transitions_out
         )?;
     }
