@@ -205,7 +205,12 @@ pub(super) fn run(args: MotionGraphArgs, out: &mut impl Write) -> anyhow::Result
         out,
         "  per clip:     frames kept of frames, transitions in / out"
     )?;
-    let name_width = graph.coverage.iter().map(|c| c.name.len()).max().unwrap_or(0);
+    let name_width = graph
+        .coverage
+        .iter()
+        .map(|c| c.name.len())
+        .max()
+        .unwrap_or(0);
     for c in &graph.coverage {
         let left_out = if c.joined() {
             String::new()
