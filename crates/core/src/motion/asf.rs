@@ -36,23 +36,16 @@ const UNIT_TOLERANCE: f64 = 1e-3;
 const METRES_PER_INCH: f64 = 0.0254;
 
 /// An ASF or AMC file that cannot be read, and the 1-based line where it goes wrong.
+pub(super) use super::line_error::{number, shown, TokenError};
+
 pub(super) type ParseError = super::line_error::LineError<ParseErrorKind>;
 
 #[derive(Debug, Clone, PartialEq, Error)]
 pub(super) enum ParseErrorKind {
     #[error("the line is longer than {MAX_LINE_BYTES} bytes")]
     LineTooLong,
-    #[error("the file ends where {expected} was expected")]
-    UnexpectedEnd { expected: &'static str },
-    #[error("expected {expected}, found `{found}`")]
-    Unexpected {
-        expected: &'static str,
-        found: String,
-    },
-    #[error("`{text}` is not a number ({what})")]
-    NotANumber { what: &'static str, text: String },
-    #[error("`{text}` is not a finite number ({what})")]
-    NonFinite { what: &'static str, text: String },
+    #[error(transparent)]
+    Token(#[from] TokenError),
     #[error("{what} {value} is outside {range}")]
     OutOfRange {
         what: &'static str,
@@ -191,10 +184,10 @@ pub(super) fn parse(text: &str) -> Result<Skeleton, ParseError> {
             other => {
                 return Err(ParseError {
                     line,
-                    kind: ParseErrorKind::Unexpected {
+                    kind: ParseErrorKind::Token(TokenError::Unexpected {
                         expected: "a section (:units, :root, :bonedata, :hierarchy, ...)",
                         found: shown(other),
-                    },
+                    }),
                 })
             }
         }
@@ -447,9 +440,9 @@ fn parse_bone(lines: &mut Lines, begin: usize) -> Result<RawBone, ParseError> {
         let Some((line, tokens)) = lines.next_in_section()? else {
             return Err(ParseError {
                 line: lines.last_line(),
-                kind: ParseErrorKind::UnexpectedEnd {
+                kind: ParseErrorKind::Token(TokenError::UnexpectedEnd {
                     expected: "the end of a bone",
-                },
+                }),
             });
         };
         let key = tokens[0];
@@ -580,10 +573,10 @@ fn parse_bone(lines: &mut Lines, begin: usize) -> Result<RawBone, ParseError> {
     match limits {
         Some((line, count)) if count != dofs.len() => Err(ParseError {
             line,
-            kind: ParseErrorKind::Unexpected {
+            kind: ParseErrorKind::Token(TokenError::Unexpected {
                 expected: "one limit per dof",
                 found: format!("{count} limits for {} dofs", dofs.len()),
-            },
+            }),
         }),
         _ => Ok(RawBone {
             line,
@@ -617,10 +610,10 @@ fn parse_limits(lines: &mut Lines, line: usize, args: &[&str]) -> Result<usize, 
             if value.parse::<f64>().map_or(true, f64::is_nan) {
                 return Err(ParseError {
                     line: *line,
-                    kind: ParseErrorKind::NotANumber {
+                    kind: ParseErrorKind::Token(TokenError::NotANumber {
                         what: "limit",
                         text: shown(value),
-                    },
+                    }),
                 });
             }
         }
@@ -651,7 +644,7 @@ fn parse_hierarchy(
 ) -> Result<(usize, Vec<Link>), ParseError> {
     let (begin, tokens) = lines.next_in_section()?.ok_or(ParseError {
         line: section_line,
-        kind: ParseErrorKind::UnexpectedEnd { expected: "begin" },
+        kind: ParseErrorKind::Token(TokenError::UnexpectedEnd { expected: "begin" }),
     })?;
     if tokens != ["begin"] {
         return Err(unexpected(begin, "begin", tokens[0]));
@@ -661,9 +654,9 @@ fn parse_hierarchy(
         let Some((line, tokens)) = lines.next_in_section()? else {
             return Err(ParseError {
                 line: lines.last_line(),
-                kind: ParseErrorKind::UnexpectedEnd {
+                kind: ParseErrorKind::Token(TokenError::UnexpectedEnd {
                     expected: "the end of :hierarchy",
-                },
+                }),
             });
         };
         if tokens == ["end"] {
@@ -771,40 +764,9 @@ fn repeated(line: usize, what: &str) -> ParseError {
 pub(super) fn unexpected(line: usize, expected: &'static str, found: &str) -> ParseError {
     ParseError {
         line,
-        kind: ParseErrorKind::Unexpected {
+        kind: ParseErrorKind::Token(TokenError::Unexpected {
             expected,
             found: shown(found),
-        },
-    }
-}
-
-/// A token as an error message shows it: whole if short, else its start, so a hostile
-/// file cannot make a message as long as itself.
-pub(super) fn shown(text: &str) -> String {
-    const MAX_CHARS: usize = 40;
-    match text.char_indices().nth(MAX_CHARS) {
-        Some((cut, _)) => format!("{}...", &text[..cut]),
-        None => text.to_string(),
-    }
-}
-
-/// A finite number, or an error naming `what` it was meant to be.
-pub(super) fn number(line: usize, text: &str, what: &'static str) -> Result<f64, ParseError> {
-    match text.parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        Ok(_) => Err(ParseError {
-            line,
-            kind: ParseErrorKind::NonFinite {
-                what,
-                text: shown(text),
-            },
-        }),
-        Err(_) => Err(ParseError {
-            line,
-            kind: ParseErrorKind::NotANumber {
-                what,
-                text: shown(text),
-            },
         }),
     }
 }

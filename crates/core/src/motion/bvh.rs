@@ -11,21 +11,14 @@ use glam::DVec3;
 use thiserror::Error;
 
 /// A BVH file that cannot be read, and the 1-based line where it goes wrong.
+use super::line_error::{number, shown, TokenError};
+
 pub(super) type ParseError = super::line_error::LineError<ParseErrorKind>;
 
 #[derive(Debug, Clone, PartialEq, Error)]
 pub(super) enum ParseErrorKind {
-    #[error("the file ends where {expected} was expected")]
-    UnexpectedEnd { expected: &'static str },
-    #[error("expected {expected}, found `{found}`")]
-    Unexpected {
-        expected: &'static str,
-        found: String,
-    },
-    #[error("`{text}` is not a number ({what})")]
-    NotANumber { what: &'static str, text: String },
-    #[error("`{text}` is not a finite number ({what})")]
-    NonFinite { what: &'static str, text: String },
+    #[error(transparent)]
+    Token(#[from] TokenError),
     #[error("unknown channel {0} (channels are X/Y/Z position and X/Y/Z rotation)")]
     UnknownChannel(String),
     #[error("channel {0} is given twice for one joint")]
@@ -161,10 +154,10 @@ pub(super) fn parse(text: &str) -> Result<Bvh, ParseError> {
         if line == time_line {
             return Err(ParseError {
                 line,
-                kind: ParseErrorKind::Unexpected {
+                kind: ParseErrorKind::Token(TokenError::Unexpected {
                     expected: "the end of the line after Frame Time",
                     found: found.to_string(),
-                },
+                }),
             });
         }
     }
@@ -229,10 +222,10 @@ fn hierarchy(cursor: &mut Cursor) -> Result<Vec<Joint>, ParseError> {
             other => {
                 return Err(ParseError {
                     line,
-                    kind: ParseErrorKind::Unexpected {
+                    kind: ParseErrorKind::Token(TokenError::Unexpected {
                         expected: "JOINT, End Site or }",
-                        found: other.to_string(),
-                    },
+                        found: shown(other),
+                    }),
                 })
             }
         }
@@ -277,26 +270,6 @@ fn joint_body(cursor: &mut Cursor, parent: Option<usize>) -> Result<Joint, Parse
     })
 }
 
-fn number(line: usize, text: &str, what: &'static str) -> Result<f64, ParseError> {
-    match text.parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        Ok(_) => Err(ParseError {
-            line,
-            kind: ParseErrorKind::NonFinite {
-                what,
-                text: text.to_string(),
-            },
-        }),
-        Err(_) => Err(ParseError {
-            line,
-            kind: ParseErrorKind::NotANumber {
-                what,
-                text: text.to_string(),
-            },
-        }),
-    }
-}
-
 /// Walks the tokens line by line, so every token comes with its line number.
 struct Cursor<'a> {
     lines: &'a [(usize, Vec<&'a str>)],
@@ -314,7 +287,7 @@ impl<'a> Cursor<'a> {
     fn next(&mut self, expected: &'static str) -> Result<(usize, &'a str), ParseError> {
         let found = self.peek().ok_or_else(|| ParseError {
             line: self.lines.last().map_or(1, |(n, _)| *n),
-            kind: ParseErrorKind::UnexpectedEnd { expected },
+            kind: ParseErrorKind::Token(TokenError::UnexpectedEnd { expected }),
         })?;
         self.token += 1;
         if self.token == self.lines[self.line].1.len() {
@@ -332,10 +305,10 @@ impl<'a> Cursor<'a> {
         } else {
             Err(ParseError {
                 line,
-                kind: ParseErrorKind::Unexpected {
+                kind: ParseErrorKind::Token(TokenError::Unexpected {
                     expected: word,
                     found: found.to_string(),
-                },
+                }),
             })
         }
     }
@@ -356,10 +329,10 @@ impl<'a> Cursor<'a> {
         let (line, text) = self.next(what)?;
         text.parse().map_err(|_| ParseError {
             line,
-            kind: ParseErrorKind::Unexpected {
+            kind: ParseErrorKind::Token(TokenError::Unexpected {
                 expected: what,
                 found: text.to_string(),
-            },
+            }),
         })
     }
 

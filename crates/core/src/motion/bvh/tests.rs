@@ -102,7 +102,10 @@ fn non_finite_and_non_numeric_values_name_the_line() {
         let err = error(&text);
         assert_eq!(err.line, 20);
         assert!(
-            matches!(err.kind, ParseErrorKind::NonFinite { .. }),
+            matches!(
+                err.kind,
+                ParseErrorKind::Token(TokenError::NonFinite { .. })
+            ),
             "{err}"
         );
     }
