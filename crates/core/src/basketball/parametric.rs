@@ -109,10 +109,11 @@ impl Kinematic {
         }
     }
 
-    /// The range each parameter is fitted in, in the order of [`Kinematic::params`]: wide
-    /// round what bodies do (a sprinter accelerates at up to about 10 m/s² and runs
-    /// 10–12 m/s) yet finite, so a map that never shows a movement (no backing up, no
-    /// instant start) pins a parameter at a bound instead of sending it to 0 or infinity.
+    /// The range each parameter is fitted in, in the order of the fields (reaction, turn,
+    /// acceleration, forward, sideways, backward): wide round what bodies do (a sprinter
+    /// accelerates at up to about 10 m/s² and runs 10–12 m/s) yet finite, so a map that
+    /// never shows a movement (no backing up, no instant start) pins a parameter at a
+    /// bound instead of sending it to 0 or infinity.
     pub const BOUNDS: [(f64, f64); 6] = [
         (0.01, 3.0),
         (0.5, 30.0),
