@@ -188,7 +188,9 @@ pub fn router(app: Arc<AppState>) -> Router {
     let config = &app.config;
     let metrics = app.metrics.clone();
     // More requests in flight than the limit are answered 503 at once rather than
-    // queued: a queue would hold their connections and memory while they wait.
+    // queued: a queue would hold their connections and memory while they wait. The
+    // limit is global: a router applies a layer to every route (and every method of
+    // it) apart, and a plain concurrency limit would give each its own.
     let shed = ServiceBuilder::new()
         .layer(HandleErrorLayer::new(move |_: tower::BoxError| {
             metrics.overloaded.fetch_add(1, Relaxed);
@@ -199,7 +201,9 @@ pub fn router(app: Arc<AppState>) -> Router {
             ))
         }))
         .load_shed()
-        .concurrency_limit(config.max_concurrent_requests);
+        .layer(tower::limit::GlobalConcurrencyLimitLayer::new(
+            config.max_concurrent_requests,
+        ));
     let api = Router::new()
         .route("/api/matches", get(api::list).post(api::create))
         .route("/api/matches/{id}", get(api::show).delete(api::delete))
