@@ -407,8 +407,8 @@ async fn a_forged_host_cannot_pass_for_the_servers_own_origin() {
     assert!(server.metric("fieldhouse_sockets_refused_total{reason=\"origin\"}") >= 1.0);
 }
 
-/// At a limit of one request in flight, a request that holds the slot (a POST whose
-/// body has not arrived: its handler is waiting for it) makes every other API request
+/// At a limit of one request in flight, a request that holds the slot (the admin's POST
+/// whose body has not arrived: its handler is waiting for it) makes every other API request
 /// an immediate 503 "overloaded", not a wait; probes are outside the limit; and once the
 /// slot is let go the API answers again. (Holding the slot on purpose, rather than
 /// racing many clients, keeps the test exact on a loaded machine.)
@@ -420,7 +420,7 @@ fn requests_beyond_the_concurrency_limit_are_shed_not_queued() {
     let mut holder = TcpStream::connect(&server.addr).unwrap();
     write!(
         holder,
-        "POST /api/matches HTTP/1.1\r\nHost: {}\r\nContent-Type: application/json\r\nContent-Length: 64\r\n\r\n",
+        "POST /api/matches HTTP/1.1\r\nHost: {}\r\nAuthorization: Bearer {ADMIN}\r\nContent-Type: application/json\r\nContent-Length: 64\r\n\r\n",
         server.addr
     )
     .unwrap();
