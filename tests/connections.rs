@@ -468,6 +468,40 @@ fn requests_beyond_the_concurrency_limit_are_shed_not_queued() {
 /// Whether the server has closed its end of `client`'s connection, as the kernel's
 /// table of TCP sockets says (the server's socket has left ESTABLISHED), without
 /// reading what the server sent.
+/// Requests without the admin token are refused from their headers, before their body
+/// is read: anonymous POSTs that never send their body (more of them than the API has
+/// request slots) are each answered 401 at once, and the admin's own POST still creates
+/// its match rather than meeting 503 "overloaded".
+#[test]
+fn anonymous_slow_bodies_cannot_deny_match_creation() {
+    let file = settings("slow-bodies", "max_concurrent_requests = 4\n");
+    let server = Server::start(&["--no-demo", "--config", file.to_str().unwrap()]);
+    let anonymous: Vec<TcpStream> = (0..12)
+        .map(|_| {
+            let mut stream = TcpStream::connect(&server.addr).unwrap();
+            write!(
+                stream,
+                "POST /api/matches HTTP/1.1\r\nHost: {}\r\nContent-Type: application/json\r\nContent-Length: 4096\r\n\r\n{{",
+                server.addr
+            )
+            .unwrap();
+            stream
+        })
+        .collect();
+    for mut stream in anonymous {
+        stream
+            .set_read_timeout(Some(Duration::from_secs(5)))
+            .unwrap();
+        let mut head = [0u8; 12];
+        stream
+            .read_exact(&mut head)
+            .expect("an anonymous POST is answered without its body");
+        assert_eq!(&head, b"HTTP/1.1 401", "{}", String::from_utf8_lossy(&head));
+    }
+    let (id, _) = server.create(common::server::fielder_with_bot("lockstep", 200));
+    assert!(!id.is_empty());
+}
+
 fn server_side_closed(server: &Server, client: &TcpStream) -> bool {
     let hex = |addr: std::net::SocketAddr| match addr {
         std::net::SocketAddr::V4(a) => {

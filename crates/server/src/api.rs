@@ -8,7 +8,8 @@ use super::slot::Slot;
 use super::state::{AppState, Control, MatchEntry};
 use super::sweep;
 use axum::body::Bytes;
-use axum::extract::{Path, State};
+use axum::extract::{FromRequestParts, Path, State};
+use axum::http::request::Parts;
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::Json;
@@ -19,6 +20,19 @@ use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
 
 /// Checks the admin bearer token: missing is 401, wrong is 403.
+/// Proof that a request carries the admin token, read from its headers alone. As an
+/// extractor it runs before the body is read, so a request without the token is refused
+/// at once and an anonymous slow body never holds one of the API's request slots.
+pub struct Admin;
+
+impl FromRequestParts<Arc<AppState>> for Admin {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(parts: &mut Parts, app: &Arc<AppState>) -> Result<Self, ApiError> {
+        admin(app, &parts.headers).map(|()| Admin)
+    }
+}
+
 fn admin(app: &AppState, headers: &HeaderMap) -> Result<(), ApiError> {
     let given = headers
         .get("authorization")
@@ -92,10 +106,9 @@ pub async fn show(
 
 pub async fn create(
     State(app): State<Arc<AppState>>,
-    headers: HeaderMap,
+    _: Admin,
     body: Bytes,
 ) -> Result<Response, ApiError> {
-    admin(&app, &headers)?;
     let scenario = Scenario::from_json(&body).map_err(|e| {
         ApiError::new(
             StatusCode::UNPROCESSABLE_ENTITY,
@@ -150,9 +163,8 @@ pub fn start(
 pub async fn delete(
     Path(id): Path<String>,
     State(app): State<Arc<AppState>>,
-    headers: HeaderMap,
+    _: Admin,
 ) -> Result<Json<Value>, ApiError> {
-    admin(&app, &headers)?;
     let entry = app
         .matches
         .write()
