@@ -86,6 +86,24 @@ fn the_same_scenario_twice_gives_the_same_frames_and_verifies() {
 }
 
 /// stdout of a command that must succeed.
+/// What `replay verify` of a file cut at its end prints: exit code 3, the readable part
+/// verified.
+fn verified_cut(command_line: &str) -> String {
+    let out = fieldhouse(command_line);
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{command_line}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("is cut at its end"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
 fn stdout(command_line: &str) -> String {
     let out = fieldhouse(command_line);
     assert!(
@@ -216,12 +234,22 @@ fn a_file_cut_mid_record_reads_to_the_cut_and_is_incomplete() {
         whole_lines_before - 1
     );
     assert!(info["problem"].as_str().unwrap().contains("torn"), "{info}");
-    // The readable part still re-simulates exactly.
-    let out = fieldhouse(&format!("replay verify {}", torn.display()));
+    // The readable part still re-simulates exactly, and the exit code says it is cut.
+    let verified = verified_cut(&format!("replay verify {}", torn.display()));
+    assert!(verified.contains("verified"), "{verified}");
+    // A whole line in the middle that is not a record is damage, not a cut: verify fails
+    // and names the line.
+    let mut lines: Vec<&[u8]> = bytes.split_inclusive(|&b| b == b'\n').collect();
+    let middle = lines.len() / 2;
+    lines[middle] = b"{\"type\": \"frame\", oops\n";
+    let damaged = dir.join("damaged.jsonl");
+    std::fs::write(&damaged, lines.concat()).unwrap();
+    let out = fieldhouse(&format!("replay verify {}", damaged.display()));
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        err.contains("is damaged") && err.contains(&format!("line {}", middle + 1)),
+        "{err}"
     );
     // A file that is not a replay at all is an error, not a panic.
     let junk = dir.join("junk.jsonl");
@@ -495,7 +523,7 @@ fn a_compressed_replay_cut_anywhere_reads_to_its_last_whole_chunk_and_that_verif
                 "cut at {cut}: {info}"
             ),
         }
-        let verified = stdout(&format!("replay verify {}", cut_file.display()));
+        let verified = verified_cut(&format!("replay verify {}", cut_file.display()));
         assert!(
             verified.contains("the file is incomplete; its readable part was checked"),
             "cut at {cut}: {verified}"
@@ -534,8 +562,15 @@ fn a_corrupt_chunk_ends_the_readable_part_and_a_file_of_neither_format_is_refuse
     );
     let said = stdout(&format!("replay info {}", bad.display()));
     assert!(said.contains("INCOMPLETE: chunk"), "{said}");
-    let verified = stdout(&format!("replay verify {}", bad.display()));
-    assert!(verified.contains("incomplete"), "{verified}");
+    // Damage with more of the file after it is not a cut tail: verify fails, naming the
+    // chunk and its byte.
+    let out = fieldhouse(&format!("replay verify {}", bad.display()));
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("is damaged") && err.contains(&format!("chunk {} (byte {at})", k + 1)),
+        "{err}"
+    );
     // Neither JSON lines nor zstd, whatever its name.
     for (name, content) in [
         ("binary.jsonl.zst", &b"\x00\x01\x02\x03 not a replay"[..]),

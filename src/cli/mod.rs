@@ -110,12 +110,34 @@ pub(crate) fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         // A reader that stopped reading (`| head`) is not an error of ours.
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<Outcome>().is_some() => {
+            let outcome = e.downcast_ref::<Outcome>().expect("just checked");
+            eprintln!("{}", outcome.message);
+            ExitCode::from(outcome.code)
+        }
         Err(e) => {
             eprintln!("error: {}", causes(&e));
             ExitCode::FAILURE
         }
     }
 }
+
+/// A command's result that is neither success nor failure, with the exit code that says
+/// which (documented in the command's help): `replay verify` of a file cut at its end
+/// verifies what it has, and exits 3 so a script can tell that from a whole file.
+#[derive(Debug)]
+pub(crate) struct Outcome {
+    pub code: u8,
+    pub message: String,
+}
+
+impl std::fmt::Display for Outcome {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for Outcome {}
 
 /// The error and its causes, joined by ": " as `{e:#}` joins them, but without a cause
 /// whose text the error wrapping it already shows. Many errors put their source in

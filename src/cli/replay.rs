@@ -27,6 +27,13 @@ enum ReplayCommand {
     },
     /// Re-simulate from the scenario, seed and bot log; compare every frame. Exits
     /// non-zero, naming the first differing tick and field, if anything differs.
+    #[command(after_help = "Exit codes:\n  \
+        0  the whole file verified: every frame re-simulates identically, and it ends with its footer\n  \
+        1  a frame differs, the file is damaged (a line or chunk that does not read where the file \
+        goes on: it names the line, or the chunk and its byte), or it cannot be read or re-simulated\n  \
+        2  bad arguments\n  \
+        3  the file is cut at its end (a crash, or a match still recording): its readable part \
+        re-simulates identically")]
     Verify {
         file: PathBuf,
         #[command(flatten)]
@@ -65,6 +72,14 @@ pub(super) fn run(args: ReplayArgs, out: &mut impl Write) -> anyhow::Result<()> 
         ReplayCommand::Info { file, json } => info(&replay::read(&file)?, json, out),
         ReplayCommand::Verify { file, capability } => {
             let replay = replay::read(&file)?;
+            if replay.damaged {
+                anyhow::bail!(
+                    "{} is damaged: {} ({} before it read)",
+                    file.display(),
+                    replay.problem.as_deref().unwrap_or("unreadable"),
+                    plural(replay.frames.len() as u64, "frame")
+                );
+            }
             let caps = match replay.scenario.sport {
                 Sport::Basketball => {
                     let caps = capability.load()?;
@@ -104,7 +119,18 @@ pub(super) fn run(args: ReplayArgs, out: &mut impl Write) -> anyhow::Result<()> 
                     " (the file is incomplete; its readable part was checked)"
                 }
             )?;
-            Ok(())
+            match (replay.complete(), &replay.problem) {
+                (true, _) => Ok(()),
+                (false, problem) => Err(super::Outcome {
+                    code: 3,
+                    message: format!(
+                        "{} is cut at its end ({}): its readable part verifies",
+                        file.display(),
+                        problem.as_deref().unwrap_or("no footer yet")
+                    ),
+                }
+                .into()),
+            }
         }
         ReplayCommand::Export { file, format, .. } => {
             let replay = replay::read(&file)?;

@@ -261,6 +261,11 @@ pub(crate) struct Unpacked {
     pub(crate) problem: Option<String>,
     /// Whether the file ends with a trailer naming its last chunk.
     pub(crate) trailer: bool,
+    /// Whether `problem` is damage rather than a cut end: a piece that does not read
+    /// where the file goes on, or a torn chunk in a file that was finished (its last
+    /// bytes are a trailer). A file cut at its end is not damaged: its whole chunks are
+    /// all it has.
+    pub(crate) damaged: bool,
 }
 
 /// Decompresses every whole chunk of `bytes`, up to the first piece that does not read.
@@ -270,6 +275,7 @@ pub(crate) fn unpack(bytes: &[u8]) -> Unpacked {
         text: Vec::with_capacity(bytes.len().saturating_mul(9).min(64 << 20)),
         problem: None,
         trailer: false,
+        damaged: false,
     };
     let mut input = bytes;
     let mut chunk = Vec::new();
@@ -311,9 +317,18 @@ pub(crate) fn unpack(bytes: &[u8]) -> Unpacked {
                 }
             },
             Piece::End => None,
-            Piece::Torn { at } => Some(torn(count, at)),
+            Piece::Torn { at } => {
+                // A finished file ends with its trailer: a chunk torn before it was not
+                // cut by a crash but damaged (a size field changed, say).
+                let finished = bytes.len() >= TRAILER_BYTES
+                    && read_trailer(&bytes[bytes.len() - TRAILER_BYTES..]).is_some();
+                unpacked.problem = Some(torn(count, at));
+                unpacked.damaged = finished;
+                return unpacked;
+            }
             Piece::Bad { at, why } => Some(format!("chunk {} (byte {at}): {why}", count + 1)),
         };
+        unpacked.damaged = problem.is_some();
         unpacked.problem = problem;
         return unpacked;
     }
@@ -418,6 +433,8 @@ mod tests {
                 texts[..whole].concat().as_bytes(),
                 "cut at {cut}"
             );
+            // A cut end is not damage: the whole chunks are all the file has.
+            assert!(!read.damaged, "cut at {cut}");
             if cut == 0 || ends.contains(&(cut as u64)) {
                 assert_eq!(read.problem, None, "cut at {cut}");
             } else {
@@ -434,6 +451,7 @@ mod tests {
         bytes[k] ^= 0x55;
         let read = unpack(&bytes);
         assert_eq!(read.text, b"a\n");
+        assert!(read.damaged);
         let problem = read.problem.unwrap();
         assert!(problem.starts_with("chunk 2 (byte"), "{problem}");
         // Neither a frame nor a trailer.
@@ -442,10 +460,13 @@ mod tests {
         let (good, _) = packed(&["a\n"]);
         let read = unpack(&[&good[..], b"garbage!"].concat());
         assert_eq!(read.text, b"a\n");
+        assert!(read.damaged);
         assert!(read.problem.unwrap().contains("not a zstd frame"));
         // A chunk with a torn line.
         let (bytes, _) = packed(&["a\n", "b"]);
-        assert!(unpack(&bytes).problem.unwrap().contains("whole line"));
+        let read = unpack(&bytes);
+        assert!(read.damaged);
+        assert!(read.problem.unwrap().contains("whole line"));
     }
 
     #[test]

@@ -474,6 +474,11 @@ pub struct Replay {
     pub footer: Option<Value>,
     /// Why reading stopped early (a torn last record, or the line that did not parse).
     pub problem: Option<String>,
+    /// Whether `problem` is damage (bytes that do not read where the file goes on: a
+    /// whole line that is not a record, a chunk that does not decompress) rather than a
+    /// cut end (a torn last record, a file cut mid-chunk or before its trailer). A cut
+    /// file's readable part is all it has; a damaged file has lost what came after.
+    pub damaged: bool,
 }
 
 impl Replay {
@@ -731,14 +736,14 @@ pub fn parse(bytes: &[u8]) -> Result<Replay, String> {
             }
             let mut replay = parse_lines(&unpacked.text)?;
             if replay.problem.is_none() {
-                replay.problem =
-                    unpacked
-                        .problem
-                        .or_else(|| match (&replay.footer, unpacked.trailer) {
-                            (Some(_), false) => Some(NO_TRAILER.into()),
-                            (None, true) => Some("the file has a trailer but no footer".into()),
-                            _ => None,
-                        });
+                (replay.problem, replay.damaged) = match unpacked.problem {
+                    Some(problem) => (Some(problem), unpacked.damaged),
+                    None => match (&replay.footer, unpacked.trailer) {
+                        (Some(_), false) => (Some(NO_TRAILER.into()), false),
+                        (None, true) => (Some("the file has a trailer but no footer".into()), true),
+                        _ => (None, false),
+                    },
+                };
             }
             Ok(replay)
         }
@@ -761,6 +766,7 @@ fn parse_lines(bytes: &[u8]) -> Result<Replay, String> {
         log: Vec::new(),
         footer: None,
         problem: None,
+        damaged: false,
     };
     for (k, raw) in lines.enumerate() {
         let number = k + 2;
@@ -771,7 +777,7 @@ fn parse_lines(bytes: &[u8]) -> Result<Replay, String> {
             replay.problem = Some(format!(
                 "line {number} is torn (the file was cut mid-record)"
             ));
-            break;
+            return Ok(replay);
         };
         let record: Value = match serde_json::from_str(line) {
             Ok(v) => v,
@@ -822,5 +828,8 @@ fn parse_lines(bytes: &[u8]) -> Result<Replay, String> {
             }
         }
     }
+    // Reading stops early only at a torn last line (returned above) or at a whole line
+    // that does not read: damage.
+    replay.damaged = replay.problem.is_some();
     Ok(replay)
 }
