@@ -228,6 +228,7 @@ fn a_file_cut_mid_record_reads_to_the_cut_and_is_incomplete() {
     std::fs::write(&torn, &bytes[..cut]).unwrap();
     let info = json(&format!("replay info {} --json", torn.display()));
     assert_eq!(info["complete"], false);
+    assert_eq!(info["damaged"], false);
     // Every complete line but the header is a frame here (no bots, no footer yet).
     assert_eq!(
         info["frames"].as_u64().unwrap() as usize,
@@ -560,8 +561,9 @@ fn a_corrupt_chunk_ends_the_readable_part_and_a_file_of_neither_format_is_refuse
         problem.starts_with(&format!("chunk {} (byte {at}): ", k + 1)),
         "{problem}"
     );
+    assert_eq!(info["damaged"], true);
     let said = stdout(&format!("replay info {}", bad.display()));
-    assert!(said.contains("INCOMPLETE: chunk"), "{said}");
+    assert!(said.contains("DAMAGED: chunk"), "{said}");
     // Damage with more of the file after it is not a cut tail: verify fails, naming the
     // chunk and its byte.
     let out = fieldhouse(&format!("replay verify {}", bad.display()));

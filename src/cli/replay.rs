@@ -164,6 +164,7 @@ fn info(replay: &Replay, as_json: bool, out: &mut impl Write) -> anyhow::Result<
         "duration_s": last_tick.saturating_sub(replay.first_tick()) as f64 / tick_hz,
         "complete": replay.complete(),
         "problem": replay.problem,
+        "damaged": replay.damaged,
         "reason": footer["reason"],
         "result": footer["result"],
         "hash": footer["hash"],
@@ -207,6 +208,10 @@ fn info(replay: &Replay, as_json: bool, out: &mut impl Write) -> anyhow::Result<
             "  complete: {}; {}",
             f["reason"].as_str().unwrap_or("ended"),
             super::run::summary(&f["result"])
+        )?,
+        (_, Some(problem)) if replay.damaged => writeln!(
+            out,
+            "  DAMAGED: {problem}; the records before it read back, what follows it is lost"
         )?,
         (_, Some(problem)) => writeln!(
             out,
