@@ -128,7 +128,15 @@ pub(crate) struct Unpacker {
     decoder: Decoder<'static>,
     /// Where the next piece starts in the file.
     at: u64,
+    /// What the decoder writes into before it is appended to a chunk's text: the text
+    /// grows by at most this at a time, and never past the bound, whatever capacity it
+    /// has (decoding straight into it let a chunk fill all its spare capacity, up to
+    /// about twice the bound).
+    scratch: Vec<u8>,
 }
+
+/// The most one decoder step writes, bytes.
+const STEP_BYTES: usize = 64 * 1024;
 
 impl Unpacker {
     /// An unpacker of pieces starting at offset `at` of their file.
@@ -137,7 +145,11 @@ impl Unpacker {
         // A chunk's window is at most its content, which is at most 2 MiB: a frame
         // asking for more is not a chunk, and must not make the reader allocate it.
         decoder.set_parameter(DParameter::WindowLogMax(22))?;
-        Ok(Unpacker { decoder, at })
+        Ok(Unpacker {
+            decoder,
+            at,
+            scratch: vec![0; STEP_BYTES],
+        })
     }
 
     /// Where the next piece starts.
@@ -201,11 +213,8 @@ impl Unpacker {
         let mut taken = 0u64;
         let mut head: &[u8] = &magic;
         loop {
-            if text.len() > MAX_CHUNK_BYTES || taken > MAX_CHUNK_BYTES as u64 {
+            if taken > MAX_CHUNK_BYTES as u64 {
                 return bad(format!("a chunk longer than {} MiB", MAX_CHUNK_BYTES >> 20));
-            }
-            if text.capacity() - text.len() < 16 * 1024 {
-                text.reserve(64 * 1024);
             }
             let available = if head.is_empty() {
                 input.fill_buf()?
@@ -214,9 +223,16 @@ impl Unpacker {
             };
             let ended = available.is_empty();
             let before = text.len();
+            // One byte past the bound is room enough to find a chunk too long.
+            let room = STEP_BYTES.min(MAX_CHUNK_BYTES + 1 - before);
             let mut from = InBuffer::around(available);
-            let mut into = OutBuffer::around_pos(text, before);
+            let mut into = OutBuffer::around(&mut self.scratch[..room]);
             let hint = self.decoder.run(&mut from, &mut into);
+            let produced = into.pos();
+            text.extend_from_slice(&self.scratch[..produced]);
+            if text.len() > MAX_CHUNK_BYTES {
+                return bad(format!("a chunk longer than {} MiB", MAX_CHUNK_BYTES >> 20));
+            }
             let used = from.pos();
             if head.is_empty() {
                 input.consume(used);
@@ -467,6 +483,27 @@ mod tests {
         let read = unpack(&bytes);
         assert!(read.damaged);
         assert!(read.problem.unwrap().contains("whole line"));
+    }
+
+    /// The bound is the one documented, to the byte: a chunk of exactly
+    /// [`MAX_CHUNK_BYTES`] reads, one byte more does not, and nothing past it is held.
+    #[test]
+    fn the_chunk_bound_is_in_force_to_the_byte() {
+        let line = |n: usize| {
+            let mut text = vec![b'x'; n - 1];
+            text.push(b'\n');
+            zstd::encode_all(&text[..], 1).unwrap()
+        };
+        let read = unpack(&line(MAX_CHUNK_BYTES));
+        assert_eq!((read.text.len(), read.problem), (MAX_CHUNK_BYTES, None));
+        let read = unpack(&line(MAX_CHUNK_BYTES + 1));
+        assert!(read.text.is_empty());
+        assert!(read.problem.unwrap().contains("longer than 2 MiB"));
+        for size in [3 << 20, 7 << 19] {
+            let read = unpack(&line(size));
+            assert!(read.text.is_empty(), "{size}");
+            assert!(read.problem.is_some(), "{size}");
+        }
     }
 
     #[test]
