@@ -124,12 +124,12 @@ async fn one_address_holds_at_most_its_share_of_sockets() {
 
 #[test]
 fn bad_limits_are_refused_naming_the_setting() {
-    let bad_origin = common::failure("serve --no-demo --allow-origin friend.example");
+    let bad_origin = common::bad_input("serve --no-demo --allow-origin friend.example");
     assert!(
         bad_origin.contains("allowed_origins") && bad_origin.contains("friend.example"),
         "{bad_origin}"
     );
-    let zero = common::failure("serve --no-demo --max-connections-per-ip 0");
+    let zero = common::bad_input("serve --no-demo --max-connections-per-ip 0");
     assert!(zero.contains("max_connections_per_ip"), "{zero}");
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("bad-limits");
     std::fs::create_dir_all(&dir).unwrap();
@@ -139,7 +139,7 @@ fn bad_limits_are_refused_naming_the_setting() {
         "allowed_origins = [\"https://ok.example\", \"https://x.example/path\"]\n",
     )
     .unwrap();
-    let err = common::failure(&format!("serve --config {}", config.display()));
+    let err = common::bad_input(&format!("serve --config {}", config.display()));
     assert!(
         err.contains("server.toml") && err.contains("allowed_origins"),
         "{err}"

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{assert_reads_well, failure, fieldhouse, json};
+use common::{assert_reads_well, bad_input, failure, fieldhouse, json};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -280,7 +280,7 @@ fn a_bad_scenario_fails_before_anything_runs_naming_the_field() {
     for (text, expected) in cases {
         std::fs::write(&file, text).unwrap();
         let out = dir.join("never.jsonl");
-        let err = failure(&format!("run {} --out {}", file.display(), out.display()));
+        let err = bad_input(&format!("run {} --out {}", file.display(), out.display()));
         assert!(err.contains(expected), "expected {expected:?} in {err}");
         assert!(!out.exists(), "a bad scenario wrote a replay");
     }
@@ -295,7 +295,7 @@ fn a_basketball_scenario_with_bots_runs_with_builtin_brains() {
     .unwrap();
     let file = dir.join("scenario.toml");
     std::fs::write(&file, &scenario).unwrap();
-    let err = failure(&format!(
+    let err = bad_input(&format!(
         "run {} --out {}",
         file.display(),
         dir.join("x.jsonl").display()

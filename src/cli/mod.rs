@@ -122,9 +122,9 @@ pub(crate) fn main() -> ExitCode {
     }
 }
 
-/// A command's result that is neither success nor failure, with the exit code that says
-/// which (documented in the command's help): `replay verify` of a file cut at its end
-/// verifies what it has, and exits 3 so a script can tell that from a whole file.
+/// An end with an exit code of its own (README, "Exit codes"): 2 for input wrong before
+/// anything ran ([`bad_input`]), 3 for `replay verify` of a file cut at its end, which
+/// verifies what it has, so a script can tell that from a whole file.
 #[derive(Debug)]
 pub(crate) struct Outcome {
     pub code: u8,
@@ -138,6 +138,17 @@ impl std::fmt::Display for Outcome {
 }
 
 impl std::error::Error for Outcome {}
+
+/// Marks `e` as input the user got wrong before anything ran (an argument, a setting, a
+/// scenario file): exit code 2, as for the arguments clap refuses, so a script can tell
+/// a mistake in what it passed from a failure while running (1).
+pub(crate) fn bad_input(e: anyhow::Error) -> anyhow::Error {
+    Outcome {
+        code: 2,
+        message: format!("error: {}", causes(&e)),
+    }
+    .into()
+}
 
 /// The error and its causes, joined by ": " as `{e:#}` joins them, but without a cause
 /// whose text the error wrapping it already shows. Many errors put their source in

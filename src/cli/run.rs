@@ -3,7 +3,7 @@
 
 use super::basketball::CapabilityArgs;
 use super::writer::Background;
-use anyhow::{bail, Context};
+use anyhow::Context;
 use clap::Args;
 use fieldhouse::protocol::Score;
 use fieldhouse::replay::{self, Encoding, Recorder};
@@ -51,18 +51,22 @@ pub(super) fn load_scenario(path: &Path) -> anyhow::Result<Scenario> {
 }
 
 pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
-    let mut scenario = load_scenario(&args.scenario)?;
+    let mut scenario = load_scenario(&args.scenario).map_err(super::bad_input)?;
     match args.bots.as_deref() {
         None => {
             if let Some(i) = scenario.agents.iter().position(|a| a.bot) {
-                bail!(
+                return Err(super::bad_input(anyhow::anyhow!(
                     "{}: agents[{i}].bot: a headless run has no bots; pass --bots builtin to play them with their built-in brains",
                     args.scenario.display()
-                );
+                )));
             }
         }
         Some("builtin") => {}
-        Some(other) => bail!("--bots {other}: the only choice is builtin"),
+        Some(other) => {
+            return Err(super::bad_input(anyhow::anyhow!(
+                "--bots {other}: the only choice is builtin"
+            )))
+        }
     }
     // Headless: as fast as possible, whatever mode the scenario is for.
     scenario.mode = fieldhouse::sim::Mode::Fast;
@@ -71,10 +75,10 @@ pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     }
     let o = &scenario.options;
     if scenario.duration_s.is_none() && o.possessions.is_none() && o.launches.is_none() {
-        bail!(
+        return Err(super::bad_input(anyhow::anyhow!(
             "{}: a headless run needs an end: duration_s, options.possessions (basketball) or options.launches (fly balls)",
             args.scenario.display()
-        );
+        )));
     }
     let caps = match scenario.sport {
         Sport::Basketball => Some(args.capability.load()?),
@@ -83,8 +87,9 @@ pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let motion = caps
         .as_ref()
         .map_or("none".to_string(), |c| c.source.fingerprint().to_string());
+    // What the world refuses is the scenario's (an unknown strategy, a bad launch).
     let world = World::new(&scenario, caps)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.scenario.display()))?;
+        .map_err(|e| super::bad_input(anyhow::anyhow!("{}: {e}", args.scenario.display())))?;
     let stem = args
         .scenario
         .file_stem()

@@ -91,8 +91,8 @@ pub(super) fn run(args: ServeArgs) -> anyhow::Result<()> {
     // Everything a newcomer can get wrong (settings, the admin token, a busy port) is
     // checked before motion is loaded and cost maps are built, which takes seconds, and
     // before an admin token is printed that a failed start would make useless.
-    let config = settings(&args)?;
-    let chosen_token = admin_token_from_env()?;
+    let config = settings(&args).map_err(super::bad_input)?;
+    let chosen_token = admin_token_from_env().map_err(super::bad_input)?;
     if let Some(dir) = &config.replay_dir {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create the replay directory {}", dir.display()))?;

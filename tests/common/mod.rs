@@ -102,6 +102,20 @@ pub(crate) fn failure(command_line: &str) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
+/// `fieldhouse ARGS` refused for input wrong before anything ran (an argument, a
+/// setting, a scenario file): exit code 2, nothing on stdout; its stderr.
+pub(crate) fn bad_input(command_line: &str) -> String {
+    let out = fieldhouse(command_line);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{command_line}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.stdout.is_empty(), "{command_line} printed to stdout");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
 /// The repository's copy of the CMU motion capture (the files the binary embeds), for
 /// tests of `--mocap DIR`. Every other test runs on the embedded default, as users do.
 pub(crate) fn repository_mocap() -> PathBuf {
