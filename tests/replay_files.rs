@@ -423,6 +423,42 @@ async fn a_replay_viewer_that_stops_reading_is_closed_within_the_send_timeout() 
     assert!(log.contains("replay viewer that stopped reading"), "{log}");
 }
 
+/// A crafted replay whose frames are a lifetime apart (tick 0, then u64::MAX, at one tick
+/// a second) is played with the gap capped: its viewer's socket stays open and answers,
+/// where the wait's arithmetic used to panic the viewer's task and drop the socket.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn frames_a_lifetime_apart_do_not_break_their_viewer() {
+    let (server, dir) = server_with("lifetime-gap", "", &["--no-demo"]);
+    let mut header = made_header();
+    header["scenario"]["tick_hz"] = json!(1.0);
+    header["scenario"]["frame_hz"] = json!(1.0);
+    let frame = |tick: u64| format!(r#"{{"type":"frame","match":"made","tick":{tick}}}"#);
+    std::fs::write(
+        dir.join("gap.jsonl"),
+        format!("{header}\n{}\n{}\n", frame(0), frame(u64::MAX)),
+    )
+    .unwrap();
+    let mut viewer = connect(&server.ws("/ws/replays/gap")).await;
+    let mut first = next(&mut viewer).await;
+    while first["type"] != "frame" {
+        first = next(&mut viewer).await;
+    }
+    assert_eq!(first["tick"], 0);
+    viewer.send(Message::Ping(vec![7].into())).await.unwrap();
+    let answered = tokio::time::timeout(Duration::from_secs(5), async {
+        while let Some(Ok(message)) = viewer.next().await {
+            if let Message::Pong(p) = message {
+                return p.to_vec() == vec![7];
+            }
+        }
+        false
+    })
+    .await;
+    assert_eq!(answered, Ok(true), "the viewer's socket was dropped");
+    let log = server.log.lock().unwrap().join("\n");
+    assert!(!log.contains("panicked"), "{log}");
+}
+
 /// Sets a file's modification time to `days_ago` days ago.
 fn age(path: &Path, days_ago: u64) {
     let then = std::time::SystemTime::now() - Duration::from_secs(days_ago * 86_400);

@@ -328,8 +328,7 @@ async fn view(
                 next += 1;
                 match index.tick(next) {
                     Some(following) => {
-                        let gap = following.saturating_sub(tick) as f64 / tick_hz / speed;
-                        due += Duration::from_secs_f64(gap);
+                        due += frame_gap(following.saturating_sub(tick), tick_hz, speed);
                         // A viewer that fell far behind does not get a burst to catch up.
                         due = due.max(Instant::now() - Duration::from_millis(200));
                     }
@@ -406,7 +405,7 @@ async fn view(
                                     send.deliver(line).await?;
                                 }
                                 next = k + 1;
-                                due = Instant::now() + Duration::from_secs_f64(1.0 / tick_hz / speed);
+                                due = Instant::now() + frame_gap(1, tick_hz, speed);
                                 None
                             }
                             None => Some(format!("tick {tick} is after the replay's last frame")),
@@ -420,4 +419,15 @@ async fn view(
             }
         }
     }
+}
+
+/// The longest a viewer waits between two frames, whatever the file says.
+const MAX_FRAME_GAP: Duration = Duration::from_secs(10);
+
+/// How long `ticks` ticks take at `tick_hz` and `speed`, at most [`MAX_FRAME_GAP`]: a
+/// crafted file (frames at tick 0 and u64::MAX, or a rate of almost nothing) asks for a
+/// wait no clock can hold, which panicked the viewer's task.
+fn frame_gap(ticks: u64, tick_hz: f64, speed: f64) -> Duration {
+    Duration::try_from_secs_f64(ticks as f64 / tick_hz / speed)
+        .map_or(MAX_FRAME_GAP, |gap| gap.min(MAX_FRAME_GAP))
 }
