@@ -7,6 +7,7 @@ use common::server::*;
 use common::until;
 use futures_util::{SinkExt, StreamExt};
 use serde_json::{json, Value};
+use std::io::Read;
 use std::process::Command;
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::protocol::frame::coding::CloseCode;
@@ -1032,10 +1033,47 @@ async fn motion_poses_are_served_once_and_frames_name_them_by_node_and_blend() {
         assert_eq!([&pose[0], &pose[2]], [&json!(0), &json!(0)]);
         assert!((700..1200).contains(&pose[1].as_i64().unwrap()), "{pose:?}");
     }
-    // The browser's copy stays good: asked again with its tag, nothing is sent.
-    let again = ureq::get(&url).set("If-None-Match", &etag).call().unwrap();
-    assert_eq!(again.status(), 304);
-    assert_eq!(again.into_string().unwrap(), "");
+    // The browser's copy stays good: asked again with its tag, nothing is sent; so too
+    // for `*`, a list holding the tag, and the tag marked weak (RFC 9110, 13.1.2).
+    for tags in [
+        etag.clone(),
+        "*".to_string(),
+        format!("\"other\", {etag}"),
+        format!("W/{etag}"),
+    ] {
+        let again = ureq::get(&url).set("If-None-Match", &tags).call().unwrap();
+        assert_eq!(again.status(), 304, "{tags}");
+        assert_eq!(again.into_string().unwrap(), "", "{tags}");
+    }
+    let stale = ureq::get(&url)
+        .set("If-None-Match", "\"other\"")
+        .call()
+        .unwrap();
+    assert_eq!(stale.status(), 200);
+    // Gzipped for a client that takes it, and the same document.
+    let zipped = ureq::get(&url)
+        .set("Accept-Encoding", "br;q=0.5, gzip")
+        .call()
+        .unwrap();
+    assert_eq!(zipped.header("content-encoding"), Some("gzip"));
+    let mut compressed = Vec::new();
+    zipped.into_reader().read_to_end(&mut compressed).unwrap();
+    let mut text = String::new();
+    flate2::read::GzDecoder::new(&compressed[..])
+        .read_to_string(&mut text)
+        .unwrap();
+    assert_eq!(serde_json::from_str::<Value>(&text).unwrap(), poses);
+    assert!(
+        compressed.len() * 3 < text.len(),
+        "{} of {}",
+        compressed.len(),
+        text.len()
+    );
+    let refused = ureq::get(&url)
+        .set("Accept-Encoding", "gzip;q=0, *")
+        .call()
+        .unwrap();
+    assert_eq!(refused.header("content-encoding"), None);
     // Running loops for the fielders come with the run poses, their slide stated.
     let run = server.get("/api/motion/run");
     let strides = run["strides"].as_array().unwrap();
