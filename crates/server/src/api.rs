@@ -83,7 +83,7 @@ pub fn summary(entry: &MatchEntry) -> Value {
         "agents": agents,
         "spectators": entry.spectators.load(Relaxed),
         "motion_source": entry.info.motion_source,
-        "replay": entry.replay,
+        "replay": *entry.replay.lock().expect("not poisoned"),
         "replay_error": *entry.replay_error.lock().expect("not poisoned"),
     })
 }

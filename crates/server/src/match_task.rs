@@ -70,18 +70,20 @@ pub fn spawn(
     let first = Utf8Bytes::from(session.frame());
     let driver = MatchDriver::new(session, &scenario);
     let creation_error = Mutex::new(None);
+    let replay = Arc::new(Mutex::new(None));
     let started = app.replay_dir.as_deref().and_then(|dir| {
         let header = replay::header(&info, &scenario, app.caps.source.fingerprint());
         let files = InDir {
             app: app.clone(),
             dir: dir.to_path_buf(),
             stem: format!("{id}-{}", unix_seconds()),
+            current: replay.clone(),
         };
         let limit = recording_limit(&app.config, &scenario);
         let queued = app.replays.queued.clone();
         let made = Recording::start(files, header, limit, queued, recording::CUT_AFTER)
             .map_err(|e| e.to_string())
-            .and_then(|(r, id)| r.frame(0, first.clone()).map(|()| (r, id)));
+            .and_then(|(r, _)| r.frame(0, first.clone()).map(|()| r));
         made.map_err(|e| {
             app.metrics.replay_errors.fetch_add(1, Relaxed);
             tracing::warn!(error = %e, "cannot record this match; it runs unrecorded");
@@ -89,7 +91,7 @@ pub fn spawn(
         })
         .ok()
     });
-    let (recorder, replay) = started.unzip();
+    let recorder = started;
     let (publish, published) = watch::channel(Published {
         seq: 0,
         frame: first,

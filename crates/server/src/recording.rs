@@ -411,6 +411,8 @@ pub struct InDir {
     pub app: Arc<AppState>,
     pub dir: PathBuf,
     pub stem: String,
+    /// The segment being written, named for the match's listing (`MatchEntry::replay`).
+    pub current: Arc<std::sync::Mutex<Option<String>>>,
 }
 
 impl InDir {
@@ -441,6 +443,7 @@ impl Files for InDir {
             .lock()
             .expect("not poisoned")
             .insert(path);
+        *self.current.lock().expect("not poisoned") = Some(id.clone());
         Ok((io::BufWriter::new(file), id))
     }
 

@@ -79,8 +79,10 @@ pub struct MatchEntry {
     pub ended_at: OnceLock<Instant>,
     /// Who controls each agent now (`true`: a bot).
     pub controlled: Mutex<Vec<bool>>,
-    /// The id of its replay, if the server records matches.
-    pub replay: Option<String>,
+    /// The id of the replay file it is recording into now, if the server records
+    /// matches: a match that rotates its replay into segments names the newest, which
+    /// retention keeps while it is written (the first may be long gone).
+    pub replay: Arc<Mutex<Option<String>>>,
     /// Why recording stopped, if it did.
     pub replay_error: Mutex<Option<String>>,
     /// Its spectators, to whom its frames are written.
