@@ -88,9 +88,12 @@ async function main() {
     return blended > 0 && checked >= 30;
   });
   check(worst < 1e-9, `basketball 3-D: ${checked} skeletons (${blended} blended across a cut) match the served poses of their frames (worst ${worst} m)`);
-  // Feet on the floor, heads up: the poses are people standing on the court.
+  // Feet on the floor, heads up: the poses are people standing on the court. Subject
+  // 102 (the footwork) is short (hips at 0.81 m) and its skeleton lacks the thorax's
+  // length, so in a deep defensive crouch its highest joint is about 1 m; a body lying
+  // down or sunk into the floor would be far below 0.8 m.
   const heights = await page.evaluate(() => window.fieldhouse3d.agents.map((a) => Math.max(...a.joints.map((j) => j[1]))));
-  check(heights.every((h) => h > 1.0 && h < 2.1), `basketball 3-D: every skeleton stands a person's height (upright or crouched): ${heights}`);
+  check(heights.every((h) => h > 0.8 && h < 2.1), `basketball 3-D: every skeleton stands a person's height (upright or crouched): ${heights}`);
   await page.locator("#view3d").screenshot({ path: join(ARTIFACTS, "view3d-basketball.png") });
   await page.locator('#view3d button[data-camera="follow"]').click();
   await until("basketball 3-D: the follow camera", 5_000, () => page.evaluate(() => window.fieldhouse3d.camera === "follow"));
