@@ -88,7 +88,14 @@ class Socket:
         except InvalidStatus as e:
             raise _refusal(e) from None
         socket = cls(ws, {})
-        hello = await socket.recv()
+        # The upgrade answered is not a server that speaks: hello must follow in time.
+        try:
+            hello = await asyncio.wait_for(socket.recv(), open_timeout_s)
+        except asyncio.TimeoutError:
+            await ws.close()
+            raise FieldhouseError(
+                f"no hello from {url} within {open_timeout_s} s of the upgrade", code="timeout"
+            ) from None
         if hello.get("type") != "hello":
             await ws.close()
             raise ProtocolMismatch(f"the first message was {hello.get('type')!r}, not hello")
@@ -102,11 +109,23 @@ class Socket:
         return socket
 
     async def recv(self) -> dict:
-        """The next message, as a JSON object."""
+        """The next message, as a JSON object. A message that is not one breaks the
+        protocol: the socket is closed (1002) and :class:`ConnectionClosed` raised, so a
+        bot reconnects as after any drop."""
         try:
-            return json.loads(await self.ws.recv())
+            text = await self.ws.recv()
         except WsClosed as e:
             raise _closed(e) from None
+        try:
+            message = json.loads(text)
+        except (ValueError, RecursionError) as e:
+            why = f"the server sent a message that is not JSON ({type(e).__name__})"
+        else:
+            if isinstance(message, dict):
+                return message
+            why = f"the server sent a JSON {type(message).__name__}, not an object"
+        await self.ws.close(1002, "not a JSON object")
+        raise ConnectionClosed(why, close_code=1002)
 
     async def send(self, obj: dict) -> None:
         """Sends one message."""

@@ -18,6 +18,22 @@ from typing import Any
 from .errors import FieldhouseError, error_for
 
 
+class _NoRedirects(urllib.request.HTTPRedirectHandler):
+    """fieldhouse never answers with a redirect, and following one would send the request,
+    its admin token with it, wherever the answer points: refuse it."""
+
+    def redirect_request(self, req, fp, code, msg, headers, newurl):
+        raise FieldhouseError(
+            f"{req.get_method()} {req.full_url} was answered with a redirect (HTTP {code}) "
+            f"to {newurl}: fieldhouse never redirects, so it was not followed",
+            code="redirect",
+            status=code,
+        )
+
+
+_OPENER = urllib.request.build_opener(_NoRedirects)
+
+
 @dataclass
 class CreatedMatch:
     """The answer to ``POST /api/matches``: the id, and a token per bot agent (shown once)."""
@@ -89,7 +105,13 @@ class Client:
     # --- plumbing --------------------------------------------------------------------
 
     def _json(self, method: str, path: str, body: Any = None, *, admin: bool = False) -> Any:
-        return json.loads(self._request(method, path, body, admin=admin))
+        raw = self._request(method, path, body, admin=admin)
+        try:
+            return json.loads(raw)
+        except (ValueError, RecursionError) as e:
+            raise FieldhouseError(
+                f"the answer to {method} {path} is not JSON: {e}", code="bad_response"
+            ) from None
 
     def _request(self, method: str, path: str, body: Any = None, *, admin: bool = False) -> bytes:
         headers = {"Accept": "application/json"}
@@ -107,7 +129,7 @@ class Client:
             headers["Authorization"] = f"Bearer {self.admin_token}"
         request = urllib.request.Request(self.url + path, data, headers, method=method)
         try:
-            with urllib.request.urlopen(request, timeout=self.timeout_s) as answer:
+            with _OPENER.open(request, timeout=self.timeout_s) as answer:
                 return answer.read()
         except urllib.error.HTTPError as e:
             raise _http_error(e) from None

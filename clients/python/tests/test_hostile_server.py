@@ -1,0 +1,132 @@
+"""The client against servers that misbehave, each played by a few lines of Python on a
+loopback port: the client must not trust its server with its token, its time or its
+exceptions."""
+
+from __future__ import annotations
+
+import asyncio
+import http.server
+import json
+import threading
+import time
+
+import pytest
+from websockets.asyncio.server import serve
+
+from fieldhouse import Client
+from fieldhouse.bot import Socket
+from fieldhouse.errors import ConnectionClosed, FieldhouseError
+from fieldhouse.messages import PROTOCOL, VERSION
+
+
+class _Http(http.server.ThreadingHTTPServer):
+    """A loopback HTTP server answering every request with ``answer(handler)``."""
+
+    def __init__(self, answer):
+        seen = self.seen = []
+
+        class Handler(http.server.BaseHTTPRequestHandler):
+            def _any(self):
+                seen.append((self.command, self.path, self.headers.get("Authorization")))
+                answer(self)
+
+            do_GET = do_POST = do_DELETE = _any
+
+            def log_message(self, *args):
+                pass
+
+        super().__init__(("127.0.0.1", 0), Handler)
+        threading.Thread(target=self.serve_forever, daemon=True).start()
+
+    @property
+    def url(self) -> str:
+        return f"http://127.0.0.1:{self.server_address[1]}"
+
+
+def test_a_redirect_is_refused_and_the_admin_token_goes_nowhere():
+    def elsewhere(h):
+        h.send_response(200)
+        h.end_headers()
+
+    target = _Http(elsewhere)
+
+    def redirect(h):
+        h.send_response(302)
+        h.send_header("Location", target.url + "/api/matches")
+        h.send_header("Content-Length", "0")
+        h.end_headers()
+
+    redirector = _Http(redirect)
+    try:
+        client = Client(redirector.url, admin_token="the-admin-token-0123456789")
+        with pytest.raises(FieldhouseError) as e:
+            client.create_match({"sport": "baseball"})
+        assert e.value.code == "redirect" and e.value.status == 302
+        assert target.seen == [], "the request followed the redirect"
+    finally:
+        target.shutdown()
+        redirector.shutdown()
+
+
+def test_an_answer_that_is_not_json_is_a_fieldhouse_error():
+    def garbage(h):
+        body = b"[" * 100_000
+        h.send_response(200)
+        h.send_header("Content-Length", str(len(body)))
+        h.end_headers()
+        h.wfile.write(body)
+
+    server = _Http(garbage)
+    try:
+        with pytest.raises(FieldhouseError) as e:
+            Client(server.url).list_matches()
+        assert e.value.code == "bad_response"
+    finally:
+        server.shutdown()
+
+
+async def _socket_server(handler):
+    """A WebSocket server on a loopback port that plays ``handler``; its ws:// URL."""
+    server = await serve(handler, "127.0.0.1", 0)
+    port = server.sockets[0].getsockname()[1]
+    return server, f"ws://127.0.0.1:{port}/ws"
+
+
+def test_an_upgrade_with_no_hello_times_out():
+    async def silent(ws):
+        await asyncio.sleep(30)
+
+    async def main():
+        server, url = await _socket_server(silent)
+        try:
+            started = time.monotonic()
+            with pytest.raises(FieldhouseError) as e:
+                await Socket.open(url, open_timeout_s=0.5)
+            assert e.value.code == "timeout"
+            assert time.monotonic() - started < 5
+        finally:
+            server.close()
+
+    asyncio.run(main())
+
+
+@pytest.mark.parametrize("message", ["{not json", "[" * 100_000, '"a string"'])
+def test_a_message_that_is_not_a_json_object_closes_the_socket_with_a_fieldhouse_error(message):
+    hello = {"type": "hello", "protocol": PROTOCOL, "version": VERSION}
+
+    async def rude(ws):
+        await ws.send(json.dumps(hello))
+        await ws.send(message)
+        await asyncio.sleep(5)
+
+    async def main():
+        server, url = await _socket_server(rude)
+        try:
+            socket = await Socket.open(url, open_timeout_s=5)
+            with pytest.raises(ConnectionClosed) as e:
+                await socket.recv()
+            assert e.value.close_code == 1002
+        finally:
+            server.close()
+
+    asyncio.run(main())
