@@ -85,6 +85,47 @@ def test_an_answer_that_is_not_json_is_a_fieldhouse_error():
         server.shutdown()
 
 
+def test_an_endless_answer_is_cut_at_its_limit_and_a_trickle_at_its_deadline():
+    def endless(h):
+        h.send_response(200)
+        h.send_header("Content-Length", str(2**62))
+        h.end_headers()
+        try:
+            while True:
+                h.wfile.write(b" " * 65536)
+        except OSError:
+            pass
+
+    def trickle(h):
+        h.send_response(200)
+        h.send_header("Content-Length", "1000")
+        h.end_headers()
+        try:
+            for _ in range(1000):
+                h.wfile.write(b" ")
+                h.wfile.flush()
+                time.sleep(0.1)
+        except OSError:
+            pass
+
+    big, slow = _Http(endless), _Http(trickle)
+    try:
+        with pytest.raises(FieldhouseError) as e:
+            Client(big.url, max_answer_bytes=2**20).list_matches()
+        assert e.value.code == "too_large"
+        with pytest.raises(FieldhouseError) as e:
+            Client(big.url, max_download_bytes=2**20).download_replay("r")
+        assert e.value.code == "too_large"
+        started = time.monotonic()
+        with pytest.raises(FieldhouseError) as e:
+            Client(slow.url, timeout_s=1.0).list_matches()
+        assert e.value.code == "timeout"
+        assert time.monotonic() - started < 3
+    finally:
+        big.shutdown()
+        slow.shutdown()
+
+
 async def _socket_server(handler):
     """A WebSocket server on a loopback port that plays ``handler``; its ws:// URL."""
     server = await serve(handler, "127.0.0.1", 0)
@@ -104,6 +145,27 @@ def test_an_upgrade_with_no_hello_times_out():
                 await Socket.open(url, open_timeout_s=0.5)
             assert e.value.code == "timeout"
             assert time.monotonic() - started < 5
+        finally:
+            server.close()
+
+    asyncio.run(main())
+
+
+def test_a_message_over_the_cap_closes_the_socket():
+    hello = {"type": "hello", "protocol": PROTOCOL, "version": VERSION}
+
+    async def huge(ws):
+        await ws.send(json.dumps(hello))
+        await ws.send(" " * (2 * 2**20))
+        await asyncio.sleep(5)
+
+    async def main():
+        server, url = await _socket_server(huge)
+        try:
+            socket = await Socket.open(url, open_timeout_s=5, max_message_bytes=2**20)
+            with pytest.raises(ConnectionClosed) as e:
+                await socket.recv()
+            assert e.value.close_code == 1009
         finally:
             server.close()
 

@@ -78,9 +78,10 @@ def test_replays_are_listed_and_downloaded(client, tmp_path):
     while not any(r["id"] == replay_id and r.get("complete") for r in client.list_replays()):
         assert time.monotonic() < deadline
         time.sleep(0.05)
-    data = client.download_replay(replay_id, tmp_path / "r.jsonl.zst")
+    size = client.download_replay(replay_id, tmp_path / "r.jsonl.zst")
+    data = client.download_replay(replay_id)
     assert data[:4] == b"\x28\xb5\x2f\xfd"  # a zstd frame: format 2
-    assert (tmp_path / "r.jsonl.zst").read_bytes() == data
+    assert (tmp_path / "r.jsonl.zst").read_bytes() == data and size == len(data)
     with pytest.raises(BadId):
         client.download_replay("../etc")
     with pytest.raises(NotFound):

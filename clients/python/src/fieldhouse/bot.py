@@ -70,17 +70,21 @@ class Socket:
         token: str | None = None,
         open_timeout_s: float = 10.0,
         max_queue: int | None = 16,
+        max_message_bytes: int | None = 16 * 2**20,
     ) -> Socket:
-        """Connects to ``url`` (the token, if any, as a bearer header) and reads ``hello``.
-        ``max_queue`` messages received but not yet read are buffered (None: without
-        limit; past a limit the socket stops reading, and the server drops a spectator
-        that does not take its frames)."""
+        """Connects to ``url`` (the token, if any, as a bearer header) and reads ``hello``,
+        which must come within ``open_timeout_s``. ``max_queue`` messages received but
+        not yet read are buffered (None: without limit; past a limit the socket stops
+        reading, and the server drops a spectator that does not take its frames). A
+        message longer than ``max_message_bytes`` closes the socket (1009): the server's
+        own are at most a few kilobytes live and a megabyte from a replay (PROTOCOL.md,
+        "Limits"), so the default leaves room and stops a server that never ends one."""
         headers = {"Authorization": f"Bearer {token}"} if token else None
         try:
             ws = await connect(
                 url,
                 additional_headers=headers,
-                max_size=None,  # the server's own messages may be large (PROTOCOL.md, Limits)
+                max_size=max_message_bytes,
                 compression=None,
                 open_timeout=open_timeout_s,
                 max_queue=max_queue,
@@ -156,6 +160,12 @@ def _refusal(e: InvalidStatus) -> FieldhouseError:
 
 def _closed(e: WsClosed) -> FieldhouseError:
     rcvd = e.rcvd
+    if rcvd is None and e.sent is not None:
+        # This side closed it (1009: a message over max_message_bytes) and heard no answer.
+        return ConnectionClosed(
+            f"the client closed the socket: {e.sent.code} {e.sent.reason}",
+            close_code=e.sent.code,
+        )
     code = rcvd.code if rcvd else None
     reason = rcvd.reason if rcvd else "no close frame"
     if code == 1008 and "another connection" in reason:

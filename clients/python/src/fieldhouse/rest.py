@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import time
 import urllib.error
 import urllib.parse
 import urllib.request
@@ -46,13 +47,28 @@ class Client:
     """A fieldhouse server's REST API at ``url`` (``http://127.0.0.1:7878``).
 
     ``admin_token`` (default: ``FIELDHOUSE_ADMIN_TOKEN``) is needed to create and delete
-    matches; listing and replays need none.
+    matches; listing and replays need none. Every request is bounded: an answer takes at
+    most ``timeout_s`` in all (``download_timeout_s`` for a replay) and holds at most
+    ``max_answer_bytes`` (``max_download_bytes`` for a replay); past either the request
+    raises ``FieldhouseError`` (``timeout``, ``too_large``).
     """
 
-    def __init__(self, url: str, admin_token: str | None = None, timeout_s: float = 10.0):
+    def __init__(
+        self,
+        url: str,
+        admin_token: str | None = None,
+        timeout_s: float = 10.0,
+        *,
+        max_answer_bytes: int = 64 * 2**20,
+        download_timeout_s: float = 600.0,
+        max_download_bytes: int = 4 * 2**30,
+    ):
         self.url = url.rstrip("/")
         self.admin_token = admin_token or os.environ.get("FIELDHOUSE_ADMIN_TOKEN")
         self.timeout_s = timeout_s
+        self.max_answer_bytes = max_answer_bytes
+        self.download_timeout_s = download_timeout_s
+        self.max_download_bytes = max_download_bytes
 
     # --- matches ---------------------------------------------------------------------
 
@@ -79,13 +95,15 @@ class Client:
         """The server's replay directory (empty if it records none)."""
         return self._json("GET", "/api/replays")["replays"]
 
-    def download_replay(self, replay_id: str, path: str | os.PathLike | None = None) -> bytes:
-        """The replay file as stored (format 2: zstd); written to ``path`` if given."""
-        data = self._request("GET", f"/api/replays/{_segment(replay_id)}")
-        if path is not None:
-            with open(path, "wb") as f:
-                f.write(data)
-        return data
+    def download_replay(self, replay_id: str, path: str | os.PathLike | None = None) -> bytes | int:
+        """The replay file as stored (format 2: zstd): its bytes, or, with ``path``, streamed
+        into that file (never held whole) and its size in bytes returned."""
+        route = f"/api/replays/{_segment(replay_id)}"
+        bounds = {"limit": self.max_download_bytes, "within_s": self.download_timeout_s}
+        if path is None:
+            return self._request("GET", route, **bounds)
+        with open(path, "wb") as out:
+            return self._request("GET", route, into=out, **bounds)
 
     # --- WebSocket addresses ---------------------------------------------------------
 
@@ -113,7 +131,17 @@ class Client:
                 f"the answer to {method} {path} is not JSON: {e}", code="bad_response"
             ) from None
 
-    def _request(self, method: str, path: str, body: Any = None, *, admin: bool = False) -> bytes:
+    def _request(
+        self,
+        method: str,
+        path: str,
+        body: Any = None,
+        *,
+        admin: bool = False,
+        limit: int | None = None,
+        within_s: float | None = None,
+        into: Any = None,
+    ) -> Any:
         headers = {"Accept": "application/json"}
         data = None
         if body is not None:
@@ -128,11 +156,36 @@ class Client:
                 )
             headers["Authorization"] = f"Bearer {self.admin_token}"
         request = urllib.request.Request(self.url + path, data, headers, method=method)
+        deadline = time.monotonic() + (self.timeout_s if within_s is None else within_s)
+        limit = self.max_answer_bytes if limit is None else limit
         try:
             with _OPENER.open(request, timeout=self.timeout_s) as answer:
-                return answer.read()
+                return _read(answer, f"{method} {path}", limit, deadline, into)
         except urllib.error.HTTPError as e:
             raise _http_error(e) from None
+
+
+def _read(answer: Any, what: str, limit: int, deadline: float, into: Any) -> Any:
+    """The answer's body, read as it comes (``read1``: a server that trickles cannot hold
+    one read for long), at most ``limit`` bytes by ``deadline``: its bytes, or with
+    ``into`` written there and counted."""
+    chunks = []
+    total = 0
+    while chunk := answer.read1(64 * 1024):
+        total += len(chunk)
+        if total > limit:
+            raise FieldhouseError(
+                f"the answer to {what} is longer than {limit} bytes", code="too_large"
+            )
+        if time.monotonic() > deadline:
+            raise FieldhouseError(
+                f"the answer to {what} is still coming at its deadline", code="timeout"
+            )
+        if into is None:
+            chunks.append(chunk)
+        else:
+            into.write(chunk)
+    return total if into is not None else b"".join(chunks)
 
 
 def _segment(s: str) -> str:
