@@ -152,7 +152,7 @@ def _refusal(e: InvalidStatus) -> FieldhouseError:
     try:
         err = json.loads(e.response.body)["error"]
         return error_for(err["code"], err["message"], status)
-    except (ValueError, KeyError, TypeError):
+    except (ValueError, KeyError, TypeError, RecursionError):
         return FieldhouseError(
             f"the upgrade was refused with HTTP {status}", code="http", status=status
         )

@@ -193,10 +193,11 @@ def _segment(s: str) -> str:
 
 
 def _http_error(e: urllib.error.HTTPError) -> FieldhouseError:
-    raw = e.read()
+    # An error body is a line of JSON; a server that sends more is not read further.
+    raw = e.read(64 * 1024)
     try:
         err = json.loads(raw)["error"]
         return error_for(err["code"], err["message"], e.code)
-    except (ValueError, KeyError, TypeError):
+    except (ValueError, KeyError, TypeError, RecursionError):
         text = raw.decode(errors="replace").strip() or e.reason
         return FieldhouseError(str(text), code="http", status=e.code)
