@@ -459,6 +459,45 @@ async fn frames_a_lifetime_apart_do_not_break_their_viewer() {
     assert!(!log.contains("panicked"), "{log}");
 }
 
+/// Seeks are cheap messages and their lead-ins many frames: a viewer's lead-in frames are
+/// bounded by a budget of their own (1,000 at once, 100 a second), so thirty seeks with
+/// the longest lead-in (15 s: 450 frames each here) bring about a thousand frames, not
+/// 13,500.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn seek_lead_ins_are_bounded_per_viewer() {
+    let (server, dir) = server_with("lead-ins", "", &["--no-demo"]);
+    write_replay(&dir.join("long.jsonl"), 20_000, 200, true);
+    let mut viewer = connect(&server.ws("/ws/replays/long")).await;
+    next(&mut viewer).await;
+    let control = |c: Value| Message::Text(c.to_string().into());
+    viewer
+        .send(control(json!({"type": "control", "action": "pause"})))
+        .await
+        .unwrap();
+    let started = Instant::now();
+    for k in 0..30u64 {
+        let seek = json!({"type": "control", "action": "seek", "tick": 30_000 + 100 * k, "lead_in_s": 15.0});
+        viewer.send(control(seek)).await.unwrap();
+    }
+    let mut frames = 0u64;
+    while let Ok(Some(Ok(message))) =
+        tokio::time::timeout(Duration::from_millis(1500), viewer.next()).await
+    {
+        if let Message::Text(t) = message {
+            frames += u64::from(t.contains(r#""type":"frame""#));
+        }
+    }
+    let allowed = 1000.0 + 100.0 * started.elapsed().as_secs_f64() + 30.0;
+    assert!(
+        (frames as f64) <= allowed,
+        "{frames} frames for 30 seeks (at most {allowed:.0})"
+    );
+    assert!(
+        frames >= 1000,
+        "the first lead-in is whole: {frames} frames"
+    );
+}
+
 /// Sets a file's modification time to `days_ago` days ago.
 fn age(path: &Path, days_ago: u64) {
     let then = std::time::SystemTime::now() - Duration::from_secs(days_ago * 86_400);

@@ -29,11 +29,24 @@ impl Bucket {
         }
     }
 
+    /// Adds what has accrued since the last look, up to the burst.
+    fn refill(&mut self, now: Instant) {
+        self.tokens = (self.tokens + (now - self.last).as_secs_f64() * self.rate).min(self.burst);
+        self.last = now;
+    }
+
+    /// Takes up to `wanted` tokens, as many as there are; returns how many.
+    pub fn take_up_to(&mut self, wanted: u64) -> u64 {
+        self.refill(Instant::now());
+        let granted = (self.tokens.max(0.0).floor() as u64).min(wanted);
+        self.tokens -= granted as f64;
+        granted
+    }
+
     /// Takes a token if there is one.
     pub fn take(&mut self) -> bool {
         let now = Instant::now();
-        self.tokens = (self.tokens + (now - self.last).as_secs_f64() * self.rate).min(self.burst);
-        self.last = now;
+        self.refill(now);
         if self.tokens >= 1.0 {
             self.tokens -= 1.0;
             return true;
