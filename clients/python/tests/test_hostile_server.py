@@ -126,69 +126,64 @@ def test_an_endless_answer_is_cut_at_its_limit_and_a_trickle_at_its_deadline():
         slow.shutdown()
 
 
-async def _socket_server(handler):
-    """A WebSocket server on a loopback port that plays ``handler``; its ws:// URL."""
-    server = await serve(handler, "127.0.0.1", 0)
-    port = server.sockets[0].getsockname()[1]
-    return server, f"ws://127.0.0.1:{port}/ws"
+HELLO = {"type": "hello", "protocol": PROTOCOL, "version": VERSION}
+
+
+def _against(server_plays, client_does):
+    """Runs ``client_does(url)`` against a WebSocket server on a loopback port that plays
+    ``server_plays`` on each connection."""
+
+    async def main():
+        server = await serve(server_plays, "127.0.0.1", 0)
+        try:
+            await client_does(f"ws://127.0.0.1:{server.sockets[0].getsockname()[1]}/ws")
+        finally:
+            server.close()
+
+    asyncio.run(main())
+
+
+def _hello_then(message: str):
+    """A server that sends hello, then ``message``, then waits."""
+
+    async def plays(ws):
+        await ws.send(json.dumps(HELLO))
+        await ws.send(message)
+        await asyncio.sleep(5)
+
+    return plays
 
 
 def test_an_upgrade_with_no_hello_times_out():
     async def silent(ws):
         await asyncio.sleep(30)
 
-    async def main():
-        server, url = await _socket_server(silent)
-        try:
-            started = time.monotonic()
-            with pytest.raises(FieldhouseError) as e:
-                await Socket.open(url, open_timeout_s=0.5)
-            assert e.value.code == "timeout"
-            assert time.monotonic() - started < 5
-        finally:
-            server.close()
+    async def opens(url):
+        started = time.monotonic()
+        with pytest.raises(FieldhouseError) as e:
+            await Socket.open(url, open_timeout_s=0.5)
+        assert e.value.code == "timeout"
+        assert time.monotonic() - started < 5
 
-    asyncio.run(main())
+    _against(silent, opens)
 
 
 def test_a_message_over_the_cap_closes_the_socket():
-    hello = {"type": "hello", "protocol": PROTOCOL, "version": VERSION}
+    async def reads(url):
+        socket = await Socket.open(url, open_timeout_s=5, max_message_bytes=2**20)
+        with pytest.raises(ConnectionClosed) as e:
+            await socket.recv()
+        assert e.value.close_code == 1009
 
-    async def huge(ws):
-        await ws.send(json.dumps(hello))
-        await ws.send(" " * (2 * 2**20))
-        await asyncio.sleep(5)
-
-    async def main():
-        server, url = await _socket_server(huge)
-        try:
-            socket = await Socket.open(url, open_timeout_s=5, max_message_bytes=2**20)
-            with pytest.raises(ConnectionClosed) as e:
-                await socket.recv()
-            assert e.value.close_code == 1009
-        finally:
-            server.close()
-
-    asyncio.run(main())
+    _against(_hello_then(" " * (2 * 2**20)), reads)
 
 
 @pytest.mark.parametrize("message", ["{not json", "[" * 100_000, '"a string"'])
 def test_a_message_that_is_not_a_json_object_closes_the_socket_with_a_fieldhouse_error(message):
-    hello = {"type": "hello", "protocol": PROTOCOL, "version": VERSION}
+    async def reads(url):
+        socket = await Socket.open(url, open_timeout_s=5)
+        with pytest.raises(ConnectionClosed) as e:
+            await socket.recv()
+        assert e.value.close_code == 1002
 
-    async def rude(ws):
-        await ws.send(json.dumps(hello))
-        await ws.send(message)
-        await asyncio.sleep(5)
-
-    async def main():
-        server, url = await _socket_server(rude)
-        try:
-            socket = await Socket.open(url, open_timeout_s=5)
-            with pytest.raises(ConnectionClosed) as e:
-                await socket.recv()
-            assert e.value.close_code == 1002
-        finally:
-            server.close()
-
-    asyncio.run(main())
+    _against(_hello_then(message), reads)
