@@ -1,4 +1,4 @@
-//! An independent check of the `chapman` fielder (issue 25): a second, small simulator
+//! An independent check of the `chapman` fielder: a second, small simulator
 //! written from docs/catching.md flies the same launches as the real `fieldhouse catch`,
 //! and the two must catch the same balls.
 //!
@@ -19,7 +19,7 @@
 //! human limits and how the body clips them; the catch zone. Where the documentation
 //! leaves a choice open, the comment at that line says which reading the oracle takes.
 //!
-//! **Why ±3 percentage points** (the issue's bound on the two catch rates). Two faithful
+//! **Why ±3 percentage points** (the bound on the two catch rates). Two faithful
 //! implementations differ in rounding, integration and how the eye estimates rates,
 //! which move a fielder by centimetres and so flip only a ball that passes within
 //! centimetres of the edge of the reach; a few such balls in a few hundred are well
@@ -285,7 +285,7 @@ fn apart(a: [f64; 2], b: [f64; 2]) -> f64 {
     length2([a[0] - b[0], a[1] - b[1]])
 }
 
-/// The issue's launch distribution (docs/catching.md, "Experiments"), drawn here: the
+/// The sweeps' launch distribution (docs/catching.md, "Experiments"), drawn here: the
 /// fielder starts 10–40 m from where this file's own flight lands, in any direction.
 fn launches(n: usize, seed: u64) -> Vec<(Launch, Flight)> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -417,7 +417,7 @@ fn an_independent_chapman_fielder_catches_the_balls_the_binary_catches() {
             gap_90th,
             gap_worst,
         );
-        // (a) The issue's bound: the two catch rates within 3 percentage points.
+        // (a) The bound: the two catch rates within 3 percentage points.
         assert!(
             (rates[k][0] - rates[k][1]).abs() <= 0.03,
             "{name}: the catch rates differ: {:?}",

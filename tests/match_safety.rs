@@ -1,4 +1,4 @@
-//! What an outside attacker found (issue 19), on the real binary over loopback: numbers
+//! What an outside attacker found, on the real binary over loopback: numbers
 //! that pass validation but kill a match, answers to perceptions charged as flooding,
 //! duplicate keys, wrapped ticks, a non-atomic match limit, ended matches listed for
 //! ever, an upper-case auth scheme, and a page without a content security policy.

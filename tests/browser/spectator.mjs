@@ -47,7 +47,7 @@ function startServer(port) {
 
 /**
  * Replay files an attacker could leave in the replay directory: HTML in every string
- * the lobby shows (issue 19: a `sport` holding an <img onerror> ran script there), and
+ * the lobby shows (a `sport` holding an <img onerror> once ran script there), and
  * a file name that is HTML. Each payload sets `window.__xss` if it ever runs.
  */
 const HOSTILE = {

@@ -1,10 +1,11 @@
 //! The square grid a cost map covers, centred on the agent in its own frame (the agent at
 //! (0, 0) facing +x), and the obstacles that block it.
 //!
-//! With y up and right-handed axes, +z is on the agent's *right* when it faces +x. (The
-//! issue text says "+z is to its left"; that only holds in a mirror image, and real motion
-//! capture confirms the handedness: see `motion::Clip`. We keep the data unmirrored, so a
-//! left turn in the data is a left turn on the map, toward −z.)
+//! With y up and right-handed axes, +z is on the agent's *right* when it faces +x. ("+z
+//! is to its left" only holds in a mirror image, and real motion capture confirms the
+//! handedness: see `motion::Clip`. A clip and its mirror image are both played, each with
+//! its own handedness kept, so a left turn in the data is a left turn on the map, toward
+//! −z.)
 
 use glam::DVec2;
 use serde::{Deserialize, Serialize};

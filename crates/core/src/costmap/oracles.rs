@@ -20,7 +20,7 @@ fn build(graph: &MotionGraph, p: &BuildParams) -> CostMap {
 }
 
 /// The fastest a root ever moves in one frame of the graph, m/s: nothing can beat
-/// straight-line distance at this speed. (The issue states this oracle with grassfire's
+/// straight-line distance at this speed. (The oracle is often stated with grassfire's
 /// distance; our 8-connected grassfire overestimates the straight line by up to 8 %, so
 /// the bound that must hold is the straight line itself.)
 fn fastest(graph: &MotionGraph) -> f64 {

@@ -180,7 +180,7 @@ fn predictive_catches_exactly_what_closed_form_reachability_allows() {
     );
 }
 
-/// The targets on catchable balls with human limits: chapman ≥ 95 %,
+/// The targets on catchable balls with human limits (docs/catching.md): chapman ≥ 95 %,
 /// lot-optical ≥ 90 %; and the theories the papers call unrealistic fail with limits.
 #[test]
 fn optical_strategies_catch_what_is_catchable() {

@@ -2,7 +2,7 @@
 //! numbers (rates, deadlines, durations, pauses, clocks) — near the limits, subnormal,
 //! huge — if `Scenario::from_value` accepts it, its world builds, its periods convert
 //! to `Duration`s and it steps, without a panic. A panic there once killed a match task
-//! and left a zombie match (issue 19, `tick_hz` 1e-300).
+//! and left a zombie match (`tick_hz` 1e-300, found by an outside attacker).
 
 use super::{Scenario, World};
 use crate::fixtures::cmu_capabilities;
