@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{assert_reads_well, bad_input, failure, fieldhouse, json};
+use common::{assert_reads_well, bad_input, exits, failure, fieldhouse, json};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -89,19 +89,9 @@ fn the_same_scenario_twice_gives_the_same_frames_and_verifies() {
 /// What `replay verify` of a file cut at its end prints: exit code 3, the readable part
 /// verified.
 fn verified_cut(command_line: &str) -> String {
-    let out = fieldhouse(command_line);
-    assert_eq!(
-        out.status.code(),
-        Some(3),
-        "{command_line}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(
-        String::from_utf8_lossy(&out.stderr).contains("is cut at its end"),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
+    let (stdout, stderr) = exits(command_line, 3);
+    assert!(stderr.contains("is cut at its end"), "{stderr}");
+    stdout
 }
 
 fn stdout(command_line: &str) -> String {
@@ -245,9 +235,7 @@ fn a_file_cut_mid_record_reads_to_the_cut_and_is_incomplete() {
     lines[middle] = b"{\"type\": \"frame\", oops\n";
     let damaged = dir.join("damaged.jsonl");
     std::fs::write(&damaged, lines.concat()).unwrap();
-    let out = fieldhouse(&format!("replay verify {}", damaged.display()));
-    assert_eq!(out.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&out.stderr);
+    let (_, err) = exits(&format!("replay verify {}", damaged.display()), 1);
     assert!(
         err.contains("is damaged") && err.contains(&format!("line {}", middle + 1)),
         "{err}"
@@ -566,9 +554,7 @@ fn a_corrupt_chunk_ends_the_readable_part_and_a_file_of_neither_format_is_refuse
     assert!(said.contains("DAMAGED: chunk"), "{said}");
     // Damage with more of the file after it is not a cut tail: verify fails, naming the
     // chunk and its byte.
-    let out = fieldhouse(&format!("replay verify {}", bad.display()));
-    assert_eq!(out.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&out.stderr);
+    let (_, err) = exits(&format!("replay verify {}", bad.display()), 1);
     assert!(
         err.contains("is damaged") && err.contains(&format!("chunk {} (byte {at})", k + 1)),
         "{err}"

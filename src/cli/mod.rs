@@ -110,15 +110,16 @@ pub(crate) fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         // A reader that stopped reading (`| head`) is not an error of ours.
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
-        Err(e) if e.downcast_ref::<Outcome>().is_some() => {
-            let outcome = e.downcast_ref::<Outcome>().expect("just checked");
-            eprintln!("{}", outcome.message);
-            ExitCode::from(outcome.code)
-        }
-        Err(e) => {
-            eprintln!("error: {}", causes(&e));
-            ExitCode::FAILURE
-        }
+        Err(e) => match e.downcast_ref::<Outcome>() {
+            Some(outcome) => {
+                eprintln!("{}", outcome.message);
+                ExitCode::from(outcome.code)
+            }
+            None => {
+                eprintln!("error: {}", causes(&e));
+                ExitCode::FAILURE
+            }
+        },
     }
 }
 

@@ -119,18 +119,18 @@ pub(super) fn run(args: ReplayArgs, out: &mut impl Write) -> anyhow::Result<()> 
                     " (the file is incomplete; its readable part was checked)"
                 }
             )?;
-            match (replay.complete(), &replay.problem) {
-                (true, _) => Ok(()),
-                (false, problem) => Err(super::Outcome {
-                    code: 3,
-                    message: format!(
-                        "{} is cut at its end ({}): its readable part verifies",
-                        file.display(),
-                        problem.as_deref().unwrap_or("no footer yet")
-                    ),
-                }
-                .into()),
+            if replay.complete() {
+                return Ok(());
             }
+            Err(super::Outcome {
+                code: 3,
+                message: format!(
+                    "{} is cut at its end ({}): its readable part verifies",
+                    file.display(),
+                    replay.problem.as_deref().unwrap_or("no footer yet")
+                ),
+            }
+            .into())
         }
         ReplayCommand::Export { file, format, .. } => {
             let replay = replay::read(&file)?;

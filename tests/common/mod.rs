@@ -66,9 +66,15 @@ pub(crate) fn fieldhouse(command_line: &str) -> Output {
 
 /// Runs a command that must succeed; returns what it wrote to stdout and to stderr.
 pub(crate) fn success(command_line: &str) -> (String, String) {
+    exits(command_line, 0)
+}
+
+/// Runs a command that must end with exit code `code` (README, "Exit codes"); returns
+/// what it wrote to stdout and to stderr.
+pub(crate) fn exits(command_line: &str, code: i32) -> (String, String) {
     let out = fieldhouse(command_line);
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(out.status.success(), "{command_line} failed: {stderr}");
+    assert_eq!(out.status.code(), Some(code), "{command_line}: {stderr}");
     (
         String::from_utf8(out.stdout).expect("stdout is text"),
         stderr,
@@ -82,27 +88,13 @@ pub(crate) fn json(command_line: &str) -> Value {
 
 /// `fieldhouse replay verify FILE` must verify the whole file (exit code 0).
 pub(crate) fn assert_verifies(file: &Path) {
-    assert_verify_exits(file, 0);
+    exits(&format!("replay verify {}", file.display()), 0);
 }
 
 /// `fieldhouse replay verify FILE` of a file cut at its end (a crash, a match still
 /// recording) must verify its readable part: exit code 3.
 pub(crate) fn assert_verifies_up_to_its_cut(file: &Path) {
-    assert_verify_exits(file, 3);
-}
-
-fn assert_verify_exits(file: &Path, code: i32) {
-    let out = Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
-        .args(["replay", "verify"])
-        .arg(file)
-        .output()
-        .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(code),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    exits(&format!("replay verify {}", file.display()), 3);
 }
 
 /// Runs a command that must fail without printing to stdout; returns its stderr.
@@ -116,15 +108,9 @@ pub(crate) fn failure(command_line: &str) -> String {
 /// `fieldhouse ARGS` refused for input wrong before anything ran (an argument, a
 /// setting, a scenario file): exit code 2, nothing on stdout; its stderr.
 pub(crate) fn bad_input(command_line: &str) -> String {
-    let out = fieldhouse(command_line);
-    assert_eq!(
-        out.status.code(),
-        Some(2),
-        "{command_line}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(out.stdout.is_empty(), "{command_line} printed to stdout");
-    String::from_utf8_lossy(&out.stderr).into_owned()
+    let (stdout, stderr) = exits(command_line, 2);
+    assert!(stdout.is_empty(), "{command_line} printed to stdout");
+    stderr
 }
 
 /// The repository's copy of the CMU motion capture (the files the binary embeds), for
