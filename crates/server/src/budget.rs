@@ -35,6 +35,12 @@ impl Bucket {
         self.last = now;
     }
 
+    /// The whole tokens there are, taking none.
+    pub fn available(&mut self) -> u64 {
+        self.refill(Instant::now());
+        self.tokens.max(0.0).floor() as u64
+    }
+
     /// Takes up to `wanted` tokens, as many as there are; returns how many.
     pub fn take_up_to(&mut self, wanted: u64) -> u64 {
         self.refill(Instant::now());

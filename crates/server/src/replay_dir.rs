@@ -164,26 +164,49 @@ impl Version {
     }
 }
 
+/// A file, whatever its size: its device and inode.
+type Inode = (u64, u64);
+
+/// Files walked at once, at most.
+const WALKS: usize = 2;
+
 /// What the server keeps about its replay directory besides the files.
-#[derive(Default)]
 pub struct Replays {
     /// The files being written, which retention never deletes.
     pub writing: Mutex<HashSet<PathBuf>>,
     /// Bytes handed to every recording's writer and not yet written.
     pub queued: Arc<std::sync::atomic::AtomicU64>,
-    /// Indexes with viewers: each file is scanned once however many watch it, and its
+    /// Indexes with viewers: each file is walked once however many watch it, and its
     /// index goes when its last viewer does.
     indexes: Mutex<HashMap<Version, Weak<Index>>>,
-    /// One scan at a time: a crowd of viewers arriving at once, at one file or many,
-    /// costs one core at most.
-    scanning: tokio::sync::Mutex<()>,
+    /// A lock per file being walked: viewers of one file arriving together wait for
+    /// one walk of it, while other files are walked beside it.
+    walking: Mutex<HashMap<Inode, Weak<tokio::sync::Mutex<()>>>>,
+    /// How many files are walked at once: a walk reads its file once (a 1 GiB file in
+    /// well under a second), so a crowd of viewers of many files costs two walks'
+    /// worth of disk and CPU at a time, and no viewer waits for a walk of another file
+    /// longer than that.
+    walks: tokio::sync::Semaphore,
     /// What the listing said of each file, by id, while the file stays as it was: the
     /// lobby asks every 2 s, and a file unchanged since is not read again.
     listed: Mutex<HashMap<String, (Version, serde_json::Value)>>,
 }
 
+impl Default for Replays {
+    fn default() -> Replays {
+        Replays {
+            writing: Mutex::default(),
+            queued: Arc::default(),
+            indexes: Mutex::default(),
+            walking: Mutex::default(),
+            walks: tokio::sync::Semaphore::new(WALKS),
+            listed: Mutex::default(),
+        }
+    }
+}
+
 impl Replays {
-    /// The index of an opened replay, shared with its other viewers; scanned (on a
+    /// The index of an opened replay, shared with its other viewers; walked (on a
     /// blocking thread) if none has it, from where an index of the same file at an
     /// earlier size stopped if there is one.
     pub async fn index(&self, file: &File, meta: &Metadata) -> Result<Arc<Index>, String> {
@@ -193,12 +216,22 @@ impl Replays {
         if let Some(index) = cached(&self.indexes.lock().expect("not poisoned")) {
             return Ok(index);
         }
-        let _scanning = self.scanning.lock().await;
-        // Another viewer may have scanned it while this one waited.
+        let this_file = {
+            let mut walking = self.walking.lock().expect("not poisoned");
+            walking.retain(|_, lock| lock.strong_count() > 0);
+            let lock = walking
+                .get(&(version.dev, version.ino))
+                .and_then(Weak::upgrade)
+                .unwrap_or_default();
+            walking.insert((version.dev, version.ino), Arc::downgrade(&lock));
+            lock
+        };
+        let _walking = this_file.lock().await;
+        // Another viewer may have walked it while this one waited.
         if let Some(index) = cached(&self.indexes.lock().expect("not poisoned")) {
             return Ok(index);
         }
-        // A file being written grows between viewers: scan on from an index of an
+        // A file being written grows between viewers: walk on from an index of an
         // earlier size of it, if one is still in use, rather than from the start.
         let earlier = {
             let indexes = self.indexes.lock().expect("not poisoned");
@@ -208,14 +241,15 @@ impl Replays {
                     (v.dev, v.ino) == (version.dev, version.ino) && v.len < version.len
                 })
                 .filter_map(|(_, weak)| weak.upgrade())
-                .max_by_key(|index| index.len())
+                .max_by_key(|index| index.walked())
         };
         let file = file.try_clone().map_err(|e| e.to_string())?;
-        let scan = move || match earlier.as_ref().and_then(|e| e.grown(&file)) {
+        let walk = move || match earlier.as_ref().and_then(|e| e.grown(&file)) {
             Some(grown) => grown,
             None => Index::build(&file),
         };
-        let index = tokio::task::spawn_blocking(scan)
+        let _permit = self.walks.acquire().await.map_err(|e| e.to_string())?;
+        let index = tokio::task::spawn_blocking(walk)
             .await
             .map_err(|e| e.to_string())??;
         let index = Arc::new(index);

@@ -3,9 +3,10 @@
 //! `control` messages: play, pause, speed (0.25× to 8×), seek to a tick.
 //!
 //! No request costs a file's size in memory: a download is streamed from the opened
-//! file with a small buffer; the viewers of a file share one [`Index`] and read frames
-//! from the file a batch at a time; a seek is a binary search over the index. Every
-//! send to a viewer is bounded by `send_timeout_ms`, like a spectator's.
+//! file with a small buffer; the viewers of a file share one [`Index`] (an entry per
+//! block of the file, never per frame) and each reads frames from the file a block at a
+//! time; a seek is a binary search over the blocks. Every send to a viewer is bounded
+//! by `send_timeout_ms`, like a spectator's.
 
 use super::admission::AdmittedSpectator;
 use super::budget::{Bucket, Verdict};
@@ -29,7 +30,7 @@ use fieldhouse_core::protocol::{
     decode_control, encode, Control, End, ErrorMessage, Hello, ReplayInfo, Role, ViewerMessage,
     MAX_LEAD_IN_S,
 };
-use fieldhouse_core::replay::{self, ChunkCache, Index};
+use fieldhouse_core::replay::{self, At, BlockCache, Frame, Index};
 use fieldhouse_core::tags;
 use futures_util::stream::SplitStream;
 use futures_util::StreamExt;
@@ -208,28 +209,38 @@ pub async fn watch(
     };
     let index = match app.replays.index(&file, &meta).await {
         Ok(index) => index,
-        Err(why) => {
-            // Say what is wrong without showing where the server keeps its files.
-            let message = format!("replay \"{id}\": {why}");
-            return ApiError::new(StatusCode::UNPROCESSABLE_ENTITY, "bad_replay", message)
-                .into_response();
-        }
+        Err(why) => return unreadable(&id, &why),
     };
     let viewed = Viewed {
         index,
         file: Arc::new(file),
         cache: Arc::default(),
     };
+    // The first and last ticks, for the hello: a block or two read from each end.
+    let ends = viewed
+        .blocking(|index, file, cache| index.ends(file, cache))
+        .await;
+    let ends = match ends {
+        Ok(ends) => ends,
+        Err(why) => return unreadable(&id, &why),
+    };
     let config = app.config.clone();
-    ws.on_upgrade(&config, move |socket| play(socket, viewed, id, app))
+    ws.on_upgrade(&config, move |socket| play(socket, viewed, ends, id, app))
 }
 
-/// A viewer's replay: the shared index, the viewer's own handle on the file, and (in
-/// format 2) the chunks it read last, decompressed, for the frames after them.
+/// The refusal of a replay that does not read, saying what is wrong without showing
+/// where the server keeps its files.
+fn unreadable(id: &str, why: &str) -> Response {
+    let message = format!("replay \"{id}\": {why}");
+    ApiError::new(StatusCode::UNPROCESSABLE_ENTITY, "bad_replay", message).into_response()
+}
+
+/// A viewer's replay: the shared index, the viewer's own handle on the file, and the
+/// block it decoded last, for the frames after it.
 struct Viewed {
     index: Arc<Index>,
     file: Arc<File>,
-    cache: Arc<Mutex<ChunkCache>>,
+    cache: Arc<Mutex<BlockCache>>,
 }
 
 /// Frames a viewer reads from the file at once, at most (and 64 KiB at most).
@@ -237,36 +248,56 @@ const BATCH_FRAMES: usize = 64;
 const BATCH_BYTES: usize = 64 * 1024;
 
 impl Viewed {
-    /// Frames `from..`, a batch of them, read on a blocking thread.
-    async fn batch(&self, from: usize) -> Result<VecDeque<String>, String> {
+    /// Runs `read` on the index, the file and the viewer's cache on a blocking thread.
+    async fn blocking<T: Send + 'static>(
+        &self,
+        read: impl FnOnce(&Index, &File, &mut BlockCache) -> std::io::Result<T> + Send + 'static,
+    ) -> Result<T, String> {
         let (index, file, cache) = (self.index.clone(), self.file.clone(), self.cache.clone());
-        let read = tokio::task::spawn_blocking(move || {
-            // One batch at a time per viewer: never waited on.
+        let done = tokio::task::spawn_blocking(move || {
+            // One read at a time per viewer: never waited on.
             let mut cache = cache.lock().expect("not poisoned");
-            index.read(&file, &mut cache, from, BATCH_FRAMES, BATCH_BYTES)
+            read(&index, &file, &mut cache)
         });
-        match read.await {
-            Ok(Ok(frames)) => Ok(frames.into()),
+        match done.await {
+            Ok(Ok(value)) => Ok(value),
             Ok(Err(e)) => Err(e.to_string()),
             Err(e) => Err(e.to_string()),
         }
+    }
+
+    /// Frames from `next` on, a batch of them, into `ahead`; `next` moves past them.
+    /// None read: the replay's end.
+    async fn fill(&self, next: &mut At, ahead: &mut VecDeque<Frame>) -> Result<(), String> {
+        let from = *next;
+        let (frames, after) = self
+            .blocking(move |index, file, cache| {
+                index.read(file, cache, from, BATCH_FRAMES, BATCH_BYTES)
+            })
+            .await?;
+        ahead.extend(frames);
+        *next = after;
+        Ok(())
     }
 }
 
 const MIN_SPEED: f64 = 0.25;
 const MAX_SPEED: f64 = 8.0;
 
-async fn play(socket: Socket, viewed: Viewed, id: String, app: Arc<AppState>) {
+async fn play(socket: Socket, viewed: Viewed, ends: Ends, id: String, app: Arc<AppState>) {
     let (mut sink, mut stream) = socket.split();
     let mut send = Sender {
         sink: &mut sink,
         timeout: Duration::from_millis(app.config.send_timeout_ms),
         metrics: &app.metrics,
     };
-    if let Err(Sent::TimedOut) = view(&mut send, &mut stream, &viewed, &id, &app).await {
+    if let Err(Sent::TimedOut) = view(&mut send, &mut stream, &viewed, ends, &id, &app).await {
         tracing::info!(%id, "dropping a replay viewer that stopped reading");
     }
 }
+
+/// The ticks of a replay's first and last frames (None without frames).
+type Ends = (Option<u64>, Option<u64>);
 
 /// Plays a replay to one viewer until it leaves, the server stops, or its socket stops
 /// taking messages.
@@ -274,19 +305,19 @@ async fn view(
     send: &mut Sender<'_>,
     stream: &mut SplitStream<Socket>,
     viewed: &Viewed,
+    (first_tick, last_tick): Ends,
     id: &str,
     app: &AppState,
 ) -> Result<(), Sent> {
     let index = &viewed.index;
     let tick_hz = index.scenario.tick_hz;
-    let last_tick = index.len().checked_sub(1).and_then(|k| index.tick(k));
     // The match as the file recorded it: a file from an older release may hold
     // shapes this one would not write, so it goes on as it was read.
     let hello = encode(&Hello {
         replay: Some(ReplayInfo {
             complete: index.complete(),
-            first_tick: index.tick(0),
-            frames: index.len(),
+            first_tick,
+            frames: index.frames(),
             id,
             last_tick,
             protocol: fieldhouse_core::replay::protocol(&index.header),
@@ -303,38 +334,48 @@ async fn view(
     });
     send.deliver(hello).await?;
     // A replay without frames has only its end to show.
-    if index.is_empty() {
+    let mut ended = first_tick.is_none();
+    if ended {
         send.deliver(end.clone()).await?;
     }
     let mut stopping = app.shutdown.clone();
     let mut inbound = budget(app);
     let mut lead_ins = Bucket::new(LEAD_IN_FRAMES_PER_S, LEAD_IN_FRAMES_BURST);
-    let (mut next, mut playing, mut speed) = (0usize, true, 1.0f64);
-    // Frames `next..` read ahead from the file: a batch at a time, never the whole file.
-    let mut ahead: VecDeque<String> = VecDeque::new();
+    let (mut playing, mut speed) = (true, 1.0f64);
+    // Frames from `next` on are read ahead into `ahead`: a batch at a time, never the
+    // whole file.
+    let mut next = At::START;
+    let mut ahead: VecDeque<Frame> = VecDeque::new();
     let mut due = Instant::now();
     loop {
-        let waiting = playing && next < index.len();
         tokio::select! {
-            _ = tokio::time::sleep_until(due), if waiting => {
+            _ = tokio::time::sleep_until(due), if playing && !ended => {
                 if ahead.is_empty() {
-                    ahead = viewed.batch(next).await.map_err(|e| {
-                        tracing::warn!(%id, error = %e, "a replay stopped reading back");
-                        Sent::Failed
-                    })?;
+                    if let Err(why) = viewed.fill(&mut next, &mut ahead).await {
+                        ended = cannot_read_on(send, id, &why, &end).await?;
+                        continue;
+                    }
                 }
-                let Some(line) = ahead.pop_front() else { return Err(Sent::Failed) };
-                send.deliver(line).await?;
-                let tick = index.tick(next).unwrap_or(0);
-                next += 1;
-                match index.tick(next) {
+                let Some(frame) = ahead.pop_front() else {
+                    ended = true;
+                    send.deliver(end.clone()).await?;
+                    continue;
+                };
+                send.deliver(frame.text).await?;
+                if ahead.is_empty() {
+                    if let Err(why) = viewed.fill(&mut next, &mut ahead).await {
+                        ended = cannot_read_on(send, id, &why, &end).await?;
+                        continue;
+                    }
+                }
+                match ahead.front() {
                     Some(following) => {
-                        due += frame_gap(following.saturating_sub(tick), tick_hz, speed);
+                        due += frame_gap(following.tick.saturating_sub(frame.tick), tick_hz, speed);
                         // A viewer that fell far behind does not get a burst to catch up.
                         due = due.max(Instant::now() - Duration::from_millis(200));
                     }
                     None => {
-                        playing = false;
+                        ended = true;
                         send.deliver(end.clone()).await?;
                     }
                 }
@@ -392,27 +433,36 @@ async fn view(
                     Ok(ViewerMessage::Control(Control::Seek { tick, lead_in_s })) => {
                         // The first frame at or after the tick, sent at once, paused or
                         // not, after the lead-in's: found by binary searches over the
-                        // index, then read a batch at a time.
-                        match index.seek(tick) {
-                            Some(k) => {
-                                let lead_in = (lead_in_s.unwrap_or(0.0) * tick_hz) as u64;
-                                let wanted = index.seek(tick.saturating_sub(lead_in)).unwrap_or(k).min(k);
-                                // The lead-in is cut to what the viewer's lead-in budget
-                                // has: a seek is one message, its lead-in many frames.
-                                let first = k - lead_ins.take_up_to((k - wanted) as u64) as usize;
+                        // index's blocks, then read a batch at a time. The lead-in is cut
+                        // to what the viewer's lead-in budget has: a seek is one
+                        // message, its lead-in many frames.
+                        let lead_in = (lead_in_s.unwrap_or(0.0) * tick_hz) as u64;
+                        let most = lead_ins.available();
+                        let found = viewed.blocking(move |index, file, cache| {
+                            let Some(at) = index.seek(file, cache, tick)? else {
+                                return Ok(None);
+                            };
+                            let floor = index.seek(file, cache, tick.saturating_sub(lead_in))?;
+                            let floor = floor.unwrap_or(at).min(at);
+                            index.back(file, cache, at, floor, most).map(Some)
+                        }).await;
+                        match found {
+                            Ok(Some((first, lead))) => {
+                                lead_ins.take_up_to(lead);
+                                (next, ended) = (first, false);
                                 ahead.clear();
-                                for at in first..=k {
+                                for _ in 0..=lead {
                                     if ahead.is_empty() {
-                                        ahead = viewed.batch(at).await.map_err(|_| Sent::Failed)?;
+                                        viewed.fill(&mut next, &mut ahead).await.map_err(|_| Sent::Failed)?;
                                     }
-                                    let Some(line) = ahead.pop_front() else { return Err(Sent::Failed) };
-                                    send.deliver(line).await?;
+                                    let Some(frame) = ahead.pop_front() else { break };
+                                    send.deliver(frame.text).await?;
                                 }
-                                next = k + 1;
                                 due = Instant::now() + frame_gap(1, tick_hz, speed);
                                 None
                             }
-                            None => Some(format!("tick {tick} is after the replay's last frame")),
+                            Ok(None) => Some(format!("tick {tick} is after the replay's last frame")),
+                            Err(why) => Some(format!("the replay cannot be read there: {why}")),
                         }
                     }
                     Err(e) => Some(e),
@@ -425,6 +475,23 @@ async fn view(
     }
 }
 
+/// Tells a viewer that its replay cannot be read on from here (a damaged block: the
+/// file's readable part ends there), then shows the end. The socket stays open, for
+/// seeks back. Returns that the replay has ended.
+async fn cannot_read_on(
+    send: &mut Sender<'_>,
+    id: &str,
+    why: &str,
+    end: &str,
+) -> Result<bool, Sent> {
+    tracing::warn!(%id, error = %why, "a replay stopped reading back");
+    let message = format!("replay \"{id}\" cannot be read on from here: {why}");
+    send.deliver(encode(&ErrorMessage::new("bad_replay", &message)))
+        .await?;
+    send.deliver(end.to_string()).await?;
+    Ok(true)
+}
+
 /// Lead-in frames a viewer gets a second, sustained, and at once: seeks are cheap
 /// messages, and without a bound of its own 400 seeks with 15 s of lead-in each made
 /// 1.3 GB out of 30 kB in. A burst covers a whole lead-in of a 60 Hz replay (15 s is 900
@@ -435,10 +502,16 @@ const LEAD_IN_FRAMES_BURST: f64 = 1000.0;
 /// The longest a viewer waits between two frames, whatever the file says.
 const MAX_FRAME_GAP: Duration = Duration::from_secs(10);
 
-/// How long `ticks` ticks take at `tick_hz` and `speed`, at most [`MAX_FRAME_GAP`]: a
-/// crafted file (frames at tick 0 and u64::MAX, or a rate of almost nothing) asks for a
-/// wait no clock can hold, which panicked the viewer's task.
+/// The shortest: a viewer gets at most 1,000 frames a second (a recording has at most a
+/// frame a tick; at 60 Hz and 8× that is 480 a second), however many frames a file puts
+/// at one tick.
+const MIN_FRAME_GAP: Duration = Duration::from_millis(1);
+
+/// How long `ticks` ticks take at `tick_hz` and `speed`, within [`MIN_FRAME_GAP`] and
+/// [`MAX_FRAME_GAP`]: a crafted file (frames at tick 0 and u64::MAX, or a rate of
+/// almost nothing) asks for a wait no clock can hold, which panicked the viewer's task,
+/// and one with millions of frames at a tick asked for them all at once.
 fn frame_gap(ticks: u64, tick_hz: f64, speed: f64) -> Duration {
     Duration::try_from_secs_f64(ticks as f64 / tick_hz / speed)
-        .map_or(MAX_FRAME_GAP, |gap| gap.min(MAX_FRAME_GAP))
+        .map_or(MAX_FRAME_GAP, |gap| gap.clamp(MIN_FRAME_GAP, MAX_FRAME_GAP))
 }

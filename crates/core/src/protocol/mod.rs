@@ -213,8 +213,10 @@ pub struct ReplayInfo<'a> {
     pub complete: bool,
     /// The tick of its first frame; null without frames.
     pub first_tick: Option<u64>,
-    /// How many frames it holds.
-    pub frames: usize,
+    /// How many frames it holds, as its footer says; null for a file without one (the
+    /// match is still running, or the file was cut), whose frames are counted only by
+    /// reading them all.
+    pub frames: Option<u64>,
     /// The replay's id (its file name without `.jsonl.zst`, or `.jsonl` for a format 1
     /// file), as in `GET /api/replays`.
     pub id: &'a str,

@@ -269,6 +269,64 @@ fn read_up_to(input: &mut impl BufRead, buf: &mut [u8]) -> io::Result<usize> {
     Ok(got)
 }
 
+/// What starts a piece of a chunked file, told from its headers alone: how a file is
+/// walked without decompressing it (see [`super::Index`]).
+#[derive(Debug, PartialEq)]
+pub(crate) enum Measured {
+    /// A chunk of `len` bytes that says it decompresses to `content` bytes (zstd checks
+    /// that it does when it is decompressed).
+    Chunk { len: u64, content: u64 },
+    /// The trailer, naming the footer chunk's offset.
+    Trailer { footer_at: u64 },
+    /// The bytes end inside the piece: more of them tell what it is.
+    Short,
+    /// No piece of a replay: why.
+    Bad(String),
+}
+
+/// Measures the piece `bytes` starts with, reading its frame header and the headers of
+/// its blocks but none of its content. A chunk is at most [`MAX_CHUNK_BYTES`] in the file
+/// and decompressed, so more bytes than that which still do not hold a whole chunk are
+/// [`Measured::Bad`], never [`Measured::Short`].
+pub(crate) fn measure(bytes: &[u8]) -> Measured {
+    /// The longest zstd frame header.
+    const MAX_FRAME_HEADER: usize = 18;
+    let Some(magic) = bytes.get(..4) else {
+        return Measured::Short;
+    };
+    if magic == MAGIC {
+        let content = match zstd::zstd_safe::get_frame_content_size(bytes) {
+            Ok(Some(n)) if n <= MAX_CHUNK_BYTES as u64 => n,
+            Ok(Some(_)) => {
+                return Measured::Bad(format!("a chunk longer than {} MiB", MAX_CHUNK_BYTES >> 20))
+            }
+            Ok(None) => return Measured::Bad("a chunk that does not say its size".into()),
+            Err(_) if bytes.len() < MAX_FRAME_HEADER => return Measured::Short,
+            Err(_) => return Measured::Bad("not a zstd frame header".into()),
+        };
+        return match zstd::zstd_safe::find_frame_compressed_size(bytes) {
+            Ok(len) if len <= MAX_CHUNK_BYTES => Measured::Chunk {
+                len: len as u64,
+                content,
+            },
+            Ok(_) => Measured::Bad(format!("a chunk longer than {} MiB", MAX_CHUNK_BYTES >> 20)),
+            Err(_) if bytes.len() <= MAX_CHUNK_BYTES => Measured::Short,
+            Err(_) => Measured::Bad(format!(
+                "a chunk longer than {} MiB, or not a zstd frame",
+                MAX_CHUNK_BYTES >> 20
+            )),
+        };
+    }
+    if u32::from_le_bytes(magic.try_into().expect("4 bytes")) == TRAILER_MAGIC {
+        return match bytes.get(..TRAILER_BYTES).map(read_trailer) {
+            None => Measured::Short,
+            Some(Some((footer_at, _))) => Measured::Trailer { footer_at },
+            Some(None) => Measured::Bad("a skippable frame that is not a replay's trailer".into()),
+        };
+    }
+    Measured::Bad("not a zstd frame".into())
+}
+
 /// A whole chunked file read into JSON lines.
 pub(crate) struct Unpacked {
     /// The whole chunks' lines, concatenated.
@@ -388,6 +446,47 @@ mod tests {
             bytes.extend_from_slice(packer.pack(c.as_bytes()).unwrap());
         }
         (bytes, offsets)
+    }
+
+    #[test]
+    fn pieces_are_measured_from_their_headers_alone() {
+        let lines = ["{\"a\":1}\n", &"{\"b\":2}\n".repeat(5000), "{\"c\":3}\n"];
+        let (mut bytes, offsets) = packed(&lines);
+        let end = bytes.len() as u64;
+        bytes.extend_from_slice(&trailer(offsets[2], (end - offsets[2]) as u32));
+        for (k, line) in lines.iter().enumerate() {
+            let at = offsets[k] as usize;
+            let len = offsets.get(k + 1).copied().unwrap_or(end) - offsets[k];
+            let expected = Measured::Chunk {
+                len,
+                content: line.len() as u64,
+            };
+            assert_eq!(measure(&bytes[at..]), expected, "chunk {k}");
+            // Every cut inside it is short, not bad.
+            for cut in 0..len as usize {
+                assert_eq!(measure(&bytes[at..at + cut]), Measured::Short, "cut {cut}");
+            }
+        }
+        assert_eq!(
+            measure(&bytes[end as usize..]),
+            Measured::Trailer {
+                footer_at: offsets[2]
+            }
+        );
+        assert!(matches!(measure(b"{\"record\":1}"), Measured::Bad(_)));
+        // A skippable frame of another kind is not a trailer.
+        let mut other = trailer(0, 0);
+        other[4] = 5;
+        assert!(matches!(measure(&other), Measured::Bad(_)));
+        // A frame that says it decompresses past the bound is refused from its header.
+        let big = zstd::bulk::compress(&vec![b'x'; MAX_CHUNK_BYTES + 1], 1).unwrap();
+        assert!(matches!(measure(&big), Measured::Bad(why) if why.contains("longer")));
+        // Bytes past the bound that hold no whole chunk are not read on for ever.
+        // (A frame header saying 100 bytes, then empty blocks none of which is last.)
+        let mut endless = vec![0x28, 0xB5, 0x2F, 0xFD, 0x20, 100];
+        endless.resize(MAX_CHUNK_BYTES + 1, 0);
+        assert_eq!(measure(&endless[..1000]), Measured::Short);
+        assert!(matches!(measure(&endless), Measured::Bad(_)));
     }
 
     #[test]

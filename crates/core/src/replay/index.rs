@@ -1,52 +1,115 @@
-//! Where each frame of a replay file is, so a file of any size can be played, sought and
-//! shared without holding its frames: the server scans a file once (a line or a chunk at
-//! a time, every one bounded), keeps each frame's tick and place, and reads frames back
-//! from the file when a viewer needs them.
+//! Where the frames of a replay file are, at a cost bounded by the file's bytes and not
+//! by its frames: the index keeps an entry per *block* of the file, never one per frame,
+//! and learns what a block holds when it is first read.
 //!
-//! In format 1 a frame's place is its offset and length in the file. In format 2 it is
-//! its chunk (the index keeps each chunk's offset and length) and its offset and length
-//! in the chunk decompressed: reading a frame decompresses its chunk, which the viewer's
-//! [`ChunkCache`] keeps for the frames after it. A file being written is indexed up to
-//! its last whole line or chunk, and [`Index::grown`] reads on from there.
+//! * A block of a format 2 file is a run of whole chunks: closed before it would take
+//!   more than [`BLOCK_BYTES`] of the file or decompress to more than 2 MiB. Opening a
+//!   file walks its chunks' zstd headers (each says how long it is and what it holds)
+//!   and decompresses none of them but the header's and the footer's.
+//! * A block of a format 1 file is a run of whole lines of at most [`BLOCK_BYTES`] (or
+//!   one longer line, up to [`MAX_LINE_BYTES`]): opening it looks for newlines and
+//!   parses nothing.
+//!
+//! So a file costs some 50 bytes of index per block and one read of its bytes to open,
+//! however many frames it packs: a file of millions of tiny frames per megabyte costs
+//! what any file of its size does (indexing every frame took 8.8 GB per MB of such a
+//! file). A format 2 file whose chunks decompress to more than [`MAX_EXPANSION`] times
+//! its size is not one this server writes (replays compress about 9×, the most seen in
+//! a chunk 44×) and is read no further than that: it could not otherwise be bounded.
+//!
+//! A block is *decoded* (read, decompressed, its lines parsed) when a viewer reads frames
+//! from it or a seek looks into it. The viewer's [`BlockCache`] keeps the last block it
+//! decoded for the frames after it; the shared index keeps what was learned of each
+//! block (how many frames, their first and last tick), so a seek is a binary search
+//! over the blocks that decodes each at most once per index. A line that is not a
+//! record is found when its block is decoded: the readable part of the file ends there.
+//!
+//! A file being written is indexed up to its last whole line or chunk, and
+//! [`Index::grown`] walks on from there.
 
-use super::chunks::{self, Piece, Unpacker};
-use super::{chunked_header, parse_header, Encoding, MAX_HEADER_BYTES, NO_TRAILER};
+use super::chunks::{self, Measured, Piece, Unpacker, MAX_CHUNK_BYTES, TRAILER_BYTES};
+use super::{chunked_header, parse_header, Encoding, MAX_HEADER_BYTES};
 use crate::sim::Scenario;
 use serde::Deserialize;
 use serde_json::Value;
-use std::collections::VecDeque;
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read, Seek, SeekFrom};
 use std::os::unix::fs::FileExt;
+use std::sync::OnceLock;
 
 /// The longest record read after the header: frames are kilobytes (the longest line of
 /// a basketball replay with cost maps was 1.4 kB), so a longer line is not one, and the
-/// readable prefix ends there rather than memory running out. It also bounds what one
-/// viewer holds of a file at a time.
+/// readable prefix ends there rather than memory running out.
 pub const MAX_LINE_BYTES: usize = 1024 * 1024;
 
-/// A format 1 frame's `chunk`: its place is in the file itself.
-const IN_FILE: u32 = u32::MAX;
+/// A block is closed before it would take more of the file than this: small enough that
+/// decoding one is quick, large enough that the index of a 1 GiB file is some thousands
+/// of entries.
+pub(crate) const BLOCK_BYTES: u64 = 64 * 1024;
 
-/// A frame's place: in its file (format 1), or in its chunk decompressed (format 2).
+/// A format 2 block is closed before its chunks would decompress to more than this, so
+/// a decoded block holds at most twice it (the last chunk may be 2 MiB itself).
+const BLOCK_TEXT_BYTES: u64 = MAX_CHUNK_BYTES as u64;
+
+/// How many times its size a format 2 file's chunks may decompress to, on average, past
+/// [`EXPANSION_SLACK`]: replays compress about 9× (the most seen in one chunk, of frames
+/// where nothing moves, 44×). It bounds the blocks of a file, and so its index, by the
+/// file's size: chunks that each expand to 2 MiB from a few dozen bytes would make a
+/// block each.
+pub(crate) const MAX_EXPANSION: u64 = 256;
+
+/// What a small file may decompress to whatever its size.
+const EXPANSION_SLACK: u64 = 64 << 20;
+
+/// What the walk over a format 2 file reads at a time.
+const WALK_READ: usize = 1 << 20;
+
+/// A block's place in its file.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct FrameAt {
-    tick: u64,
-    /// [`IN_FILE`], or the index of its chunk.
-    chunk: u32,
-    /// Without the newline.
-    len: u32,
+struct Block {
     offset: u64,
+    len: u32,
 }
 
-/// A format 2 chunk's place in its file.
+/// What decoding a block found in it.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct ChunkAt {
-    offset: u64,
-    len: u32,
+struct Learned {
+    frames: u32,
+    /// The ticks of its first and last frame (0 without frames).
+    first_tick: u64,
+    last_tick: u64,
 }
 
-/// A replay file's header, footer and frame positions: everything but the frames.
+/// A frame's place: its block and its number among the block's frames. A place past a
+/// block's last frame stands for the next frame after it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Default)]
+pub struct At {
+    block: u32,
+    frame: u32,
+}
+
+impl At {
+    /// The start of the file: its first frame.
+    pub const START: At = At { block: 0, frame: 0 };
+
+    fn next_block(self) -> At {
+        At {
+            block: self.block + 1,
+            frame: 0,
+        }
+    }
+}
+
+/// A frame read back: its tick and its line, as recorded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Frame {
+    /// The frame's tick.
+    pub tick: u64,
+    /// Its line, without the newline (invalid UTF-8, which no writer writes, replaced).
+    pub text: String,
+}
+
+/// A replay file's header, footer and blocks: everything but the frames.
 #[derive(Debug, Clone)]
 pub struct Index {
     /// The header record (see the module doc of [`super`]).
@@ -55,19 +118,31 @@ pub struct Index {
     pub scenario: Scenario,
     /// How the file is stored.
     pub encoding: Encoding,
-    frames: Vec<FrameAt>,
-    /// Format 2: every whole chunk read.
-    chunks: Vec<ChunkAt>,
     /// The footer record, if the file has one.
     pub footer: Option<Value>,
-    /// Why the readable prefix ends early, as [`super::Replay::problem`].
+    /// Why the walk stopped before the file's end, as [`super::Replay::problem`].
     pub problem: Option<String>,
-    /// Where the scan stopped: after the last whole line (format 1) or chunk (format 2)
-    /// read, and the number of the line after it.
-    scanned: (u64, usize),
-    /// Whether the scan stopped at the file's end (maybe in a line or chunk being
+    blocks: Vec<Block>,
+    /// What each block holds, once it has been decoded.
+    learned: Vec<OnceLock<Learned>>,
+    walk: Walk,
+}
+
+/// Where the walk over a file stopped, and what it needs to go on from there.
+#[derive(Debug, Clone)]
+struct Walk {
+    /// After the last whole line or chunk walked.
+    offset: u64,
+    /// The number of the line (format 1) or chunk (format 2, 1 first) at `offset`.
+    number: usize,
+    /// The last whole line (without its newline) or chunk walked: the footer is the
+    /// last line of a format 1 file, and the chunk a format 2 file's trailer names.
+    last: Option<Block>,
+    /// What the chunks walked say they decompress to.
+    content: u64,
+    /// Whether the walk stopped at the file's end (maybe in a line or chunk being
     /// written) rather than at something that does not read: a file that has grown
-    /// since can be scanned on from `scanned` (see [`Index::grown`]).
+    /// since can be walked on (see [`Index::grown`]).
     at_end: bool,
 }
 
@@ -119,14 +194,28 @@ fn next_line(reader: &mut impl BufRead, buf: &mut Vec<u8>, max: usize) -> io::Re
     }
 }
 
+/// Reads into `buf` from `at` until it is full or the file ends; returns how much.
+fn read_up_to(file: &File, buf: &mut [u8], at: u64) -> io::Result<usize> {
+    let mut got = 0;
+    while got < buf.len() {
+        match file.read_at(&mut buf[got..], at + got as u64) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(got)
+}
+
 impl Index {
-    /// Scans `file` from its start, in either encoding (told by its first bytes). Only a
+    /// Walks `file` from its start, in either encoding (told by its first bytes). Only a
     /// missing or unreadable header is an error (the same cases as [`super::parse`]);
-    /// anything later that does not read ends the readable prefix, with the reason in
-    /// `problem`. Memory: one line or chunk at a time.
+    /// anything later that does not read ends the walk, with the reason in `problem`.
+    /// Memory: the index and one read buffer; no frame is parsed.
     pub fn build(mut file: &File) -> Result<Index, String> {
         let encoding = Encoding::of_file(file)?;
-        let (header, scenario, scanned) = match encoding {
+        let (header, scenario, offset, number) = match encoding {
             Encoding::Plain => {
                 file.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
                 let mut first = Vec::new();
@@ -134,505 +223,619 @@ impl Index {
                     .read_until(b'\n', &mut first)
                     .map_err(|e| e.to_string())?;
                 let (header, scenario) = parse_header(&first)?;
-                (header, scenario, (first.len() as u64, 2))
+                (header, scenario, first.len() as u64, 2)
             }
-            // The header's chunk is scanned with the rest (line 1 is skipped there).
+            // The header's chunk is block 0's first (its line is skipped there).
             Encoding::Zstd => {
                 let (header, scenario) = chunked_header(file)?;
-                (header, scenario, (0, 1))
+                (header, scenario, 0, 1)
             }
         };
         let mut index = Index {
             header,
             scenario,
             encoding,
-            frames: Vec::new(),
-            chunks: Vec::new(),
             footer: None,
             problem: None,
-            scanned,
-            at_end: false,
+            blocks: Vec::new(),
+            learned: Vec::new(),
+            walk: Walk {
+                offset,
+                number,
+                last: None,
+                content: 0,
+                at_end: false,
+            },
         };
-        index.scan(file)?;
+        index.walk_on(file)?;
         Ok(index)
     }
 
-    /// The index of `file`, the file this index is of, grown since it was scanned (a
-    /// replay being written): the frames already found are kept and only the bytes
-    /// after them are read. None if there is nothing to read on from (the file is
-    /// complete, or the scan ended at something that does not read).
+    /// The index of `file`, the file this index is of, grown since it was walked (a
+    /// replay being written): the blocks already found are kept, with what was learned
+    /// of them, and only the bytes after them are read. None if there is nothing to
+    /// read on from (the file is complete, or the walk ended at something that does
+    /// not read).
     pub fn grown(&self, file: &File) -> Option<Result<Index, String>> {
-        if !self.at_end || self.complete() {
+        if !self.walk.at_end || self.complete() {
             return None;
         }
-        let mut index = Index {
-            problem: None,
-            at_end: false,
-            ..self.clone()
-        };
-        Some(index.scan(file).map(|()| index))
+        let mut index = self.clone();
+        index.problem = None;
+        index.walk.at_end = false;
+        Some(index.walk_on(file).map(|()| index))
     }
 
-    fn scan(&mut self, file: &File) -> Result<(), String> {
+    /// How many bytes of the file the index covers.
+    pub fn walked(&self) -> u64 {
+        self.walk.offset
+    }
+
+    fn walk_on(&mut self, file: &File) -> Result<(), String> {
         match self.encoding {
-            Encoding::Plain => self.scan_lines(file),
-            Encoding::Zstd => self.scan_chunks(file),
+            Encoding::Plain => self.walk_lines(file),
+            Encoding::Zstd => self.walk_chunks(file),
         }
     }
 
-    /// Reads whole lines from `scanned` on, to the end or the first that does not read.
-    fn scan_lines(&mut self, mut file: &File) -> Result<(), String> {
-        let (mut offset, first_number) = self.scanned;
-        file.seek(SeekFrom::Start(offset))
+    /// Files the piece at `at`, `len` bytes long, in the last block if `join`, else in
+    /// a block of its own.
+    fn file_piece(&mut self, at: u64, len: u64, join: bool) {
+        match self.blocks.last_mut() {
+            Some(block) if join => block.len += len as u32,
+            _ => {
+                self.blocks.push(Block {
+                    offset: at,
+                    len: len as u32,
+                });
+                self.learned.push(OnceLock::new());
+            }
+        }
+    }
+
+    /// Takes the last `len` bytes (the footer's line or chunk) out of the last block.
+    fn take_off_the_end(&mut self, len: u32) {
+        if let Some(block) = self.blocks.last_mut() {
+            block.len -= len.min(block.len);
+            if block.len == 0 {
+                self.blocks.pop();
+                self.learned.pop();
+            }
+        }
+    }
+
+    /// Walks whole lines from where the walk stopped, to the end or the first that does
+    /// not read; a last line that is a footer is the footer.
+    fn walk_lines(&mut self, mut file: &File) -> Result<(), String> {
+        file.seek(SeekFrom::Start(self.walk.offset))
             .map_err(|e| e.to_string())?;
         let mut reader = BufReader::with_capacity(64 * 1024, file);
         let mut line = Vec::new();
-        for number in first_number.. {
+        // A walk starts a block of its own, so no block learned before it changes.
+        let mut first = true;
+        let problem = loop {
+            let number = self.walk.number;
             let read = next_line(&mut reader, &mut line, MAX_LINE_BYTES)
                 .map_err(|e| format!("line {number} cannot be read: {e}"));
-            let problem = match read {
+            match read {
+                Ok(Line::Whole) => {
+                    let (at, len) = (self.walk.offset, line.len() as u64 + 1);
+                    let join = !first
+                        && self
+                            .blocks
+                            .last()
+                            .is_some_and(|b| u64::from(b.len) + len <= BLOCK_BYTES);
+                    self.file_piece(at, len, join);
+                    first = false;
+                    self.walk.last = Some(Block {
+                        offset: at,
+                        len: line.len() as u32,
+                    });
+                    self.walk.offset += len;
+                    self.walk.number += 1;
+                }
                 Ok(Line::End) => {
-                    self.at_end = true;
-                    None
+                    self.walk.at_end = true;
+                    break None;
                 }
-                Ok(Line::Whole) => self.take(&line, IN_FILE, offset, number).err(),
                 Ok(Line::Torn) => {
-                    self.at_end = true;
-                    Some(format!(
+                    self.walk.at_end = true;
+                    break Some(format!(
                         "line {number} is torn (the file was cut mid-record)"
-                    ))
-                }
-                Ok(Line::TooLong) => Some(format!(
-                    "line {number} is longer than {} MiB: not a record",
-                    MAX_LINE_BYTES >> 20
-                )),
-                Err(e) => Some(e),
-            };
-            if problem.is_some() || self.at_end {
-                self.problem = problem;
-                self.scanned = (offset, number);
-                return Ok(());
-            }
-            offset += line.len() as u64 + 1;
-        }
-        unreachable!("the lines of a file are fewer than usize::MAX")
-    }
-
-    /// Reads whole chunks from `scanned` on, to the end or the first that does not read.
-    fn scan_chunks(&mut self, mut file: &File) -> Result<(), String> {
-        let (offset, mut number) = self.scanned;
-        file.seek(SeekFrom::Start(offset))
-            .map_err(|e| e.to_string())?;
-        let mut reader = BufReader::with_capacity(64 * 1024, file);
-        let mut unpacker = Unpacker::new(offset).map_err(|e| e.to_string())?;
-        let mut text = Vec::new();
-        loop {
-            let (at, count) = (unpacker.at(), self.chunks.len());
-            let problem = match unpacker.next(&mut reader, &mut text) {
-                Err(e) => Some(format!(
-                    "chunk {} (byte {at}) cannot be read: {e}",
-                    count + 1
-                )),
-                Ok(Piece::End) => {
-                    self.at_end = true;
-                    self.footer.as_ref().map(|_| NO_TRAILER.to_string())
-                }
-                Ok(Piece::Torn { at }) => {
-                    self.at_end = true;
-                    Some(chunks::torn(count, at))
-                }
-                Ok(Piece::Bad { at, why }) => {
-                    Some(format!("chunk {} (byte {at}): {why}", count + 1))
-                }
-                Ok(Piece::Trailer { footer_at }) => {
-                    let last = self.chunks.last().map(|c| c.offset);
-                    match chunks::trailer_problem(footer_at, last) {
-                        Some(p) => Some(p),
-                        None if self.footer.is_none() => {
-                            Some("the file has a trailer but no footer".into())
-                        }
-                        // Complete: nothing may follow.
-                        None => match unpacker.next(&mut reader, &mut text) {
-                            Ok(Piece::End) => None,
-                            _ => Some("something follows the trailer".into()),
-                        },
-                    }
-                }
-                Ok(Piece::Chunk { at, len }) => {
-                    match self.take_chunk(&text, at, len, &mut number) {
-                        Ok(()) => {
-                            self.scanned = (at + len, number);
-                            continue;
-                        }
-                        Err(p) => Some(p),
-                    }
-                }
-            };
-            self.problem = problem;
-            return Ok(());
-        }
-    }
-
-    /// Files the lines of a whole chunk, found at `at`, `len` bytes long; the first line
-    /// is number `number`, which is moved on past them.
-    fn take_chunk(
-        &mut self,
-        text: &[u8],
-        at: u64,
-        len: u64,
-        number: &mut usize,
-    ) -> Result<(), String> {
-        if let Some(p) = chunks::chunk_problem(text, self.chunks.len(), at) {
-            return Err(p);
-        }
-        let k = self.chunks.len() as u32;
-        self.chunks.push(ChunkAt {
-            offset: at,
-            len: len as u32,
-        });
-        let mut within = 0u64;
-        for line in text.split_inclusive(|&b| b == b'\n') {
-            let line = &line[..line.len() - 1];
-            let n = *number;
-            *number += 1;
-            // The header, read already.
-            if n > 1 {
-                if line.len() > MAX_LINE_BYTES {
-                    return Err(format!(
-                        "line {n} is longer than {} MiB: not a record",
-                        MAX_LINE_BYTES >> 20
                     ));
                 }
-                self.take(line, k, within, n)?;
+                Ok(Line::TooLong) => {
+                    break Some(format!(
+                        "line {number} is longer than {} MiB: not a record",
+                        MAX_LINE_BYTES >> 20
+                    ))
+                }
+                Err(e) => break Some(e),
             }
-            within += line.len() as u64 + 1;
-        }
-        Ok(())
-    }
-
-    /// Files one whole line, found at `offset` (of the file, or of chunk `chunk`).
-    fn take(&mut self, line: &[u8], chunk: u32, offset: u64, number: usize) -> Result<(), String> {
-        if self.footer.is_some() {
-            return Err(format!("line {number} follows the footer"));
-        }
-        let kind: Kind = serde_json::from_slice(line)
-            .map_err(|e| format!("line {number} is not a record: {e}"))?;
-        match (kind.kind.as_deref(), kind.record.as_deref(), kind.tick) {
-            (Some("frame"), _, Some(tick)) => self.frames.push(FrameAt {
-                tick,
-                chunk,
-                len: line.len() as u32,
-                offset,
-            }),
-            // The bot log matters for checking a replay, not for watching one.
-            (_, Some("command" | "control"), Some(_)) => {}
-            (_, Some("footer"), _) => {
-                self.footer = Some(serde_json::from_slice(line).map_err(|e| e.to_string())?)
-            }
-            _ => {
-                return Err(format!(
-                    "line {number} is not a frame, command, control or footer record"
-                ))
+        };
+        self.problem = problem;
+        if self.walk.at_end && self.problem.is_none() {
+            if let Some(last) = self.walk.last {
+                let mut text = vec![0; last.len as usize];
+                file.read_exact_at(&mut text, last.offset)
+                    .map_err(|e| e.to_string())?;
+                if let Some(footer) = footer_of(&text) {
+                    self.footer = Some(footer);
+                    self.take_off_the_end(last.len + 1);
+                }
             }
         }
         Ok(())
     }
 
-    /// Frames indexed.
-    pub fn len(&self) -> usize {
-        self.frames.len()
+    /// Walks whole chunks from where the walk stopped, by their headers, to the end or
+    /// the first piece that does not read; the chunk the trailer names is the footer.
+    fn walk_chunks(&mut self, file: &File) -> Result<(), String> {
+        // The bytes from `walk.offset` on that have been read, from `pos` in `buf`.
+        let (mut buf, mut pos, mut ended) = (Vec::new(), 0usize, false);
+        let (mut first, mut block_text) = (true, 0u64);
+        let mut trailer = false;
+        let problem = loop {
+            let at = self.walk.offset;
+            let chunk = self.walk.number;
+            match chunks::measure(&buf[pos..]) {
+                Measured::Short if !ended => {
+                    buf.drain(..pos);
+                    pos = 0;
+                    let had = buf.len();
+                    buf.resize(had + WALK_READ, 0);
+                    let got = read_up_to(file, &mut buf[had..], at + had as u64)
+                        .map_err(|e| e.to_string())?;
+                    buf.truncate(had + got);
+                    ended = got == 0;
+                }
+                Measured::Short if pos == buf.len() => {
+                    self.walk.at_end = true;
+                    break None;
+                }
+                Measured::Short if trailer => break Some("something follows the trailer".into()),
+                Measured::Short => {
+                    self.walk.at_end = true;
+                    break Some(chunks::torn(chunk - 1, at));
+                }
+                Measured::Chunk { .. } if trailer => {
+                    break Some("something follows the trailer".into())
+                }
+                Measured::Chunk { len, content } => {
+                    self.walk.content += content;
+                    if self.walk.content > MAX_EXPANSION * (at + len) + EXPANSION_SLACK {
+                        break Some(format!(
+                            "chunk {chunk} (byte {at}): the chunks up to it decompress to more \
+                             than {MAX_EXPANSION}× their size (not a replay this server writes)"
+                        ));
+                    }
+                    let join = !first
+                        && block_text + content <= BLOCK_TEXT_BYTES
+                        && self
+                            .blocks
+                            .last()
+                            .is_some_and(|b| u64::from(b.len) + len <= BLOCK_BYTES);
+                    block_text = if join { block_text + content } else { content };
+                    self.file_piece(at, len, join);
+                    first = false;
+                    self.walk.last = Some(Block {
+                        offset: at,
+                        len: len as u32,
+                    });
+                    self.walk.offset += len;
+                    self.walk.number += 1;
+                    pos += len as usize;
+                }
+                Measured::Trailer { .. } if trailer => break Some("a second trailer".into()),
+                Measured::Trailer { footer_at } => {
+                    trailer = true;
+                    self.walk.offset += TRAILER_BYTES as u64;
+                    pos += TRAILER_BYTES;
+                    if let Some(problem) = self.take_chunked_footer(file, footer_at) {
+                        break Some(problem);
+                    }
+                }
+                Measured::Bad(why) => break Some(format!("chunk {chunk} (byte {at}): {why}")),
+            }
+        };
+        self.problem = problem;
+        Ok(())
     }
 
-    /// Whether no frame is indexed.
-    pub fn is_empty(&self) -> bool {
-        self.frames.is_empty()
+    /// Reads the footer from the chunk the trailer names, which must be the last one
+    /// walked, and takes it out of the last block; or says why not.
+    fn take_chunked_footer(&mut self, file: &File, footer_at: u64) -> Option<String> {
+        let last = self.walk.last.filter(|last| last.offset == footer_at);
+        let Some(last) = last else {
+            return chunks::trailer_problem(footer_at, self.walk.last.map(|l| l.offset));
+        };
+        let not_a_footer = || Some("the trailer names a chunk that is not a footer".into());
+        let mut packed = vec![0; last.len as usize];
+        if file.read_exact_at(&mut packed, last.offset).is_err() {
+            return not_a_footer();
+        }
+        let mut text = Vec::new();
+        let unpacked =
+            Unpacker::new(last.offset).and_then(|mut u| u.next(&mut &packed[..], &mut text));
+        let footer = match unpacked {
+            Ok(Piece::Chunk { .. }) => text.strip_suffix(b"\n").and_then(footer_of),
+            _ => None,
+        };
+        let Some(footer) = footer else {
+            return not_a_footer();
+        };
+        self.footer = Some(footer);
+        self.take_off_the_end(last.len);
+        None
     }
 
-    /// The tick of frame `k`.
-    pub fn tick(&self, k: usize) -> Option<u64> {
-        self.frames.get(k).map(|f| f.tick)
-    }
-
-    /// The first frame at or after `tick`: a binary search, whatever the file's size.
-    pub fn seek(&self, tick: u64) -> Option<usize> {
-        let k = self.frames.partition_point(|f| f.tick < tick);
-        (k < self.frames.len()).then_some(k)
-    }
-
-    /// Whether the file ends with its footer (and in format 2 its trailer) and nothing
-    /// is missing.
+    /// Whether the file ends with its footer (and in format 2 its trailer) and its walk
+    /// found nothing wrong. (A line inside that is not a record is found when it is
+    /// read.)
     pub fn complete(&self) -> bool {
         self.footer.is_some() && self.problem.is_none()
     }
 
-    /// Reads frames `from..` back from `file` (the file indexed): at least one if there
-    /// is one, then more, up to `most` of them, while they span at most `budget` bytes
-    /// (of the file in format 1, in one read; of frames in format 2, from the chunks
-    /// `cache` holds or decompresses).
+    /// How many frames the file holds, as its footer says: known without reading them
+    /// only for a complete file.
+    pub fn frames(&self) -> Option<u64> {
+        let footer = self.footer.as_ref().filter(|_| self.complete())?;
+        footer["frames"].as_u64()
+    }
+
+    /// Decodes block `k` into `cache` (unless it holds it already), learning what it
+    /// holds.
+    fn decode<'c>(
+        &self,
+        file: &File,
+        cache: &'c mut BlockCache,
+        k: u32,
+    ) -> io::Result<&'c Decoded> {
+        if cache.held.as_ref().is_some_and(|d| d.block == k) {
+            return Ok(cache.held.as_ref().expect("held"));
+        }
+        let block = self.blocks[k as usize];
+        let mut decoded = cache.held.take().unwrap_or_default();
+        decoded.block = k;
+        decoded.text.clear();
+        decoded.frames.clear();
+        cache.raw.resize(block.len as usize, 0);
+        file.read_exact_at(&mut cache.raw, block.offset)?;
+        let damaged = |why: &str| {
+            io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!("the block at byte {}: {why}", block.offset),
+            )
+        };
+        match self.encoding {
+            Encoding::Plain => decoded.text.extend_from_slice(&cache.raw),
+            Encoding::Zstd => {
+                let unpacker = match &mut cache.unpacker {
+                    Some(u) => u,
+                    None => cache.unpacker.insert(Unpacker::new(block.offset)?),
+                };
+                let mut input = &cache.raw[..];
+                while !input.is_empty() {
+                    match unpacker.next(&mut input, &mut cache.chunk)? {
+                        Piece::Chunk { .. } if cache.chunk.ends_with(b"\n") => {}
+                        Piece::Chunk { .. } => {
+                            return Err(damaged("a chunk does not end with a whole line"))
+                        }
+                        Piece::Bad { why, .. } => return Err(damaged(&why)),
+                        _ => return Err(damaged("a chunk does not read as when it was indexed")),
+                    }
+                    decoded.text.extend_from_slice(&cache.chunk);
+                }
+                // What a chunk of 2 MiB left is not kept for the next block.
+                if cache.chunk.capacity() > BLOCK_BYTES as usize {
+                    cache.chunk = Vec::new();
+                }
+            }
+        }
+        // The header's line opens a format 2 file's first chunk.
+        let mut start = match (self.encoding, k) {
+            (Encoding::Zstd, 0) => decoded
+                .text
+                .iter()
+                .position(|&b| b == b'\n')
+                .map_or(0, |n| n + 1),
+            _ => 0,
+        };
+        let mut lines = decoded.text[start..]
+            .split_inclusive(|&b| b == b'\n')
+            .peekable();
+        while let Some(line) = lines.next() {
+            let body = line.strip_suffix(b"\n").unwrap_or(line);
+            if body.len() > MAX_LINE_BYTES {
+                return Err(damaged("a line longer than 1 MiB: not a record"));
+            }
+            let kind: Kind = serde_json::from_slice(body)
+                .map_err(|e| damaged(&format!("a line that is not a record: {e}")))?;
+            match (kind.kind.as_deref(), kind.record.as_deref(), kind.tick) {
+                (Some("frame"), _, Some(tick)) => decoded.frames.push(Placed {
+                    tick,
+                    start: start as u32,
+                    len: body.len() as u32,
+                }),
+                // The bot log matters for checking a replay, not for watching one.
+                (_, Some("command" | "control"), Some(_)) => {}
+                // The footer of a file cut before its trailer: nothing follows it.
+                (_, Some("footer"), _) if lines.peek().is_none() => {}
+                (_, Some("footer"), _) => return Err(damaged("a line follows the footer")),
+                _ => {
+                    return Err(damaged(
+                        "a line that is not a frame, command, control or footer record",
+                    ))
+                }
+            }
+            start += line.len();
+        }
+        let frames = &decoded.frames;
+        self.learned[k as usize].get_or_init(|| Learned {
+            frames: frames.len() as u32,
+            first_tick: frames.first().map_or(0, |f| f.tick),
+            last_tick: frames.last().map_or(0, |f| f.tick),
+        });
+        Ok(cache.held.insert(decoded))
+    }
+
+    /// What block `k` holds, decoding it if nobody has yet.
+    fn learn(&self, file: &File, cache: &mut BlockCache, k: u32) -> io::Result<Learned> {
+        if let Some(learned) = self.learned[k as usize].get() {
+            return Ok(*learned);
+        }
+        self.decode(file, cache, k)?;
+        Ok(*self.learned[k as usize].get().expect("decoding learns"))
+    }
+
+    fn block_count(&self) -> u32 {
+        self.blocks.len() as u32
+    }
+
+    /// Whether `at` is past the last frame of the file as indexed.
+    pub fn is_end(&self, at: At) -> bool {
+        at.block >= self.block_count()
+    }
+
+    /// The ticks of the file's first and last frames (None without frames), looked for
+    /// in at most [`ENDS_LOOKED_AT`] blocks from each end.
+    pub fn ends(
+        &self,
+        file: &File,
+        cache: &mut BlockCache,
+    ) -> io::Result<(Option<u64>, Option<u64>)> {
+        let n = self.block_count();
+        let mut first = None;
+        for k in (0..n).take(ENDS_LOOKED_AT) {
+            let learned = self.learn(file, cache, k)?;
+            if learned.frames > 0 {
+                first = Some(learned.first_tick);
+                break;
+            }
+        }
+        let mut last = None;
+        for k in (0..n).rev().take(ENDS_LOOKED_AT) {
+            let learned = self.learn(file, cache, k)?;
+            if learned.frames > 0 {
+                last = Some(learned.last_tick);
+                break;
+            }
+        }
+        Ok((first, last))
+    }
+
+    /// The first frame at or after `tick` (a file's ticks never go back): a binary
+    /// search over the blocks, then over the frames of one. None if every frame is
+    /// before it.
+    pub fn seek(&self, file: &File, cache: &mut BlockCache, tick: u64) -> io::Result<Option<At>> {
+        // The first block with a frame at or after `tick` is in lo..=hi (hi: none).
+        let (mut lo, mut hi) = (0, self.block_count());
+        while lo < hi {
+            let mid = lo + (hi - lo) / 2;
+            // The first block from `mid` on (before `hi`) with frames.
+            let mut found = None;
+            for k in mid..hi {
+                let learned = self.learn(file, cache, k)?;
+                if learned.frames > 0 {
+                    found = Some((k, learned));
+                    break;
+                }
+            }
+            match found {
+                None => hi = mid,
+                Some((k, learned)) if learned.last_tick < tick => lo = k + 1,
+                Some((k, _)) => hi = k,
+            }
+        }
+        // Blocks from `hi` on to the first with frames have none: that one is it.
+        for k in hi..self.block_count() {
+            if self.learn(file, cache, k)?.frames > 0 {
+                let decoded = self.decode(file, cache, k)?;
+                let frame = decoded.frames.partition_point(|f| f.tick < tick) as u32;
+                return Ok(Some(At { block: k, frame }));
+            }
+        }
+        Ok(None)
+    }
+
+    /// Where the frames up to `most` before `at` start, but not before `floor` (both
+    /// places of frames, `floor` not after `at`), and how many frames that is: where a
+    /// seek's lead-in starts.
+    pub fn back(
+        &self,
+        file: &File,
+        cache: &mut BlockCache,
+        at: At,
+        floor: At,
+        most: u64,
+    ) -> io::Result<(At, u64)> {
+        let (mut place, mut left) = (at, most);
+        loop {
+            let available = if place.block == floor.block {
+                place.frame.saturating_sub(floor.frame)
+            } else {
+                place.frame
+            };
+            let taken = u64::from(available).min(left);
+            place.frame -= taken as u32;
+            left -= taken;
+            if left == 0 || place.block <= floor.block {
+                return Ok((place, most - left));
+            }
+            let k = place.block - 1;
+            place = At {
+                block: k,
+                frame: self.learn(file, cache, k)?.frames,
+            };
+        }
+    }
+
+    /// Reads frames from `from` on (the first frame at or after it): at least one if
+    /// there is one, then more, up to `most` of them, while their text is at most
+    /// `budget` bytes; and where the next read goes on. Empty at the end of the file.
     pub fn read(
         &self,
         file: &File,
-        cache: &mut ChunkCache,
-        from: usize,
+        cache: &mut BlockCache,
+        from: At,
         most: usize,
         budget: usize,
-    ) -> io::Result<Vec<String>> {
-        let Some(first) = self.frames.get(from) else {
-            return Ok(Vec::new());
-        };
-        if first.chunk != IN_FILE {
-            return self.read_chunked(file, cache, from, most, budget);
-        }
-        let end_of = |f: &FrameAt| f.offset + u64::from(f.len);
-        let last = self.frames[from..]
-            .iter()
-            .take(most)
-            .take_while(|f| end_of(f) - first.offset <= budget as u64)
-            .count()
-            .max(1);
-        let batch = &self.frames[from..from + last];
-        let mut bytes = vec![0; (end_of(&batch[last - 1]) - first.offset) as usize];
-        file.read_exact_at(&mut bytes, first.offset)?;
-        Ok(batch
-            .iter()
-            .map(|f| {
-                let at = (f.offset - first.offset) as usize;
-                String::from_utf8_lossy(&bytes[at..at + f.len as usize]).into_owned()
-            })
-            .collect())
-    }
-
-    fn read_chunked(
-        &self,
-        file: &File,
-        cache: &mut ChunkCache,
-        from: usize,
-        most: usize,
-        budget: usize,
-    ) -> io::Result<Vec<String>> {
-        let mut frames = Vec::new();
-        let mut spent = 0;
-        for f in self.frames[from..].iter().take(most) {
-            let len = f.len as usize;
+    ) -> io::Result<(Vec<Frame>, At)> {
+        let (mut frames, mut at, mut spent) = (Vec::new(), from, 0);
+        while frames.len() < most && !self.is_end(at) {
+            // A block known to have nothing more is not decoded again.
+            if self.learned[at.block as usize]
+                .get()
+                .is_some_and(|l| at.frame >= l.frames)
+            {
+                at = at.next_block();
+                continue;
+            }
+            let decoded = self.decode(file, cache, at.block)?;
+            let Some(placed) = decoded.frames.get(at.frame as usize) else {
+                at = at.next_block();
+                continue;
+            };
+            let len = placed.len as usize;
             if !frames.is_empty() && spent + len > budget {
                 break;
             }
-            let text = cache.chunk(file, f.chunk, self.chunks[f.chunk as usize])?;
-            let at = f.offset as usize;
-            let line = text.get(at..at + len).ok_or_else(|| changed(f.chunk))?;
-            frames.push(String::from_utf8_lossy(line).into_owned());
+            let line = &decoded.text[placed.start as usize..][..len];
+            frames.push(Frame {
+                tick: placed.tick,
+                text: String::from_utf8_lossy(line).into_owned(),
+            });
             spent += len;
+            at.frame += 1;
         }
-        Ok(frames)
+        Ok((frames, at))
     }
 }
 
-/// The error of a chunk that no longer reads as it did when it was indexed.
-fn changed(chunk: u32) -> io::Error {
-    io::Error::new(
-        io::ErrorKind::InvalidData,
-        format!(
-            "chunk {} no longer reads as when it was indexed (the file changed)",
-            chunk + 1
-        ),
-    )
+/// How many blocks from each end [`Index::ends`] looks at for a frame: a file this
+/// writes has frames in its first and last; one with thousands of blocks of none is
+/// not worth decoding whole to open.
+const ENDS_LOOKED_AT: usize = 64;
+
+/// `line` as a footer record, if it is one.
+fn footer_of(line: &[u8]) -> Option<Value> {
+    serde_json::from_slice::<Value>(line)
+        .ok()
+        .filter(|v| v["record"] == "footer")
 }
 
-/// One reader's decompressed chunks of a format 2 file: the two it read last, so that
-/// playing on through a chunk, or a batch that spans two, decompresses each once.
+/// A frame's place in its decoded block.
+#[derive(Debug, Clone, Copy)]
+struct Placed {
+    tick: u64,
+    start: u32,
+    len: u32,
+}
+
+/// A block read and parsed.
+#[derive(Debug, Default)]
+struct Decoded {
+    block: u32,
+    text: Vec<u8>,
+    frames: Vec<Placed>,
+}
+
+/// One reader's last decoded block, for the frames after it, and the buffers decoding
+/// reuses. It holds at most a block: 4 MiB of text and its frames' places.
 #[derive(Default)]
-pub struct ChunkCache {
-    held: VecDeque<(u32, Vec<u8>)>,
+pub struct BlockCache {
+    held: Option<Decoded>,
+    raw: Vec<u8>,
+    chunk: Vec<u8>,
     unpacker: Option<Unpacker>,
-}
-
-impl ChunkCache {
-    /// Chunks held at most.
-    const HELD: usize = 2;
-
-    /// Chunk `k`, at `at` in `file`, decompressed.
-    fn chunk(&mut self, file: &File, k: u32, at: ChunkAt) -> io::Result<&[u8]> {
-        if let Some(i) = self.held.iter().position(|(j, _)| *j == k) {
-            return Ok(&self.held[i].1);
-        }
-        let mut packed = vec![0; at.len as usize];
-        file.read_exact_at(&mut packed, at.offset)?;
-        let unpacker = match &mut self.unpacker {
-            Some(u) => u,
-            None => self.unpacker.insert(Unpacker::new(at.offset)?),
-        };
-        let mut text = match self.held.len() {
-            n if n >= Self::HELD => self.held.pop_front().expect("held").1,
-            _ => Vec::new(),
-        };
-        match unpacker.next(&mut &packed[..], &mut text)? {
-            Piece::Chunk { len, .. } if len == u64::from(at.len) => {}
-            _ => return Err(changed(k)),
-        }
-        self.held.push_back((k, text));
-        Ok(&self.held.back().expect("just pushed").1)
-    }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{next_line, ChunkCache, Index, Line};
+    use super::{next_line, At, BlockCache, Frame, Index, Line, BLOCK_BYTES, MAX_EXPANSION};
+    use crate::replay::chunks::{Packer, LEVEL, MAGIC};
     use crate::replay::{Encoding, Recorder};
     use std::io::Write;
 
     const HEADER: &str = r#"{"record":"header","format":1,"match":{"id":"m"},"scenario":{"sport":"baseball"},"seed":1}"#;
 
-    fn file_of(text: &str) -> std::fs::File {
-        let mut file = tempfile();
-        file.write_all(text.as_bytes()).unwrap();
-        file
+    fn tempfile() -> std::fs::File {
+        tempfile::tempfile().unwrap()
     }
 
-    fn file_of_bytes(bytes: &[u8]) -> std::fs::File {
+    fn file_of(bytes: &[u8]) -> std::fs::File {
         let mut file = tempfile();
         file.write_all(bytes).unwrap();
         file
     }
 
-    fn tempfile() -> std::fs::File {
-        let path = std::env::temp_dir().join(format!(
-            "fieldhouse-index-{}-{:?}",
-            std::process::id(),
-            std::thread::current().id()
-        ));
-        let file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(&path)
-            .unwrap();
-        std::fs::remove_file(&path).unwrap();
-        file
-    }
+    /// A small deterministic generator, so that the files are the same on every run.
+    struct Lcg(u64);
 
-    fn frame(tick: u64) -> String {
-        format!(
-            r#"{{"type":"frame","tick":{tick},"x":"{}"}}"#,
-            "y".repeat(tick as usize % 7)
-        )
-    }
-
-    #[test]
-    fn frames_are_found_by_tick_and_read_back_byte_for_byte() {
-        let mut text = format!("{HEADER}\n");
-        for t in (0..1000).step_by(2) {
-            text += &frame(t);
-            text += "\n";
-            if t % 10 == 0 {
-                text += &format!(r#"{{"record":"control","tick":{t},"agent":"cf","bot":true}}"#);
-                text += "\n";
-            }
+    impl Lcg {
+        fn next(&mut self) -> u64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            self.0 >> 33
         }
-        text += r#"{"record":"footer","tick":998,"frames":500,"hash":"h","reason":"finished","result":{}}"#;
-        text += "\n";
-        let file = file_of(&text);
-        let index = Index::build(&file).unwrap();
-        assert_eq!(index.len(), 500);
-        assert!(index.complete(), "{:?}", index.problem);
-        // Seeking is a binary search: the first frame at or after the tick.
-        assert_eq!(index.seek(0), Some(0));
-        assert_eq!(index.seek(501), Some(251));
-        assert_eq!(index.tick(251), Some(502));
-        assert_eq!(index.seek(999), None);
-        // A batch is what fits the budget, and always at least one frame.
-        let batch = index
-            .read(&file, &mut ChunkCache::default(), 251, 64, 200)
-            .unwrap();
-        assert!(!batch.is_empty() && batch.len() < 10, "{}", batch.len());
-        assert_eq!(batch[0], frame(502));
-        assert_eq!(batch[1], frame(504));
-        assert_eq!(
-            index
-                .read(&file, &mut ChunkCache::default(), 0, 3, 1 << 20)
-                .unwrap()
-                .len(),
-            3
-        );
-        assert_eq!(
-            index
-                .read(&file, &mut ChunkCache::default(), 499, 64, 1)
-                .unwrap(),
-            vec![frame(998)]
-        );
-        assert!(index
-            .read(&file, &mut ChunkCache::default(), 500, 64, 1000)
-            .unwrap()
-            .is_empty());
-    }
 
-    #[test]
-    fn a_torn_or_endless_line_ends_the_readable_prefix() {
-        let torn = file_of(&format!("{HEADER}\n{}\n{{\"type\":\"fra", frame(0)));
-        let index = Index::build(&torn).unwrap();
-        assert_eq!(index.len(), 1);
-        assert!(index.problem.unwrap().contains("torn"));
-        // A header with no end is not read for ever.
-        let endless = file_of(&"x".repeat(2 * 1024 * 1024));
-        assert!(Index::build(&endless).is_err());
-    }
-
-    #[test]
-    fn a_grown_file_is_scanned_on_from_where_its_index_stopped() {
-        let mut text = format!("{HEADER}\n");
-        for t in 0..100 {
-            text += &frame(t);
-            text += "\n";
+        fn hex(&mut self, n: usize) -> String {
+            (0..n).map(|_| format!("{:x}", self.next() % 16)).collect()
         }
-        // Cut in the middle of a frame being written.
-        let cut = text.len() - 10;
-        let mut file = file_of(&text[..cut]);
-        let before = Index::build(&file).unwrap();
-        assert_eq!(before.len(), 99);
-        assert!(before.problem.as_ref().unwrap().contains("torn"));
-        file.write_all(&text.as_bytes()[cut..]).unwrap();
-        file.write_all(format!("{}\n", frame(100)).as_bytes())
-            .unwrap();
-        let grown = before.grown(&file).unwrap().unwrap();
-        assert_eq!(grown.len(), 101);
-        assert_eq!(grown.problem, None);
-        assert_eq!(
-            grown
-                .read(&file, &mut ChunkCache::default(), 99, 2, 1 << 20)
-                .unwrap(),
-            vec![frame(99), frame(100)]
-        );
-        let whole = Index::build(&file).unwrap();
-        assert_eq!(grown.frames, whole.frames);
-        assert_eq!(grown.scanned, whole.scanned);
-        // A file that ended at a record that does not read is not scanned on.
-        let bad = file_of(&format!("{HEADER}\n{}\nnot json\n", frame(0)));
-        assert!(Index::build(&bad).unwrap().grown(&bad).is_none());
     }
 
-    /// A format 2 file of `frames` frames (ticks 0, 2, ...), with a control record every
-    /// tenth, finished if `finish`: its bytes.
-    fn chunked(frames: u64, finish: bool) -> Vec<u8> {
+    /// A replay of `frames` frames, in `encoding`, finished if `finish`: its bytes and
+    /// its frames in order (the oracle the index is checked against). Ticks go up by 0
+    /// to 3, and now and then a long run of control records makes blocks without
+    /// frames.
+    fn sample(encoding: Encoding, frames: usize, seed: u64, finish: bool) -> (Vec<u8>, Vec<Frame>) {
+        let mut rng = Lcg(seed);
         let file = tempfile();
         let header: serde_json::Value = serde_json::from_str(HEADER).unwrap();
-        let mut r = Recorder::new(
-            std::io::BufWriter::new(file.try_clone().unwrap()),
-            &header,
-            Encoding::Zstd,
-        )
-        .unwrap();
+        let out = std::io::BufWriter::new(file.try_clone().unwrap());
+        let mut r = Recorder::new(out, &header, encoding).unwrap();
+        let mut truth = Vec::new();
+        let mut tick = rng.next() % 5;
         for k in 0..frames {
-            r.frame(&frame(2 * k)).unwrap();
-            if k % 10 == 0 {
-                r.log(&format!(
-                    r#"{{"record":"control","tick":{k},"agent":"cf","bot":true}}"#
-                ))
-                .unwrap();
+            let text = format!(r#"{{"type":"frame","tick":{tick},"x":"{}"}}"#, rng.hex(150));
+            r.frame(&text).unwrap();
+            truth.push(Frame { tick, text });
+            if k % 700 == 350 {
+                for _ in 0..1500 {
+                    let c = format!(
+                        r#"{{"record":"control","tick":{tick},"agent":"cf","bot":true,"x":"{}"}}"#,
+                        rng.hex(160)
+                    );
+                    r.log(&c).unwrap();
+                }
             }
+            tick += rng.next() % 4;
         }
         if finish {
-            r.finish(2 * frames, "finished", &serde_json::json!({}))
-                .unwrap();
+            let result = serde_json::json!({});
+            r.finish(tick, "finished", &result).unwrap();
         } else {
             r.cut().unwrap();
             r.flush().unwrap();
@@ -640,89 +843,279 @@ mod tests {
         let mut bytes = Vec::new();
         std::io::Seek::rewind(&mut &file).unwrap();
         std::io::Read::read_to_end(&mut &file, &mut bytes).unwrap();
+        (bytes, truth)
+    }
+
+    /// Every frame, read from the start a batch at a time.
+    fn read_all(
+        index: &Index,
+        file: &std::fs::File,
+        cache: &mut BlockCache,
+    ) -> std::io::Result<Vec<Frame>> {
+        let (mut all, mut at) = (Vec::new(), At::START);
+        loop {
+            let (batch, next) = index.read(file, cache, at, 64, 16 * 1024)?;
+            if batch.is_empty() {
+                assert!(index.is_end(next));
+                return Ok(all);
+            }
+            all.extend(batch);
+            at = next;
+        }
+    }
+
+    const ENCODINGS: [Encoding; 2] = [Encoding::Plain, Encoding::Zstd];
+
+    #[test]
+    fn every_frame_reads_back_byte_for_byte_and_seeks_agree_with_a_linear_search() {
+        for encoding in ENCODINGS {
+            let (bytes, truth) = sample(encoding, 3000, 7, true);
+            let file = file_of(&bytes);
+            let index = Index::build(&file).unwrap();
+            assert!(index.complete(), "{encoding:?}: {:?}", index.problem);
+            assert_eq!(index.frames(), Some(3000));
+            assert!(
+                index.blocks.len() > 4,
+                "{encoding:?}: {} blocks",
+                index.blocks.len()
+            );
+            // Nothing is decoded to open a file.
+            assert!(index.learned.iter().all(|l| l.get().is_none()));
+            let mut cache = BlockCache::default();
+            assert_eq!(read_all(&index, &file, &mut cache).unwrap(), truth);
+            let ends = index.ends(&file, &mut cache).unwrap();
+            assert_eq!(ends, (Some(truth[0].tick), Some(truth[2999].tick)));
+            // Some blocks hold only control records.
+            assert!(index.learned.iter().any(|l| l.get().unwrap().frames == 0));
+            let last = truth[2999].tick;
+            for tick in (0..=last + 2).step_by(7).chain([0, 1, last, last + 1]) {
+                let mut fresh = BlockCache::default();
+                let expected = truth.iter().position(|f| f.tick >= tick);
+                let found = index.seek(&file, &mut fresh, tick).unwrap();
+                match (expected, found) {
+                    (None, None) => {}
+                    (Some(k), Some(at)) => {
+                        let (got, _) = index.read(&file, &mut fresh, at, 1, 1).unwrap();
+                        assert_eq!(got[0], truth[k], "{encoding:?}: seek {tick}");
+                        // The lead-in: up to `most` frames back, never before the floor.
+                        let floor_tick = tick.saturating_sub(40);
+                        let floor_k = truth.iter().position(|f| f.tick >= floor_tick).unwrap();
+                        let floor = index.seek(&file, &mut fresh, floor_tick).unwrap().unwrap();
+                        for most in [0, 1, 5, 30, 1000] {
+                            let (start, n) =
+                                index.back(&file, &mut fresh, at, floor, most).unwrap();
+                            let first = k - (k - floor_k).min(most as usize);
+                            assert_eq!(n as usize, k - first, "{encoding:?}: back {most} from {k}");
+                            let (got, _) = index.read(&file, &mut fresh, start, 1, 1).unwrap();
+                            assert_eq!(got[0], truth[first], "{encoding:?}: back {most} from {k}");
+                        }
+                    }
+                    other => panic!("{encoding:?}: seek {tick}: {other:?}"),
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_file_cut_anywhere_reads_a_prefix_and_grows_to_the_whole() {
+        for encoding in ENCODINGS {
+            let (whole, truth) = sample(encoding, 800, 11, true);
+            let step = whole.len() / 37;
+            for cut in (200..whole.len())
+                .step_by(step)
+                .chain(whole.len() - 25..whole.len())
+            {
+                let file = file_of(&whole[..cut]);
+                let before = match Index::build(&file) {
+                    Ok(index) => index,
+                    // Cut inside the header.
+                    Err(_) => continue,
+                };
+                assert!(!before.complete(), "{encoding:?}: cut at {cut}");
+                if let Some(problem) = &before.problem {
+                    assert!(problem.contains("torn"), "{encoding:?}: {problem}");
+                }
+                let read = read_all(&before, &file, &mut BlockCache::default()).unwrap();
+                assert_eq!(read[..], truth[..read.len()], "{encoding:?}: cut at {cut}");
+                // Where the writer goes on: the file's end, whatever reading moved.
+                std::os::unix::fs::FileExt::write_all_at(&file, &whole[cut..], cut as u64).unwrap();
+                let grown = before.grown(&file).unwrap().unwrap();
+                assert!(
+                    grown.complete(),
+                    "{encoding:?}: cut at {cut}: {:?}",
+                    grown.problem
+                );
+                assert_eq!(
+                    read_all(&grown, &file, &mut BlockCache::default()).unwrap(),
+                    truth
+                );
+                assert_eq!(grown.frames(), Some(800));
+            }
+            // A file whose writer cut its last chunk reads to its last frame, incomplete.
+            let (unfinished, truth) = sample(encoding, 130, 3, false);
+            let file = file_of(&unfinished);
+            let index = Index::build(&file).unwrap();
+            assert_eq!(index.problem, None);
+            assert!(!index.complete());
+            assert_eq!(index.frames(), None);
+            assert_eq!(
+                read_all(&index, &file, &mut BlockCache::default()).unwrap(),
+                truth
+            );
+        }
+    }
+
+    #[test]
+    fn damage_inside_a_block_ends_the_readable_part_there_and_nothing_else_is_misread() {
+        for encoding in ENCODINGS {
+            let (mut bytes, truth) = sample(encoding, 2000, 5, true);
+            // In the middle of frame 1000: a quote in a format 1 line, any byte of a
+            // format 2 chunk (its checksum fails).
+            match encoding {
+                Encoding::Plain => {
+                    let text = truth[1000].text.as_bytes();
+                    let k = bytes.windows(text.len()).position(|w| w == text).unwrap();
+                    bytes[k + text.len() / 2] = b'"';
+                }
+                Encoding::Zstd => {
+                    let clean_file = file_of(&bytes);
+                    let clean = Index::build(&clean_file).unwrap();
+                    let mut cache = BlockCache::default();
+                    let at = clean
+                        .seek(&clean_file, &mut cache, truth[1000].tick)
+                        .unwrap()
+                        .unwrap();
+                    let block = clean.blocks[at.block as usize];
+                    let k = block.offset as usize + block.len as usize / 2;
+                    bytes[k] ^= 0x5a;
+                }
+            }
+            let file = file_of(&bytes);
+            let index = Index::build(&file).unwrap();
+            let mut cache = BlockCache::default();
+            let (mut read, mut at) = (Vec::new(), At::START);
+            let error = loop {
+                match index.read(&file, &mut cache, at, 64, 1 << 20) {
+                    Ok((batch, _)) if batch.is_empty() => break None,
+                    Ok((batch, next)) => {
+                        read.extend(batch);
+                        at = next;
+                    }
+                    Err(e) => break Some(e.to_string()),
+                }
+            };
+            assert_eq!(read[..], truth[..read.len()], "{encoding:?}");
+            assert!(
+                read.len() <= 1000,
+                "{encoding:?}: {} frames read",
+                read.len()
+            );
+            // The blocks before the damaged one are read (a block holds a few hundred
+            // of these frames).
+            assert!(
+                read.len() >= 250,
+                "{encoding:?}: {} frames read",
+                read.len()
+            );
+            let error = error
+                .or(index.problem.clone())
+                .expect("the damage is found");
+            assert!(error.contains("byte"), "{encoding:?}: {error}");
+        }
+    }
+
+    #[test]
+    fn a_grown_file_is_walked_on_and_an_endless_line_is_not_read_for_ever() {
+        let torn = file_of(
+            format!("{HEADER}\n{{\"type\":\"frame\",\"tick\":0}}\n{{\"type\":\"fra").as_bytes(),
+        );
+        let index = Index::build(&torn).unwrap();
+        assert!(index.problem.as_ref().unwrap().contains("torn"));
+        assert_eq!(
+            read_all(&index, &torn, &mut BlockCache::default())
+                .unwrap()
+                .len(),
+            1
+        );
+        // A header with no end is not read for ever.
+        assert!(Index::build(&file_of(&vec![b'x'; 2 << 20])).is_err());
+        // Nor a line after it.
+        let mut long = format!("{HEADER}\n").into_bytes();
+        long.resize(long.len() + (1 << 20) + 10, b'x');
+        let index = Index::build(&file_of(&long)).unwrap();
+        assert!(index.problem.unwrap().contains("longer than 1 MiB"));
+    }
+
+    /// Chunks of tiny frames, each 2 MiB decompressed from a few hundred bytes: what
+    /// made the old index hold 8.8 GB per MB of file.
+    fn dense(chunks: usize) -> Vec<u8> {
+        let mut packer = Packer::new(LEVEL).unwrap();
+        let mut bytes = packer
+            .pack(format!("{HEADER}\n").as_bytes())
+            .unwrap()
+            .to_vec();
+        for c in 0..chunks {
+            let mut text = Vec::new();
+            let mut k = 0;
+            while text.len() < (2 << 20) - 64 {
+                writeln!(
+                    text,
+                    r#"{{"type":"frame","tick":{}}}"#,
+                    c * 1_000_000 + k / 1000
+                )
+                .unwrap();
+                k += 1;
+            }
+            bytes.extend_from_slice(packer.pack(&text).unwrap());
+        }
         bytes
     }
 
     #[test]
-    fn a_chunked_file_is_indexed_by_chunk_and_read_back_through_a_cache() {
-        let bytes = chunked(1000, true);
-        assert_eq!(&bytes[..4], &crate::replay::chunks::MAGIC);
-        let file = file_of_bytes(&bytes);
+    fn frame_dense_files_cost_an_index_entry_per_block_not_per_frame() {
+        let bytes = dense(20);
+        assert_eq!(&bytes[..4], &MAGIC);
+        let file = file_of(&bytes);
         let index = Index::build(&file).unwrap();
-        assert_eq!(index.encoding, Encoding::Zstd);
-        assert_eq!(index.header["format"], 2);
-        assert!(index.complete(), "{:?}", index.problem);
-        assert_eq!(index.len(), 1000);
-        // Chunks of 60 lines: the header's, 1100 lines in 19, the footer's.
-        assert_eq!(index.chunks.len(), 1 + 19 + 1);
-        assert_eq!(index.seek(501), Some(251));
-        let mut cache = ChunkCache::default();
-        // Played through: every frame, byte for byte, each chunk decompressed once.
-        let mut k = 0;
-        while k < index.len() {
-            let batch = index.read(&file, &mut cache, k, 64, 64 * 1024).unwrap();
-            for (j, f) in batch.iter().enumerate() {
-                assert_eq!(*f, frame(2 * (k + j) as u64));
-            }
-            k += batch.len();
-        }
-        assert!(cache.held.len() <= 2);
-        // A budget smaller than a frame still gives one.
-        assert_eq!(
-            index.read(&file, &mut cache, 999, 64, 1).unwrap(),
-            vec![frame(1998)]
+        // 1.6 million frames in 20 chunks: 21 blocks at most, none decoded yet.
+        assert!(index.blocks.len() <= 21, "{}", index.blocks.len());
+        assert_eq!(index.problem, None);
+        assert!(index.learned.iter().all(|l| l.get().is_none()));
+        // Seeks find their frame by decoding a handful of blocks.
+        let mut cache = BlockCache::default();
+        let at = index.seek(&file, &mut cache, 7_000_050).unwrap().unwrap();
+        let (got, _) = index.read(&file, &mut cache, at, 1, 1).unwrap();
+        assert_eq!(got[0].text, r#"{"type":"frame","tick":7000050}"#);
+        let decoded = index.learned.iter().filter(|l| l.get().is_some()).count();
+        assert!(decoded <= 6, "{decoded} blocks decoded for one seek");
+        // Past what any replay expands to, the file is read no further.
+        let bytes = dense(40);
+        let index = Index::build(&file_of(&bytes)).unwrap();
+        let problem = index.problem.unwrap();
+        assert!(
+            problem.contains(&format!("more than {MAX_EXPANSION}×")),
+            "{problem}"
+        );
+        let most = (super::EXPANSION_SLACK + MAX_EXPANSION * bytes.len() as u64) >> 21;
+        assert!(
+            index.blocks.len() as u64 <= most + 1,
+            "{} blocks",
+            index.blocks.len()
         );
     }
 
     #[test]
-    fn a_chunked_file_being_written_is_indexed_by_whole_chunks_and_grows() {
-        let whole = chunked(300, true);
-        let complete = Index::build(&file_of_bytes(&whole)).unwrap();
-        // Cut at many places, mid-chunk and mid-trailer included: the index holds the
-        // frames of the whole chunks before the cut, and grows to the complete one.
-        let after_header = complete.chunks[1].offset as usize;
-        for cut in (after_header..whole.len())
-            .step_by(97)
-            .chain(whole.len() - 15..whole.len())
-        {
-            let mut file = file_of_bytes(&whole[..cut]);
-            let before = Index::build(&file).unwrap();
-            assert!(!before.complete(), "cut at {cut}");
-            let shown = before.len();
-            assert!(shown <= 300);
-            assert_eq!(before.frames[..], complete.frames[..shown], "cut at {cut}");
-            if let Some(problem) = &before.problem {
-                assert!(
-                    problem.contains("torn") || problem.contains("trailer"),
-                    "{problem}"
-                );
+    fn blocks_stay_within_their_bound() {
+        for encoding in ENCODINGS {
+            let (bytes, _) = sample(encoding, 3000, 9, true);
+            let index = Index::build(&file_of(&bytes)).unwrap();
+            for pair in index.blocks.windows(2) {
+                assert_eq!(pair[0].offset + u64::from(pair[0].len), pair[1].offset);
+                assert!(u64::from(pair[0].len) <= BLOCK_BYTES);
+                // A block was closed only because the next piece did not fit.
+                assert!(u64::from(pair[0].len + pair[1].len) > BLOCK_BYTES / 2);
             }
-            file.write_all(&whole[cut..]).unwrap();
-            let grown = before.grown(&file).unwrap().unwrap();
-            assert!(grown.complete(), "cut at {cut}: {:?}", grown.problem);
-            assert_eq!(grown.frames, complete.frames);
-            assert_eq!(grown.chunks, complete.chunks);
         }
-        // A file whose writer cut its last chunk reads to its last frame, incomplete.
-        let unfinished = Index::build(&file_of_bytes(&chunked(130, false))).unwrap();
-        assert_eq!(unfinished.len(), 130);
-        assert_eq!(unfinished.problem, None);
-        assert!(!unfinished.complete());
-    }
-
-    #[test]
-    fn a_corrupt_chunk_ends_the_readable_prefix_and_is_not_scanned_on() {
-        let mut bytes = chunked(300, true);
-        let complete = Index::build(&file_of_bytes(&bytes)).unwrap();
-        let third = complete.chunks[3];
-        bytes[third.offset as usize + third.len as usize / 2] ^= 0xff;
-        let file = file_of_bytes(&bytes);
-        let index = Index::build(&file).unwrap();
-        let problem = index.problem.clone().unwrap();
-        assert!(problem.starts_with("chunk 4 (byte"), "{problem}");
-        assert_eq!(index.frames[..], complete.frames[..index.len()]);
-        assert!(index.len() < complete.len());
-        assert!(index.grown(&file).is_none());
     }
 
     #[test]

@@ -62,7 +62,7 @@ pub mod chunks;
 mod index;
 mod verify;
 
-pub use index::{ChunkCache, Index, MAX_LINE_BYTES};
+pub use index::{At, BlockCache, Frame, Index, MAX_LINE_BYTES};
 pub use verify::{verify, Mismatch, Verified};
 
 use crate::sim::{Action, Scenario};
