@@ -56,7 +56,9 @@
 //! is reported ended.
 //!
 //! **Reading.** [`read`] and [`parse`] take a whole file, for tools; the server reads
-//! through an [`Index`] and [`peek`], which bound every line and chunk they read.
+//! through an [`Index`] (an entry per block of the file, never per frame, so a file's
+//! index is bounded by its bytes) and [`peek`], which bound every line and chunk they
+//! read.
 
 pub mod chunks;
 mod index;

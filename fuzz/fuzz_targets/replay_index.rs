@@ -1,0 +1,58 @@
+//! A replay file, any bytes (truncated, corrupted, hostile), opened as the server opens
+//! one for its viewers: walked into a block index, then played through, sought and
+//! sought back with a lead-in. Never a panic, and reading stops (an error or the end).
+#![no_main]
+
+use fieldhouse_core::replay::{At, BlockCache, Index};
+use libfuzzer_sys::fuzz_target;
+use std::fs::File;
+use std::os::unix::fs::FileExt;
+use std::sync::OnceLock;
+
+/// One file for every input, unlinked at once: the index reads a file, not bytes.
+fn file() -> &'static File {
+    static FILE: OnceLock<File> = OnceLock::new();
+    FILE.get_or_init(|| {
+        let path = std::env::temp_dir().join(format!("fuzz-replay-index-{}", std::process::id()));
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(&path)
+            .unwrap();
+        std::fs::remove_file(&path).unwrap();
+        file
+    })
+}
+
+fuzz_target!(|data: &[u8]| {
+    let file = file();
+    file.set_len(0).unwrap();
+    file.write_all_at(data, 0).unwrap();
+    let Ok(index) = Index::build(file) else {
+        return;
+    };
+    let _ = (index.complete(), index.frames(), index.walked());
+    let mut cache = BlockCache::default();
+    let Ok((first, last)) = index.ends(file, &mut cache) else {
+        return;
+    };
+    // Played through, a batch at a time: the place always moves on.
+    let mut at = At::START;
+    for _ in 0..10_000 {
+        match index.read(file, &mut cache, at, 64, 64 * 1024) {
+            Ok((frames, next)) if !frames.is_empty() => {
+                assert!(next > at);
+                at = next;
+            }
+            _ => break,
+        }
+    }
+    for tick in [first.unwrap_or(0), last.unwrap_or(0), u64::MAX, 0] {
+        if let Ok(Some(found)) = index.seek(file, &mut cache, tick) {
+            let _ = index.back(file, &mut cache, found, At::START, 1000);
+            let _ = index.read(file, &mut cache, found, 4, 1024);
+        }
+    }
+});
