@@ -663,6 +663,287 @@ async fn retention_deletes_the_oldest_replays_and_never_the_one_being_written() 
     assert_eq!(seen_late["first_tick"], 0);
 }
 
+/// A server whose process may hold at most `descriptors` files and sockets at once (soft
+/// and hard limit: the server raises its soft limit to the hard one).
+fn server_with_descriptors(descriptors: u32, flags: &[&str]) -> Server {
+    let limit = format!("ulimit -n {descriptors} && exec \"$0\" \"$@\"");
+    Server::launch(&["sh", "-c", &limit], "info", flags)
+}
+
+/// Writes `count` small replays into `dir`, named `r000`, `r001`, ..., alternately format
+/// 2 and format 1, each a second newer than the one before (`r000` the oldest, modified
+/// `count` seconds ago); returns their names, oldest first.
+fn write_many_replays(dir: &Path, count: u64) -> Vec<String> {
+    // One of each format, copied: a recorder syncs each file it finishes, which for
+    // hundreds of files takes most of a minute.
+    let made = dir.join("made");
+    std::fs::create_dir_all(&made).unwrap();
+    write_compressed_replay(&made.join("two.jsonl.zst"), 3, 100);
+    write_replay(&made.join("one.jsonl"), 3, 100, true);
+    let two = std::fs::read(made.join("two.jsonl.zst")).unwrap();
+    let one = std::fs::read(made.join("one.jsonl")).unwrap();
+    std::fs::remove_dir_all(&made).unwrap();
+    let now = std::time::SystemTime::now();
+    (0..count)
+        .map(|k| {
+            let (name, bytes) = match k % 2 {
+                0 => (format!("r{k:03}.jsonl.zst"), &two),
+                _ => (format!("r{k:03}.jsonl"), &one),
+            };
+            let mut file = std::fs::File::create_new(dir.join(&name)).unwrap();
+            file.write_all(bytes).unwrap();
+            file.set_modified(now - Duration::from_secs(count - k))
+                .unwrap();
+            name
+        })
+        .collect()
+}
+
+/// Every page of the listing, `limit` replays a page, following `next` until there is
+/// none; each page asked for within 5 s and answered in under 3.
+fn pages(server: &Server, limit: usize) -> Vec<Vec<Value>> {
+    let mut pages = Vec::new();
+    let mut after: Option<String> = None;
+    loop {
+        let path = match &after {
+            Some(cursor) => format!("/api/replays?limit={limit}&after={cursor}"),
+            None => format!("/api/replays?limit={limit}"),
+        };
+        let started = Instant::now();
+        let page: Value = ureq::get(&server.http(&path))
+            .timeout(Duration::from_secs(5))
+            .call()
+            .unwrap_or_else(|e| panic!("{path}: {e}"))
+            .into_json()
+            .unwrap();
+        assert!(
+            started.elapsed() < Duration::from_secs(3),
+            "{path} took {:?}",
+            started.elapsed()
+        );
+        pages.push(page["replays"].as_array().unwrap().clone());
+        match page["next"].as_str() {
+            Some(cursor) => after = Some(cursor.to_string()),
+            None => return pages,
+        }
+        assert!(pages.len() <= 1000, "the listing never ends");
+    }
+}
+
+/// Descriptors the server's process holds now.
+fn descriptors(server: &Server) -> usize {
+    std::fs::read_dir(format!("/proc/{}/fd", server.child.id()))
+        .unwrap()
+        .count()
+}
+
+/// More replays than the server may hold descriptors (600 files, a limit of 256): the
+/// listing pages through every one, newest first, none missing and none in error, with
+/// one file open at a time; listings at once each get every page.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn more_replays_than_descriptors_are_all_listed_a_page_at_a_time_newest_first() {
+    let dir = empty_dir("many-replays");
+    std::fs::create_dir_all(&dir).unwrap();
+    let written = write_many_replays(&dir, 600);
+    let newest_first: Vec<&str> = written
+        .iter()
+        .rev()
+        .map(|n| n.split('.').next().unwrap())
+        .collect();
+    let server =
+        server_with_descriptors(256, &["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
+    // The first listing reads every file's header and footer: one file at a time, so
+    // the process holds hardly more descriptors than when idle.
+    let idle = descriptors(&server);
+    let stop = Arc::new(AtomicBool::new(false));
+    let most = std::thread::spawn({
+        let (pid, stop) = (server.child.id(), stop.clone());
+        move || {
+            let mut most = 0;
+            while !stop.load(Ordering::Relaxed) {
+                if let Ok(fds) = std::fs::read_dir(format!("/proc/{pid}/fd")) {
+                    most = most.max(fds.count());
+                }
+            }
+            most
+        }
+    });
+    let started = Instant::now();
+    let all = pages(&server, 1000);
+    let took = started.elapsed();
+    stop.store(true, Ordering::Relaxed);
+    let most = most.join().unwrap();
+    eprintln!(
+        "600 replays listed in {took:?} (first read), {idle} descriptors idle, at most {most} while listing"
+    );
+    assert!(
+        most <= idle + 4,
+        "{idle} descriptors idle, {most} while listing"
+    );
+    assert_eq!(all.len(), 1, "600 replays fit one page of 1000");
+    assert_eq!(ids(&all[0]), newest_first);
+    // A page at a time: 100 by default, the last page without a `next`.
+    let paged = pages(&server, 100);
+    assert_eq!(paged.iter().map(Vec::len).collect::<Vec<_>>(), [100; 6]);
+    let paged: Vec<Value> = paged.into_iter().flatten().collect();
+    assert_eq!(ids(&paged), newest_first);
+    for entry in &paged {
+        assert!(entry.get("error").is_none(), "{entry}");
+        assert_eq!(entry["complete"], true, "{entry}");
+        assert_eq!(entry["match"], "made", "{entry}");
+    }
+    let default_page = server.get("/api/replays");
+    assert_eq!(default_page["replays"].as_array().unwrap().len(), 100);
+    assert_eq!(default_page["total"], 600);
+    assert!(default_page["next"].is_string(), "{}", default_page["next"]);
+    // Eight clients page through at once, each in pages of 37: every request answered,
+    // every replay listed.
+    let lists: Vec<_> = (0..8)
+        .map(|_| {
+            let lister = Lister {
+                addr: server.addr.clone(),
+            };
+            std::thread::spawn(move || lister.ids(37))
+        })
+        .collect();
+    for list in lists {
+        assert_eq!(list.join().unwrap(), newest_first);
+    }
+    // Bad pages are refused, saying why.
+    for query in [
+        "limit=0",
+        "limit=1001",
+        "limit=x",
+        "after=nonsense",
+        "after=12.bad%2Fid",
+    ] {
+        let response = get(&server, &format!("/api/replays?{query}"));
+        assert_eq!(response.status(), 400, "{query}");
+        let body: Value = response.into_json().unwrap();
+        assert_eq!(body["error"]["code"], "bad_query", "{query}: {body}");
+    }
+}
+
+/// A listing client of its own, for threads.
+struct Lister {
+    addr: String,
+}
+
+impl Lister {
+    /// Every replay's id, a page of `limit` at a time.
+    fn ids(&self, limit: usize) -> Vec<String> {
+        let mut ids = Vec::new();
+        let mut after = String::new();
+        loop {
+            let url = format!("http://{}/api/replays?limit={limit}{after}", self.addr);
+            let page: Value = ureq::get(&url)
+                .timeout(Duration::from_secs(10))
+                .call()
+                .unwrap_or_else(|e| panic!("{url}: {e}"))
+                .into_json()
+                .unwrap();
+            for entry in page["replays"].as_array().unwrap() {
+                assert!(entry.get("error").is_none(), "{entry}");
+                ids.push(entry["id"].as_str().unwrap().to_string());
+            }
+            match page["next"].as_str() {
+                Some(cursor) => after = format!("&after={cursor}"),
+                None => return ids,
+            }
+        }
+    }
+}
+
+/// Retention weighs every replay, however few descriptors the server has: 600 files at
+/// a limit of 256, kept to a budget of about a sixth of them, lose exactly the oldest.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn retention_keeps_its_budget_with_more_replays_than_descriptors() {
+    let dir = empty_dir("many-replays-retention");
+    std::fs::create_dir_all(&dir).unwrap();
+    let written = write_many_replays(&dir, 600);
+    let size = |name: &String| std::fs::metadata(dir.join(name)).unwrap().len();
+    let all: u64 = written.iter().map(size).sum();
+    let budget = all / 6;
+    // What retention keeps: the newest that fit the budget together.
+    let mut kept = Vec::new();
+    let mut total = 0;
+    for name in written.iter().rev() {
+        if total + size(name) > budget {
+            break;
+        }
+        total += size(name);
+        kept.push(name.clone());
+    }
+    kept.sort();
+    let budget_flag = budget.to_string();
+    let server = server_with_descriptors(
+        256,
+        &[
+            "--no-demo",
+            "--replay-dir",
+            dir.to_str().unwrap(),
+            "--replay-retention-bytes",
+            &budget_flag,
+        ],
+    );
+    let present = || {
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    };
+    let mut names = Vec::new();
+    common::found_within(Duration::from_secs(10), || {
+        names = present();
+        (names == kept).then_some(())
+    })
+    .await
+    .unwrap_or_else(|| {
+        panic!(
+            "retention kept {} files (wanted the newest {}): {:?}",
+            names.len(),
+            kept.len(),
+            &names[..names.len().min(10)]
+        )
+    });
+    assert_eq!(
+        server.metric("fieldhouse_replays_deleted_total") as usize,
+        600 - kept.len()
+    );
+}
+
+/// Sweeps asked for by recordings that finish in a burst (a match created and deleted,
+/// again and again) are coalesced: at most one a second.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn retention_sweeps_at_most_once_a_second_however_many_recordings_finish() {
+    let (server, _dir) = server_with("sweep-burst", "", &["--no-demo"]);
+    common::until(Duration::from_secs(5), "no sweep at start", || {
+        server.metric("fieldhouse_replay_sweeps_total") >= 1.0
+    })
+    .await;
+    let before = server.metric("fieldhouse_replay_sweeps_total");
+    let started = Instant::now();
+    for _ in 0..60 {
+        let (id, _) = server.create(json!({"sport": "cricket", "mode": "realtime"}));
+        ureq::delete(&server.http(&format!("/api/matches/{id}")))
+            .set("Authorization", &format!("Bearer {ADMIN}"))
+            .call()
+            .unwrap();
+    }
+    // The last recording's sweep comes within a second of it.
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    let sweeps = server.metric("fieldhouse_replay_sweeps_total") - before;
+    let seconds = started.elapsed().as_secs_f64();
+    eprintln!("60 recordings finished in {seconds:.1} s: {sweeps} sweeps");
+    assert!(sweeps >= 1.0, "no sweep after the recordings");
+    assert!(
+        sweeps <= seconds.ceil() + 1.0,
+        "{sweeps} sweeps in {seconds:.1} s"
+    );
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_never_ending_match_rotates_its_replay_into_segments_that_verify() {
     let (server, dir) = server_with(
@@ -673,11 +954,13 @@ async fn a_never_ending_match_rotates_its_replay_into_segments_that_verify() {
     // No bot slots, real time: it rotates (the total limit is for other matches).
     let (id, _) = server.create(json!({"sport": "baseball", "mode": "realtime", "seed": 7}));
     let segments = until_listed(&server, |listing| {
-        let segments: Vec<Value> = listing
+        let mut segments: Vec<Value> = listing
             .iter()
             .filter(|r| r["match"] == id.as_str())
             .cloned()
             .collect();
+        // Listed newest first: the first segment last.
+        segments.sort_by_key(|s| s["segment"].as_u64());
         (segments.len() >= 3).then_some(segments)
     })
     .await;
@@ -860,7 +1143,9 @@ async fn replays_of_both_formats_are_listed_played_sought_and_downloaded_as_stor
     write_replay(&dir.join("misnamed.jsonl.zst"), 30, 200, true);
     let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
     let listing = listed(&server);
-    assert_eq!(ids(&listing), ["both", "misnamed", "new", "old"]);
+    let mut listed_ids = ids(&listing);
+    listed_ids.sort_unstable();
+    assert_eq!(listed_ids, ["both", "misnamed", "new", "old"]);
     let cases = [
         // id, stored as, served as, media type, frames, first tick
         (
@@ -896,8 +1181,8 @@ async fn replays_of_both_formats_are_listed_played_sought_and_downloaded_as_stor
             0,
         ),
     ];
-    for (k, (id, stored, served, media, frames, first)) in cases.into_iter().enumerate() {
-        let entry = &listing[k];
+    for (id, stored, served, media, frames, first) in cases {
+        let entry = listing.iter().find(|e| e["id"] == id).unwrap();
         assert_eq!(entry["file"], served, "{entry}");
         assert_eq!(entry["complete"], true, "{entry}");
         let bytes = std::fs::read(dir.join(stored)).unwrap();

@@ -3,6 +3,9 @@
 import { $, escapeHtml, formatScore } from "./draw.js";
 
 const REFRESH_MS = 2000;
+// The replays shown: the listing's first page, the newest (a directory may hold
+// thousands, and the server answers a page at a time).
+const REPLAYS_SHOWN = 100;
 
 export function showLobby() {
   $("lobby").hidden = false;
@@ -12,14 +15,14 @@ export function showLobby() {
   let stopped = false;
   const load = async () => {
     try {
-      const [live, recorded] = await Promise.all([getJson("/api/matches"), getJson("/api/replays")]);
+      const [live, recorded] = await Promise.all([getJson("/api/matches"), getJson(`/api/replays?limit=${REPLAYS_SHOWN}`)]);
       if (stopped) return;
       $("matches").innerHTML = live.matches.length
         ? live.matches.map(matchRow).join("")
         : `<tr><td colspan="5" class="muted">no matches</td></tr>`;
       const recording = new Set(live.matches.filter((m) => m.status === "running").map((m) => m.replay));
       $("replays").innerHTML = recorded.replays.length
-        ? recorded.replays.map((r) => replayRow(r, r.recording || recording.has(r.id))).join("")
+        ? recorded.replays.map((r) => replayRow(r, r.recording || recording.has(r.id))).join("") + moreRow(recorded)
         : `<tr><td colspan="5" class="muted">no replays (start the server with --replay-dir DIR to record matches)</td></tr>`;
       if (live.matches[0]) $("source").textContent = `motion: ${live.matches[0].motion_source}`;
       $("lobby-state").textContent = `updated ${new Date().toLocaleTimeString()}`;
@@ -61,6 +64,15 @@ function replayRow(r, recording) {
   return `<tr><td><a href="#/replays/${encodeURIComponent(r.id)}">${name}</a>${started}</td>` +
     `<td>${escapeHtml(r.sport)}</td><td>${replayState(r, recording)}</td>` +
     `<td>${escapeHtml(formatScore(r.sport, r.result))}</td><td>${file}</td></tr>`;
+}
+
+/** Says how many replays are not shown, if the listing has more pages. */
+function moreRow(recorded) {
+  if (!recorded.next) return "";
+  const total = Number(recorded.total);
+  const shown = recorded.replays.length;
+  const more = Number.isFinite(total) && total > shown ? `${total - shown} older` : "older";
+  return `<tr><td colspan="5" class="muted">the newest ${shown} shown; ${escapeHtml(more)} not listed here</td></tr>`;
 }
 
 function replayState(r, recording) {

@@ -9,6 +9,7 @@ import http.server
 import json
 import threading
 import time
+import urllib.parse
 
 import pytest
 from websockets.asyncio.server import serve
@@ -187,3 +188,50 @@ def test_a_message_that_is_not_a_json_object_closes_the_socket_with_a_fieldhouse
         assert e.value.close_code == 1002
 
     _against(_hello_then(message), reads)
+
+
+def _listing(replays, *, repeat_cursor=False):
+    """A server listing ``replays`` a page at a time, as fieldhouse does: ``limit`` and
+    ``after`` (here the index of the last entry sent); with ``repeat_cursor`` it hands
+    back the first page's cursor for ever."""
+
+    def answer(h):
+        query = urllib.parse.parse_qs(urllib.parse.urlparse(h.path).query)
+        limit = int(query["limit"][0])
+        start = 0 if "after" not in query else int(query["after"][0]) + 1
+        page = replays[start : start + limit]
+        more = start + limit < len(replays)
+        cursor = str(limit - 1 if repeat_cursor else start + limit - 1)
+        body = json.dumps({"replays": page, "next": cursor if more else None}).encode()
+        h.send_response(200)
+        h.send_header("Content-Length", str(len(body)))
+        h.end_headers()
+        h.wfile.write(body)
+
+    return _Http(answer)
+
+
+def test_replays_are_listed_by_following_the_pages_and_a_cursor_loop_is_refused():
+    replays = [{"id": f"r{k}"} for k in range(5)]
+    server = _listing(replays)
+    looping = _listing(replays, repeat_cursor=True)
+    try:
+        client = Client(server.url)
+        assert client.list_replays(page_size=2) == replays
+        assert [p for _, p, _ in server.seen] == [
+            "/api/replays?limit=2",
+            "/api/replays?limit=2&after=1",
+            "/api/replays?limit=2&after=3",
+        ]
+        server.seen.clear()
+        assert client.list_replays(limit=3, page_size=2) == replays[:3]
+        assert len(server.seen) == 2, "no page asked for past the limit"
+        server.seen.clear()
+        assert client.list_replays(limit=1) == replays[:1]
+        assert [p for _, p, _ in server.seen] == ["/api/replays?limit=1"]
+        with pytest.raises(FieldhouseError) as e:
+            Client(looping.url).list_replays(page_size=2)
+        assert e.value.code == "bad_response"
+    finally:
+        server.shutdown()
+        looping.shutdown()

@@ -8,7 +8,7 @@ import time
 import pytest
 
 from fieldhouse import Client
-from fieldhouse.errors import BadId, BadScenario, FieldhouseError, Forbidden, NotFound
+from fieldhouse.errors import BadId, BadQuery, BadScenario, FieldhouseError, Forbidden, NotFound
 
 ONE_BALL = {
     "sport": "baseball",
@@ -86,3 +86,23 @@ def test_replays_are_listed_and_downloaded(client, tmp_path):
         client.download_replay("../etc")
     with pytest.raises(NotFound):
         client.download_replay("no-such-replay")
+
+
+def test_replays_are_listed_a_page_at_a_time_newest_first(client):
+    ours = []
+    for _ in range(3):
+        ours.append(wait_ended(client, client.create_match(ONE_BALL).id)["replay"])
+    deadline = time.monotonic() + 30
+    while not all(
+        any(r["id"] == id and r.get("complete") for r in client.list_replays()) for id in ours
+    ):
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    # A page of one at a time finds what one big page does, in the same order: the
+    # newest first, so ours (finished one after another) come last-finished first.
+    paged = [r["id"] for r in client.list_replays(page_size=1) if r["id"] in ours]
+    whole = [r["id"] for r in client.list_replays(page_size=1000) if r["id"] in ours]
+    assert paged == whole == ours[::-1]
+    assert len(client.list_replays(limit=2)) == 2
+    with pytest.raises(BadQuery):
+        client._json("GET", "/api/replays?limit=0")

@@ -31,6 +31,8 @@ pub struct Metrics {
     pub slow_clients_dropped: AtomicU64,
     pub replay_errors: AtomicU64,
     pub replays_deleted: AtomicU64,
+    /// Retention sweeps of the replay directory run.
+    pub replay_sweeps: AtomicU64,
     pub refused_origin: AtomicU64,
     pub refused_per_ip: AtomicU64,
     pub refused_full: AtomicU64,
@@ -134,6 +136,12 @@ impl Metrics {
             "Replay files deleted by retention (replay_retention_bytes, replay_retention_days).",
             "counter",
             self.replays_deleted.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_replay_sweeps_total",
+            "Retention sweeps of the replay directory (at start, every minute, and after recordings finish: at most one a second).",
+            "counter",
+            self.replay_sweeps.load(Relaxed),
         );
         counter(
             "fieldhouse_slow_clients_dropped_total",

@@ -9,9 +9,19 @@
 //! by its first bytes, not its name. A symbolic link is never followed (it could name
 //! `/etc/passwd` or `/proc/self/environ`), a device or a FIFO is never read (`/dev/zero`
 //! has no end, a FIFO blocks for ever), and a file with a second name (a hard link)
-//! could be a file from elsewhere, so it is refused too. The checks are made on the
+//! could be a file from elsewhere, so it is refused too.
+//!
+//! The directory is walked without opening its files ([`scan`]): each entry is looked
+//! at with `lstat` (the entry itself, never what a link names), so a directory of
+//! thousands of replays costs one descriptor to list or sweep, not one per file (when
+//! every file was opened at once and held, a directory with more replays than the
+//! process had descriptors was listed and swept in part, silently, and took every
+//! descriptor the connections needed). A file is opened only when its content is read
+//! ([`Entry::open`], [`open`]), one at a time, and the checks are made again on the
 //! opened handle (`O_NOFOLLOW`, then `fstat`), so nothing can be swapped in between a
-//! check and the open.
+//! check and the read. Retention deletes by name, never through a handle
+//! ([`Entry::remove`]): the name is looked at again just before, and `unlink` removes
+//! that name only (a link, not what it points to; one name of a file with others).
 
 use fieldhouse_core::replay::{Encoding, Index};
 use std::collections::{HashMap, HashSet};
@@ -111,36 +121,97 @@ impl Found {
     }
 }
 
-/// Every replay in `dir`, opened as [`open`] opens one (one per id: the one [`open`]
-/// finds); other entries are passed over without being opened. Blocking: call it on a
-/// blocking thread.
-pub fn scan(dir: &Path) -> Vec<Found> {
-    let mut found = Vec::new();
-    for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
-        // The type of the entry itself: a link is a link, not what it points to.
-        if !entry.file_type().is_ok_and(|t| t.is_file()) {
-            continue;
+/// A replay in the directory as its entry says (`lstat`): nothing is opened.
+pub struct Entry {
+    pub id: String,
+    pub path: PathBuf,
+    /// The encoding its name says.
+    pub named: Encoding,
+    /// The entry's own metadata: a regular file with one name.
+    pub meta: Metadata,
+}
+
+impl Entry {
+    /// When it was last written, in nanoseconds since 1970: what the listing's order
+    /// and retention's age go by.
+    pub fn modified_ns(&self) -> i128 {
+        i128::from(self.meta.mtime()) * 1_000_000_000 + i128::from(self.meta.mtime_nsec())
+    }
+
+    /// Opens it to read, as [`open`] opens a replay: the checks again, on the handle
+    /// (the name may name something else since it was looked at). `NotFound` if it is
+    /// gone or is no replay now.
+    pub fn open(&self) -> io::Result<Found> {
+        let (file, meta) = open_path(&self.path)?;
+        Ok(Found {
+            id: self.id.clone(),
+            path: self.path.clone(),
+            named: self.named,
+            file,
+            meta,
+        })
+    }
+
+    /// Deletes it, if its name still names the file looked at (the same inode, a
+    /// regular file with one name): false, and nothing deleted, if not. Nothing is
+    /// opened. The name is removed, never followed: were it swapped for a link or a
+    /// second name of another file between the look and the `unlink`, the link or that
+    /// name would go, not what it points to, and only someone who may write the
+    /// directory, and so remove the name anyway, can swap it.
+    pub fn remove(&self) -> io::Result<bool> {
+        let now = match std::fs::symlink_metadata(&self.path) {
+            Ok(now) => now,
+            Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(false),
+            Err(e) => return Err(e),
+        };
+        let same = now.file_type().is_file()
+            && now.nlink() == 1
+            && (now.dev(), now.ino()) == (self.meta.dev(), self.meta.ino());
+        if !same {
+            return Ok(false);
         }
+        match std::fs::remove_file(&self.path) {
+            Ok(()) => Ok(true),
+            Err(e) if e.kind() == io::ErrorKind::NotFound => Ok(false),
+            Err(e) => Err(e),
+        }
+    }
+}
+
+/// Every replay in `dir` (one per id: the one [`open`] finds), from its directory
+/// entry alone: one descriptor, the directory's, is held, and no file is opened. An
+/// error reading the directory is returned, never taken for an empty or shorter one.
+/// Blocking: call it on a blocking thread.
+pub fn scan(dir: &Path) -> io::Result<Vec<Entry>> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
         let name = entry.file_name();
         let Some((id, named)) = name.to_str().and_then(id_of) else {
             continue;
         };
-        let path = name_of(dir, id, named);
-        if let Ok((file, meta)) = open_path(&path) {
-            found.push(Found {
-                id: id.to_string(),
-                path,
-                named,
-                file,
-                meta,
-            });
+        // The entry itself (`fstatat` without following links): a link is a link.
+        let meta = match entry.metadata() {
+            Ok(meta) => meta,
+            // Gone since the directory was read.
+            Err(e) if e.kind() == io::ErrorKind::NotFound => continue,
+            Err(e) => return Err(e),
+        };
+        if !meta.file_type().is_file() || meta.nlink() != 1 {
+            continue;
         }
+        found.push(Entry {
+            id: id.to_string(),
+            path: name_of(dir, id, named),
+            named,
+            meta,
+        });
     }
     // Format 2's name first, so that it is the one kept of an id with both.
     let rank = |e: Encoding| ENCODINGS.iter().position(|&x| x == e);
     found.sort_by(|a, b| a.id.cmp(&b.id).then(rank(a.named).cmp(&rank(b.named))));
     found.dedup_by(|later, first| later.id == first.id);
-    found
+    Ok(found)
 }
 
 /// Which file an index is of: the same inode at the same size and time of change is
@@ -188,8 +259,24 @@ pub struct Replays {
     /// longer than that.
     walks: tokio::sync::Semaphore,
     /// What the listing said of each file, by id, while the file stays as it was: the
-    /// lobby asks every 2 s, and a file unchanged since is not read again.
+    /// lobby asks every 2 s, and a file unchanged since is not opened again.
     listed: Mutex<HashMap<String, (Version, serde_json::Value)>>,
+    /// Turns to walk the directory for a listing.
+    listings: Turns,
+}
+
+/// Listings that walk the directory at once, at most; the others wait their turn
+/// (without a thread). Each holds two descriptors (the directory's, and the file it
+/// reads, if any) and a blocking thread: a crowd of listings costs eight descriptors,
+/// well within those the server keeps from connections for files, and four threads.
+pub const LISTINGS_AT_ONCE: usize = 4;
+
+struct Turns(Arc<tokio::sync::Semaphore>);
+
+impl Default for Turns {
+    fn default() -> Self {
+        Turns(Arc::new(tokio::sync::Semaphore::new(LISTINGS_AT_ONCE)))
+    }
 }
 
 impl Default for Replays {
@@ -259,33 +346,44 @@ impl Replays {
         Ok(index)
     }
 
-    /// The listing's entry for `found`: remembered while the file is unchanged, else
-    /// made by `describe` (which reads the file). Entries of files gone are forgotten
-    /// by [`Replays::forget_all_but`].
+    /// A turn to walk the directory for a listing (see [`LISTINGS_AT_ONCE`]), held
+    /// until the permit is dropped: moved to the blocking thread that walks, it is held
+    /// as long as the walk, even if the request is gone.
+    pub async fn listing_turn(&self) -> tokio::sync::OwnedSemaphorePermit {
+        self.listings
+            .0
+            .clone()
+            .acquire_owned()
+            .await
+            .expect("the semaphore is never closed")
+    }
+
+    /// The listing's entry for `entry`: remembered while the file is unchanged (as its
+    /// `lstat` says: it is not opened), else made by `describe` from the file opened now
+    /// (and closed when it returns). An error opening it is returned and nothing is
+    /// remembered, so the next listing tries again; `NotFound` is a file gone, or no
+    /// replay now. Entries of files gone are forgotten by [`Replays::forget_all_but`].
     pub fn listing(
         &self,
-        found: &Found,
-        describe: impl FnOnce() -> serde_json::Value,
-    ) -> serde_json::Value {
-        let version = Version::of(&found.meta);
-        let known = self
-            .listed
-            .lock()
-            .expect("not poisoned")
-            .get(&found.id)
-            .cloned();
-        match known {
-            Some((v, entry)) if v == version => entry,
-            _ => {
-                let entry = describe();
-                let remembered = (version, entry.clone());
-                self.listed
-                    .lock()
-                    .expect("not poisoned")
-                    .insert(found.id.clone(), remembered);
-                entry
+        entry: &Entry,
+        describe: impl FnOnce(&Found) -> serde_json::Value,
+    ) -> io::Result<serde_json::Value> {
+        let version = Version::of(&entry.meta);
+        let listed = |id: &str| self.listed.lock().expect("not poisoned").get(id).cloned();
+        if let Some((v, known)) = listed(&entry.id) {
+            if v == version {
+                return Ok(known);
             }
         }
+        let found = entry.open()?;
+        let described = describe(&found);
+        // Remembered as the file read was: it may have grown since the look.
+        let remembered = (Version::of(&found.meta), described.clone());
+        self.listed
+            .lock()
+            .expect("not poisoned")
+            .insert(entry.id.clone(), remembered);
+        Ok(described)
     }
 
     /// Forgets the listing's entries of files not in `ids`.
@@ -297,5 +395,100 @@ impl Replays {
     /// Whether `path` is being written.
     pub fn is_writing(&self, path: &Path) -> bool {
         self.writing.lock().expect("not poisoned").contains(path)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::scan;
+    use fieldhouse_core::replay::Encoding;
+    use std::path::PathBuf;
+
+    fn empty_dir(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("fieldhouse-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn the_walk_finds_regular_files_with_one_name_and_passes_over_the_rest() {
+        let dir = empty_dir("walk");
+        let outside = empty_dir("walk-outside");
+        for name in [
+            "a.jsonl",
+            "b.jsonl.zst",
+            "both.jsonl",
+            "both.jsonl.zst",
+            "notes.txt",
+        ] {
+            std::fs::write(dir.join(name), "x").unwrap();
+        }
+        std::fs::write(outside.join("secret"), "x").unwrap();
+        std::os::unix::fs::symlink(outside.join("secret"), dir.join("link.jsonl")).unwrap();
+        std::fs::hard_link(outside.join("secret"), dir.join("hard.jsonl")).unwrap();
+        std::fs::create_dir(dir.join("sub.jsonl")).unwrap();
+        let found = scan(&dir).unwrap();
+        let ids: Vec<(&str, Encoding)> = found.iter().map(|e| (e.id.as_str(), e.named)).collect();
+        assert_eq!(
+            ids,
+            [
+                ("a", Encoding::Plain),
+                ("b", Encoding::Zstd),
+                ("both", Encoding::Zstd)
+            ]
+        );
+        // A directory that cannot be read is an error, not an empty directory.
+        assert!(scan(&dir.join("missing")).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+        std::fs::remove_dir_all(&outside).unwrap();
+    }
+
+    /// Deleting goes by name, and only while the name still names the file weighed: a
+    /// name swapped since for a link, another file or a second name of one is left.
+    #[test]
+    fn a_name_swapped_after_the_walk_is_not_deleted() {
+        let dir = empty_dir("swapped");
+        let outside = empty_dir("swapped-outside");
+        std::fs::write(outside.join("precious"), "keep me").unwrap();
+        for name in [
+            "kept.jsonl",
+            "linked.jsonl",
+            "hard.jsonl",
+            "renewed.jsonl",
+            "gone.jsonl",
+        ] {
+            std::fs::write(dir.join(name), "x").unwrap();
+        }
+        let found = scan(&dir).unwrap();
+        let entry = |id: &str| found.iter().find(|e| e.id == id).unwrap();
+        let swap = |name: &str| std::fs::remove_file(dir.join(name)).unwrap();
+        swap("linked.jsonl");
+        std::os::unix::fs::symlink(outside.join("precious"), dir.join("linked.jsonl")).unwrap();
+        swap("hard.jsonl");
+        std::fs::hard_link(outside.join("precious"), dir.join("hard.jsonl")).unwrap();
+        // A new file under the old name (the old one's inode kept alive, so that the
+        // new one cannot reuse it).
+        let old = std::fs::File::open(dir.join("renewed.jsonl")).unwrap();
+        swap("renewed.jsonl");
+        std::fs::write(dir.join("renewed.jsonl"), "new").unwrap();
+        swap("gone.jsonl");
+        for id in ["linked", "hard", "renewed", "gone"] {
+            assert!(!entry(id).remove().unwrap(), "{id}");
+        }
+        drop(old);
+        assert!(entry("kept").remove().unwrap());
+        let mut left: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(left, ["hard.jsonl", "linked.jsonl", "renewed.jsonl"]);
+        assert_eq!(
+            std::fs::read_to_string(outside.join("precious")).unwrap(),
+            "keep me"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+        std::fs::remove_dir_all(&outside).unwrap();
     }
 }

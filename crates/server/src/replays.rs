@@ -19,7 +19,7 @@ use super::socket::{
 use super::state::AppState;
 use super::upgrade::{Socket, Upgrade};
 use axum::body::Body;
-use axum::extract::{Path, State};
+use axum::extract::{Path, Query, State};
 use axum::http::header::{
     ACCEPT_RANGES, CONTENT_DISPOSITION, CONTENT_LENGTH, CONTENT_RANGE, CONTENT_TYPE, RANGE,
 };
@@ -35,7 +35,7 @@ use fieldhouse_core::tags;
 use futures_util::stream::SplitStream;
 use futures_util::StreamExt;
 use serde_json::{json, Value};
-use std::collections::VecDeque;
+use std::collections::{HashMap, VecDeque};
 use std::fs::File;
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::{Arc, Mutex};
@@ -88,28 +88,155 @@ async fn open(app: &AppState, id: &str) -> Result<replay_dir::Found, ApiError> {
     }
 }
 
-pub async fn list(State(app): State<Arc<AppState>>) -> Result<Json<Value>, ApiError> {
+/// Replays a listing page holds unless `limit` says otherwise, and the most it may ask.
+pub const PAGE: usize = 100;
+pub const MAX_PAGE: usize = 1000;
+
+/// `GET /api/replays?limit=N&after=CURSOR`: a page of the replay directory, newest
+/// first (by the time each file was last written; ties by id), with the cursor of the
+/// next page in `next` if more remain, and how many replays there are in `total`. The
+/// directory is walked without opening its files; the page's files are opened one at a
+/// time, and only those the listing has not described as they are now.
+pub async fn list(
+    Query(query): Query<HashMap<String, String>>,
+    State(app): State<Arc<AppState>>,
+) -> Result<Json<Value>, ApiError> {
+    let page = Page::asked(&query)?;
     let Some(dir) = app.replay_dir.clone() else {
-        return Ok(Json(json!({"replays": []})));
+        return Ok(Json(json!({"replays": [], "next": null, "total": 0})));
     };
-    let replays = tokio::task::spawn_blocking(move || {
-        let found = replay_dir::scan(&dir);
-        let listed = found
-            .iter()
-            .map(|found| {
-                // Whether it is being written changes without the file changing.
-                let mut entry = app.replays.listing(found, || describe(found));
-                entry["recording"] = app.replays.is_writing(&found.path).into();
-                entry
-            })
-            .collect::<Vec<_>>();
-        app.replays
-            .forget_all_but(&found.iter().map(|f| f.id.as_str()).collect());
-        listed
+    let turn = app.replays.listing_turn().await;
+    let listed = tokio::task::spawn_blocking(move || {
+        let _turn = turn;
+        list_page(&app, &dir, &page)
     })
     .await
-    .unwrap_or_default();
-    Ok(Json(json!({"replays": replays})))
+    .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string()))?;
+    listed.map(Json)
+}
+
+/// The page a listing asks for.
+#[derive(Debug)]
+struct Page {
+    limit: usize,
+    after: Option<Cursor>,
+}
+
+impl Page {
+    fn asked(query: &HashMap<String, String>) -> Result<Page, ApiError> {
+        let bad = |message: String| ApiError::new(StatusCode::BAD_REQUEST, "bad_query", message);
+        let limit = match query.get("limit") {
+            None => PAGE,
+            Some(n) => n
+                .parse()
+                .ok()
+                .filter(|n| (1..=MAX_PAGE).contains(n))
+                .ok_or_else(|| {
+                    bad(format!(
+                        "limit \"{n}\" is not a number from 1 to {MAX_PAGE}"
+                    ))
+                })?,
+        };
+        let after = match query.get("after") {
+            None => None,
+            Some(c) => Some(Cursor::parse(c).ok_or_else(|| {
+                bad(format!(
+                    "after \"{c}\" is not a cursor: pass a listing's `next` as it is"
+                ))
+            })?),
+        };
+        Ok(Page { limit, after })
+    }
+}
+
+/// Where a page ends: the last replay listed, by the listing's order. Written
+/// `MODIFIED_NS.ID`: digits (a sign, for a file written before 1970), then an id.
+#[derive(Debug)]
+struct Cursor {
+    modified_ns: i128,
+    id: String,
+}
+
+impl Cursor {
+    fn at(entry: &replay_dir::Entry) -> Cursor {
+        Cursor {
+            modified_ns: entry.modified_ns(),
+            id: entry.id.clone(),
+        }
+    }
+
+    fn parse(text: &str) -> Option<Cursor> {
+        let (modified_ns, id) = text.split_once('.')?;
+        Some(Cursor {
+            modified_ns: modified_ns.parse().ok()?,
+            id: replay_dir::valid_id(id).then(|| id.to_string())?,
+        })
+    }
+
+    /// Whether `entry` comes after this cursor in the listing's order.
+    fn precedes(&self, entry: &replay_dir::Entry) -> bool {
+        newest_first(entry.modified_ns(), &entry.id, self.modified_ns, &self.id).is_gt()
+    }
+}
+
+impl std::fmt::Display for Cursor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}.{}", self.modified_ns, self.id)
+    }
+}
+
+/// The listing's order: the newest first, by the time a file was last written (a
+/// recording being written comes first), and by id among files of the same time.
+fn newest_first(a_ns: i128, a_id: &str, b_ns: i128, b_id: &str) -> std::cmp::Ordering {
+    b_ns.cmp(&a_ns).then_with(|| a_id.cmp(b_id))
+}
+
+/// One page of the listing of `dir`. Blocking.
+fn list_page(app: &AppState, dir: &std::path::Path, page: &Page) -> Result<Value, ApiError> {
+    // The directory unreadable (out of descriptors, say) is said, not listed as empty.
+    let mut entries = replay_dir::scan(dir).map_err(|e| {
+        ApiError::new(
+            StatusCode::SERVICE_UNAVAILABLE,
+            "replays_unavailable",
+            format!("the replay directory cannot be read now ({e}); try again"),
+        )
+    })?;
+    app.replays
+        .forget_all_but(&entries.iter().map(|e| e.id.as_str()).collect());
+    entries.sort_by(|a, b| newest_first(a.modified_ns(), &a.id, b.modified_ns(), &b.id));
+    let start = match &page.after {
+        Some(cursor) => entries.partition_point(|e| !cursor.precedes(e)),
+        None => 0,
+    };
+    let end = entries.len().min(start + page.limit);
+    let mut replays = Vec::with_capacity(end - start);
+    for entry in &entries[start..end] {
+        let Some(mut listed) = listed(&app.replays, entry) else {
+            continue;
+        };
+        // Whether it is being written changes without the file changing.
+        listed["recording"] = app.replays.is_writing(&entry.path).into();
+        replays.push(listed);
+    }
+    let next = (end < entries.len()).then(|| Cursor::at(&entries[end - 1]).to_string());
+    Ok(json!({"replays": replays, "next": next, "total": entries.len()}))
+}
+
+/// A replay's entry in a page of the listing: remembered, or described from the file
+/// (see [`describe`]); if the file cannot be opened now (the process out of
+/// descriptors, say), listed all the same from what its directory entry says, with the
+/// error, and tried again by the next listing. None: gone since the walk, or no replay
+/// now (a link, say).
+fn listed(replays: &replay_dir::Replays, entry: &replay_dir::Entry) -> Option<Value> {
+    match replays.listing(entry, describe) {
+        Ok(listed) => Some(listed),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+        Err(e) => Some(json!({
+            "id": entry.id,
+            "bytes": entry.meta.len(),
+            "error": format!("cannot be opened now: {e}"),
+        })),
+    }
 }
 
 /// A replay's entry in the listing, from its header and footer (read with bounds).
@@ -514,4 +641,78 @@ const MIN_FRAME_GAP: Duration = Duration::from_millis(1);
 fn frame_gap(ticks: u64, tick_hz: f64, speed: f64) -> Duration {
     Duration::try_from_secs_f64(ticks as f64 / tick_hz / speed)
         .map_or(MAX_FRAME_GAP, |gap| gap.clamp(MIN_FRAME_GAP, MAX_FRAME_GAP))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{listed, newest_first, Cursor, Page, MAX_PAGE, PAGE};
+    use crate::replay_dir::{self, Replays};
+    use std::collections::HashMap;
+
+    fn page(query: &[(&str, &str)]) -> Result<Page, String> {
+        let query: HashMap<String, String> = query
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect();
+        Page::asked(&query).map_err(|e| format!("{e:?}"))
+    }
+
+    #[test]
+    fn a_page_is_asked_for_with_a_limit_and_a_cursor_and_bad_ones_are_refused() {
+        assert_eq!(page(&[]).unwrap().limit, PAGE);
+        assert_eq!(page(&[("limit", "1")]).unwrap().limit, 1);
+        assert_eq!(page(&[("limit", "1000")]).unwrap().limit, MAX_PAGE);
+        for limit in ["0", "1001", "-1", "ten", ""] {
+            let refused = page(&[("limit", limit)]).unwrap_err();
+            assert!(refused.contains("bad_query"), "{limit}: {refused}");
+        }
+        let after = page(&[("after", "-5.old-one")]).unwrap().after.unwrap();
+        assert_eq!((after.modified_ns, after.id.as_str()), (-5, "old-one"));
+        for cursor in ["", "5", "x.id", "5.", "5.a/b", "5.a.b", ".id"] {
+            let refused = page(&[("after", cursor)]).unwrap_err();
+            assert!(refused.contains("bad_query"), "{cursor}: {refused}");
+        }
+        let cursor = Cursor {
+            modified_ns: 1_795_318_528_487_000_123,
+            id: "demo-cricket-1795318471-s2".into(),
+        };
+        let again = Cursor::parse(&cursor.to_string()).unwrap();
+        assert_eq!(
+            (again.modified_ns, again.id),
+            (cursor.modified_ns, cursor.id)
+        );
+    }
+
+    #[test]
+    fn the_newest_come_first_and_ids_break_ties() {
+        let mut files = [(1, "b"), (3, "a"), (2, "c"), (3, "b"), (1, "a")];
+        files.sort_by(|a, b| newest_first(a.0, a.1, b.0, b.1));
+        assert_eq!(files, [(3, "a"), (3, "b"), (2, "c"), (1, "a"), (1, "b")]);
+    }
+
+    /// A file that cannot be opened when the listing comes to it (here a socket put in
+    /// its place after the walk: opening a socket fails, as opening anything does out of
+    /// descriptors) is listed from its directory entry with the error, not left out.
+    #[test]
+    fn a_replay_that_cannot_be_opened_now_is_listed_with_an_error_not_left_out() {
+        let dir = std::env::temp_dir().join(format!("fieldhouse-listed-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("busy.jsonl"), "not read\n").unwrap();
+        std::fs::write(dir.join("gone.jsonl"), "not read\n").unwrap();
+        let entries = replay_dir::scan(&dir).unwrap();
+        std::fs::remove_file(dir.join("busy.jsonl")).unwrap();
+        let _socket = std::os::unix::net::UnixListener::bind(dir.join("busy.jsonl")).unwrap();
+        std::fs::remove_file(dir.join("gone.jsonl")).unwrap();
+        let replays = Replays::default();
+        let busy = listed(&replays, &entries[0]).expect("listed");
+        assert_eq!(busy["id"], "busy");
+        assert_eq!(busy["bytes"], 9);
+        let error = busy["error"].as_str().unwrap();
+        assert!(error.starts_with("cannot be opened now: "), "{error}");
+        assert!(!error.contains(dir.to_str().unwrap()), "{error}");
+        assert_eq!(entries[1].id, "gone");
+        assert!(listed(&replays, &entries[1]).is_none());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

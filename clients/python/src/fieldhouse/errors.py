@@ -43,6 +43,12 @@ class BadRequest(FieldhouseError):
     code = "bad_request"
 
 
+class BadQuery(FieldhouseError):
+    """400: a replay listing's ``limit`` outside 1 to 1000, or an ``after`` that is no cursor."""
+
+    code = "bad_query"
+
+
 class Unauthorized(FieldhouseError):
     """401: no admin token (REST) or no bot token (``/play``)."""
 
@@ -133,6 +139,12 @@ class Overloaded(FieldhouseError):
     code = "overloaded"
 
 
+class ReplaysUnavailable(FieldhouseError):
+    """503: the replay directory cannot be read now (out of descriptors, say); try again."""
+
+    code = "replays_unavailable"
+
+
 # --- `error` messages on a WebSocket (PROTOCOL.md, "`error`") ---------------------------
 
 
@@ -215,6 +227,7 @@ ERRORS_BY_CODE: dict[str, type[FieldhouseError]] = {
     for cls in (
         BadId,
         BadRequest,
+        BadQuery,
         Unauthorized,
         Forbidden,
         NotFound,
@@ -230,6 +243,7 @@ ERRORS_BY_CODE: dict[str, type[FieldhouseError]] = {
         TooManyMatches,
         ServerBusy,
         Overloaded,
+        ReplaysUnavailable,
         MalformedJson,
         BadMessage,
         Binary,

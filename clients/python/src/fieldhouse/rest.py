@@ -13,6 +13,7 @@ import time
 import urllib.error
 import urllib.parse
 import urllib.request
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -91,9 +92,42 @@ class Client:
 
     # --- replays ---------------------------------------------------------------------
 
-    def list_replays(self) -> list[dict]:
-        """The server's replay directory (empty if it records none)."""
-        return self._json("GET", "/api/replays")["replays"]
+    def list_replays(self, limit: int | None = None, *, page_size: int = 100) -> list[dict]:
+        """The server's replays, newest first (empty if it records none): every one, asked
+        for ``page_size`` at a time (``GET /api/replays?limit=N&after=CURSOR``), or the
+        newest ``limit``."""
+        if limit is not None and limit < 1:
+            raise ValueError(f"limit {limit} is not a positive count")
+        replays: list[dict] = []
+        for replay in self.iter_replays(
+            page_size=page_size if limit is None else min(page_size, limit)
+        ):
+            replays.append(replay)
+            if limit is not None and len(replays) >= limit:
+                break
+        return replays
+
+    def iter_replays(self, *, page_size: int = 100) -> Iterator[dict]:
+        """The server's replays, newest first, a page of ``page_size`` (1 to 1000) asked for
+        at a time as the iteration reaches it, following each page's ``next`` cursor. A
+        server that hands back a cursor it gave before is refused (``bad_response``)
+        rather than followed round for ever."""
+        if not 1 <= page_size <= 1000:
+            raise ValueError(f"page_size {page_size} is not from 1 to 1000")
+        after = None
+        seen: set[str] = set()
+        while True:
+            query = {"limit": page_size} if after is None else {"limit": page_size, "after": after}
+            page = self._json("GET", "/api/replays?" + urllib.parse.urlencode(query))
+            yield from page["replays"]
+            after = page.get("next")
+            if not after:
+                return
+            if after in seen:
+                raise FieldhouseError(
+                    f"the replay listing gave the cursor {after!r} twice", code="bad_response"
+                )
+            seen.add(after)
 
     def download_replay(self, replay_id: str, path: str | os.PathLike | None = None) -> bytes | int:
         """The replay file as stored (format 2: zstd): its bytes, or, with ``path``, streamed
