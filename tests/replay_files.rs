@@ -102,8 +102,7 @@ fn last_tick_in(file: &Path) -> Option<u64> {
     let (text, _) = fieldhouse::replay::decode(&bytes).unwrap();
     String::from_utf8_lossy(&text)
         .lines()
-        .filter(|l| l.starts_with(r#"{"type":"frame""#))
-        .last()
+        .rfind(|l| l.starts_with(r#"{"type":"frame""#))
         .and_then(|l| serde_json::from_str::<Value>(l).ok()?["tick"].as_u64())
 }
 

@@ -262,7 +262,7 @@ pub struct Replays {
     /// lobby asks every 2 s, and a file unchanged since is not opened again.
     listed: Mutex<HashMap<String, (Version, serde_json::Value)>>,
     /// Turns to walk the directory for a listing.
-    listings: Turns,
+    listings: Arc<tokio::sync::Semaphore>,
 }
 
 /// Listings that walk the directory at once, at most; the others wait their turn
@@ -271,14 +271,6 @@ pub struct Replays {
 /// well within those the server keeps from connections for files, and four threads.
 pub const LISTINGS_AT_ONCE: usize = 4;
 
-struct Turns(Arc<tokio::sync::Semaphore>);
-
-impl Default for Turns {
-    fn default() -> Self {
-        Turns(Arc::new(tokio::sync::Semaphore::new(LISTINGS_AT_ONCE)))
-    }
-}
-
 impl Default for Replays {
     fn default() -> Replays {
         Replays {
@@ -286,6 +278,7 @@ impl Default for Replays {
             queued: Arc::default(),
             indexes: Mutex::default(),
             walking: Mutex::default(),
+            listings: Arc::new(tokio::sync::Semaphore::new(LISTINGS_AT_ONCE)),
             walks: tokio::sync::Semaphore::new(WALKS),
             listed: Mutex::default(),
         }
@@ -351,7 +344,6 @@ impl Replays {
     /// as long as the walk, even if the request is gone.
     pub async fn listing_turn(&self) -> tokio::sync::OwnedSemaphorePermit {
         self.listings
-            .0
             .clone()
             .acquire_owned()
             .await
