@@ -1,7 +1,7 @@
 //! Connections from clients that do not play by the rules: headers trickled, sockets
-//! opened and left idle, descriptors run short, control frames by the thousand, text
-//! from clients that should only listen, bots that stop reading, forged Host headers,
-//! more requests than the server should run at once. Real binary, loopback only; each
+//! opened and left idle, downloads read slowly to hold places, descriptors run short,
+//! control frames by the thousand, text from clients that should only listen, bots that
+//! stop reading, forged Host headers, more requests than the server should run at once. Real binary, loopback only; each
 //! test is bounded in time and count.
 
 mod common;
@@ -582,5 +582,169 @@ fn a_download_whose_client_stops_reading_is_closed_at_the_send_timeout() {
         received.len() < size,
         "the whole file came through ({} bytes): the stalled download was kept",
         received.len()
+    );
+}
+
+/// The server's TCP sockets (not its listener) whose client address `peer` accepts:
+/// its descriptors, matched by inode to the kernel's table of TCP sockets. What the
+/// server really holds, whatever its own accounting says.
+fn sockets_held(server: &Server, peer: impl Fn(std::net::Ipv4Addr) -> bool) -> usize {
+    let fds = format!("/proc/{}/fd", server.child.id());
+    let inodes: std::collections::HashSet<String> = std::fs::read_dir(&fds)
+        .unwrap()
+        .filter_map(|fd| {
+            let link = std::fs::read_link(fd.ok()?.path()).ok()?;
+            let link = link.to_str()?;
+            Some(
+                link.strip_prefix("socket:[")?
+                    .strip_suffix(']')?
+                    .to_string(),
+            )
+        })
+        .collect();
+    let table = std::fs::read_to_string("/proc/net/tcp").unwrap();
+    // Rows: slot, local address, remote address, state (0A is LISTEN), ..., inode (10th).
+    table
+        .lines()
+        .skip(1)
+        .filter(|row| {
+            let fields: Vec<&str> = row.split_whitespace().collect();
+            let remote = fields[2].split(':').next().unwrap();
+            let remote =
+                std::net::Ipv4Addr::from(u32::from_str_radix(remote, 16).unwrap().to_ne_bytes());
+            fields[3] != "0A" && inodes.contains(fields[9]) && peer(remote)
+        })
+        .count()
+}
+
+/// Asks for a download of replay `id` from `source` (a client with a small receive
+/// buffer) and reads its status code, and no more unless it is refused: a client that
+/// reads the body slowly, or never. A refused connection is read to its end, so the
+/// server has closed it when this returns.
+async fn download_from(source: [u8; 4], server: &Server, id: &str) -> (u16, tokio::net::TcpStream) {
+    let socket = tokio::net::TcpSocket::new_v4().unwrap();
+    socket.set_recv_buffer_size(4096).unwrap();
+    socket
+        .bind((std::net::Ipv4Addr::from(source), 0).into())
+        .unwrap();
+    let mut stream = socket.connect(server.addr.parse().unwrap()).await.unwrap();
+    let request = format!(
+        "GET /api/replays/{id} HTTP/1.1\r\nHost: {}\r\n\r\n",
+        server.addr
+    );
+    // A refused connection may be closed before the request is written.
+    let _ = stream.write_all(request.as_bytes()).await;
+    let mut head = [0u8; 12];
+    tokio::time::timeout(Duration::from_secs(10), stream.read_exact(&mut head))
+        .await
+        .expect("an answer within 10 s")
+        .expect("a status line");
+    let status: u16 = std::str::from_utf8(&head[9..12]).unwrap().parse().unwrap();
+    if status != 200 {
+        let mut rest = Vec::new();
+        let _ = tokio::time::timeout(Duration::from_secs(10), stream.read_to_end(&mut rest))
+            .await
+            .expect("a refused connection is closed");
+    }
+    (status, stream)
+}
+
+/// A download is busy until its body has gone, however slowly its client reads: it is
+/// never closed to make room for another connection, and new connections at a cap are
+/// refused (429 for an address at its cap, 503 for a full server) rather than counted on
+/// top of it. Before, a download counted as idle once its headers were out, so each new
+/// connection "closed" one (a graceful shutdown that let its body go on) and was counted
+/// as well: one address held 320 connections at a cap of 20.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn slow_downloads_hold_their_places_and_the_caps_hold() {
+    // Downloads that read nothing are not dropped at the send timeout within the test.
+    let file = settings(
+        "slow-downloads",
+        "send_timeout_ms = 60000\nmax_connections = 32\n",
+    );
+    let dir = common::server::empty_dir("slow-downloads-replays");
+    std::fs::create_dir_all(&dir).unwrap();
+    // 64 MB (sparse) that no socket buffer holds: the body is in flight until its
+    // client has read it.
+    std::fs::File::create(dir.join("large.jsonl"))
+        .unwrap()
+        .set_len(64 << 20)
+        .unwrap();
+    let server = Server::start(&[
+        "--no-demo",
+        "--config",
+        file.to_str().unwrap(),
+        "--replay-dir",
+        dir.to_str().unwrap(),
+        "--max-connections-per-ip",
+        "20",
+    ]);
+    let attacker = [127, 0, 0, 2];
+    let from = |a: [u8; 4]| move |ip: std::net::Ipv4Addr| ip.octets() == a;
+    let mut held = Vec::new();
+    for _ in 0..20 {
+        let (status, stream) = download_from(attacker, &server, "large").await;
+        assert_eq!(status, 200);
+        held.push(stream);
+    }
+    // 300 more from the same address, each asking for the download too.
+    let (mut answers, mut most) = (std::collections::BTreeMap::new(), 0);
+    for k in 0..300 {
+        let (status, stream) = download_from(attacker, &server, "large").await;
+        *answers.entry(status).or_insert(0) += 1;
+        if status == 200 {
+            held.push(stream);
+        }
+        if k % 10 == 9 {
+            most = most.max(sockets_held(&server, from(attacker)));
+        }
+    }
+    assert!(
+        most <= 20,
+        "the server held {most} connections from one address at a cap of 20 (answers: {answers:?})"
+    );
+    assert_eq!(
+        answers[&429], 300,
+        "every connection over the cap is refused"
+    );
+    assert_eq!(sockets_held(&server, from(attacker)), 20);
+    assert_eq!(
+        server.metric("fieldhouse_sockets_refused_total{reason=\"per_ip\"}"),
+        300.0
+    );
+    // The total cap the same way: 12 more downloads from another address fill the 32
+    // places; 100 connections from a third are refused 503 and the server holds 32.
+    for _ in 0..12 {
+        let (status, stream) = download_from([127, 0, 0, 3], &server, "large").await;
+        assert_eq!(status, 200);
+        held.push(stream);
+    }
+    let (mut full, mut most) = (0, 0);
+    for k in 0..100 {
+        match download_from([127, 0, 0, 4], &server, "large").await {
+            (503, _) => full += 1,
+            (200, stream) => held.push(stream),
+            (other, _) => panic!("a connection over the total cap got {other}"),
+        }
+        if k % 10 == 9 {
+            most = most.max(sockets_held(&server, |_| true));
+        }
+    }
+    assert!(
+        most <= 32,
+        "the server held {most} connections at a cap of 32 ({full} of 100 refused)"
+    );
+    assert_eq!(full, 100);
+    // Let the downloads go: their places come back, and the refusals were counted.
+    drop(held);
+    common::until(
+        Duration::from_secs(10),
+        "the closed downloads' places come back",
+        || sockets_held(&server, |_| true) == 0,
+    )
+    .await;
+    assert_eq!(
+        server.metric("fieldhouse_sockets_refused_total{reason=\"full\"}"),
+        100.0
     );
 }
