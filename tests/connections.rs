@@ -1,7 +1,8 @@
 //! Connections from clients that do not play by the rules: headers trickled, sockets
 //! opened and left idle, downloads read slowly to hold places, descriptors run short,
-//! control frames by the thousand, text from clients that should only listen, bots that
-//! stop reading, forged Host headers, more requests than the server should run at once. Real binary, loopback only; each
+//! control frames by the thousand, frames that break the WebSocket protocol, text from
+//! clients that should only listen, bots that stop reading, forged Host headers, more
+//! requests than the server should run at once. Real binary, loopback only; each
 //! test is bounded in time and count.
 
 mod common;
@@ -746,5 +747,158 @@ async fn slow_downloads_hold_their_places_and_the_caps_hold() {
     assert_eq!(
         server.metric("fieldhouse_sockets_refused_total{reason=\"full\"}"),
         100.0
+    );
+}
+
+/// A client frame written by hand: its first byte (FIN, reserved bits, opcode), masked
+/// or not, any length.
+fn raw_frame(first: u8, masked: bool, payload: &[u8]) -> Vec<u8> {
+    let mask_bit = if masked { 0x80 } else { 0 };
+    let mut out = vec![first];
+    match payload.len() {
+        n if n < 126 => out.push(mask_bit | n as u8),
+        n if n <= 0xffff => {
+            out.push(mask_bit | 126);
+            out.extend((n as u16).to_be_bytes());
+        }
+        n => {
+            out.push(mask_bit | 127);
+            out.extend((n as u64).to_be_bytes());
+        }
+    }
+    if masked {
+        out.extend([7, 7, 7, 7]);
+        out.extend(payload.iter().map(|b| b ^ 7));
+    } else {
+        out.extend(payload);
+    }
+    out
+}
+
+/// Frames that break RFC 6455 get a close frame with 1002 (protocol error) on every
+/// socket kind, text that is not UTF-8 gets 1007, and a message over the size limit
+/// still gets 1009. Before, a protocol error ended the socket without a close frame.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn protocol_errors_are_closed_with_1002_on_every_socket_kind() {
+    let dir = common::server::empty_dir("protocol-errors");
+    let server = Server::start(&["--replay-dir", dir.to_str().unwrap()]);
+    let replays = server.get("/api/replays");
+    let replay = replays["replays"][0]["id"]
+        .as_str()
+        .expect("a demo is recorded")
+        .to_string();
+    let (id, tokens) = server.create(common::server::fielder_with_bot("realtime", 1000));
+    let play = format!(
+        "/ws/matches/{id}/play?token={}",
+        tokens["cf"].as_str().unwrap()
+    );
+    let close = |code: u16, reason: &[u8]| {
+        let mut payload = code.to_be_bytes().to_vec();
+        payload.extend(reason);
+        payload
+    };
+    let violations: Vec<(&str, Vec<u8>, u16)> = vec![
+        (
+            "a reserved bit set (RSV1)",
+            raw_frame(0x80 | 0x40 | 0x1, true, b"{}"),
+            1002,
+        ),
+        (
+            "reserved bits set (RSV2, RSV3)",
+            raw_frame(0x80 | 0x30 | 0x2, true, b"x"),
+            1002,
+        ),
+        ("an unmasked frame", raw_frame(0x81, false, b"{}"), 1002),
+        (
+            "a reserved data opcode (3)",
+            raw_frame(0x83, true, b"x"),
+            1002,
+        ),
+        (
+            "a reserved control opcode (0xB)",
+            raw_frame(0x8b, true, b""),
+            1002,
+        ),
+        (
+            "a continuation frame first",
+            raw_frame(0x80, true, b"x"),
+            1002,
+        ),
+        (
+            "a new message inside a fragmented one",
+            {
+                let mut bytes = raw_frame(0x01, true, b"{");
+                bytes.extend(raw_frame(0x81, true, b"}"));
+                bytes
+            },
+            1002,
+        ),
+        ("a fragmented ping", raw_frame(0x09, true, b"hi"), 1002),
+        (
+            "a ping of 126 bytes",
+            raw_frame(0x89, true, &[b'p'; 126]),
+            1002,
+        ),
+        (
+            "a close with a one-byte body",
+            raw_frame(0x88, true, &[3]),
+            1002,
+        ),
+        (
+            "a close with code 1005 (never sent)",
+            raw_frame(0x88, true, &close(1005, b"")),
+            1002,
+        ),
+        (
+            "a close with code 999",
+            raw_frame(0x88, true, &close(999, b"")),
+            1002,
+        ),
+        (
+            "a close with reserved code 2000",
+            raw_frame(0x88, true, &close(2000, b"")),
+            1002,
+        ),
+        (
+            "a close with code 5000",
+            raw_frame(0x88, true, &close(5000, b"")),
+            1002,
+        ),
+        (
+            "text that is not UTF-8",
+            raw_frame(0x81, true, &[b'{', 0xff, 0xfe, b'}']),
+            1007,
+        ),
+        (
+            "a close whose reason is not UTF-8",
+            raw_frame(0x88, true, &close(1000, &[0xc3, 0x28])),
+            1007,
+        ),
+        (
+            "a message over the size limit",
+            raw_frame(0x81, true, &vec![b' '; 5000]),
+            1009,
+        ),
+    ];
+    for path in [
+        "/ws/matches/demo-baseball".to_string(),
+        play.clone(),
+        format!("/ws/replays/{replay}"),
+    ] {
+        for (what, bytes, code) in &violations {
+            let mut socket = raw_socket(&server, &path).await;
+            // The server may close before it has read them all.
+            let _ = socket.write_all(bytes).await;
+            assert_eq!(
+                close_code(&mut socket).await,
+                Some(*code),
+                "{what} on {path}"
+            );
+        }
+    }
+    // 14 protocol errors and 2 bad texts on each of the three sockets.
+    assert_eq!(
+        server.metric("fieldhouse_closed_protocol_error_total"),
+        3.0 * 16.0
     );
 }
