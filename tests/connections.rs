@@ -1,7 +1,8 @@
 //! Connections from clients that do not play by the rules: headers trickled, sockets
-//! opened and left idle, descriptors run short, control frames by the thousand, text
-//! from clients that should only listen, bots that stop reading, forged Host headers,
-//! more requests than the server should run at once. Real binary, loopback only; each
+//! opened and left idle, downloads read slowly to hold places, descriptors run short,
+//! control frames by the thousand, frames that break the WebSocket protocol, text from
+//! clients that should only listen, bots that stop reading, forged Host headers, more
+//! requests than the server should run at once. Real binary, loopback only; each
 //! test is bounded in time and count.
 
 mod common;
@@ -582,5 +583,322 @@ fn a_download_whose_client_stops_reading_is_closed_at_the_send_timeout() {
         received.len() < size,
         "the whole file came through ({} bytes): the stalled download was kept",
         received.len()
+    );
+}
+
+/// The server's TCP sockets (not its listener) whose client address `peer` accepts:
+/// its descriptors, matched by inode to the kernel's table of TCP sockets. What the
+/// server really holds, whatever its own accounting says.
+fn sockets_held(server: &Server, peer: impl Fn(std::net::Ipv4Addr) -> bool) -> usize {
+    let fds = format!("/proc/{}/fd", server.child.id());
+    let inodes: std::collections::HashSet<String> = std::fs::read_dir(&fds)
+        .unwrap()
+        .filter_map(|fd| {
+            let link = std::fs::read_link(fd.ok()?.path()).ok()?;
+            let link = link.to_str()?;
+            Some(
+                link.strip_prefix("socket:[")?
+                    .strip_suffix(']')?
+                    .to_string(),
+            )
+        })
+        .collect();
+    let table = std::fs::read_to_string("/proc/net/tcp").unwrap();
+    // Rows: slot, local address, remote address, state (0A is LISTEN), ..., inode (10th).
+    table
+        .lines()
+        .skip(1)
+        .filter(|row| {
+            let fields: Vec<&str> = row.split_whitespace().collect();
+            let remote = fields[2].split(':').next().unwrap();
+            let remote =
+                std::net::Ipv4Addr::from(u32::from_str_radix(remote, 16).unwrap().to_ne_bytes());
+            fields[3] != "0A" && inodes.contains(fields[9]) && peer(remote)
+        })
+        .count()
+}
+
+/// Asks for a download of replay `id` from `source` (a client with a small receive
+/// buffer) and reads its status code, and no more unless it is refused: a client that
+/// reads the body slowly, or never. A refused connection is read to its end, so the
+/// server has closed it when this returns.
+async fn download_from(source: [u8; 4], server: &Server, id: &str) -> (u16, tokio::net::TcpStream) {
+    let socket = tokio::net::TcpSocket::new_v4().unwrap();
+    socket.set_recv_buffer_size(4096).unwrap();
+    socket
+        .bind((std::net::Ipv4Addr::from(source), 0).into())
+        .unwrap();
+    let mut stream = socket.connect(server.addr.parse().unwrap()).await.unwrap();
+    let request = format!(
+        "GET /api/replays/{id} HTTP/1.1\r\nHost: {}\r\n\r\n",
+        server.addr
+    );
+    // A refused connection may be closed before the request is written.
+    let _ = stream.write_all(request.as_bytes()).await;
+    let mut head = [0u8; 12];
+    tokio::time::timeout(Duration::from_secs(10), stream.read_exact(&mut head))
+        .await
+        .expect("an answer within 10 s")
+        .expect("a status line");
+    let status: u16 = std::str::from_utf8(&head[9..12]).unwrap().parse().unwrap();
+    if status != 200 {
+        let mut rest = Vec::new();
+        let _ = tokio::time::timeout(Duration::from_secs(10), stream.read_to_end(&mut rest))
+            .await
+            .expect("a refused connection is closed");
+    }
+    (status, stream)
+}
+
+/// A download is busy until its body has gone, however slowly its client reads: it is
+/// never closed to make room for another connection, and new connections at a cap are
+/// refused (429 for an address at its cap, 503 for a full server) rather than counted on
+/// top of it. Before, a download counted as idle once its headers were out, so each new
+/// connection "closed" one (a graceful shutdown that let its body go on) and was counted
+/// as well: one address held 320 connections at a cap of 20.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn slow_downloads_hold_their_places_and_the_caps_hold() {
+    // Downloads that read nothing are not dropped at the send timeout within the test.
+    let file = settings(
+        "slow-downloads",
+        "send_timeout_ms = 60000\nmax_connections = 32\n",
+    );
+    let dir = common::server::empty_dir("slow-downloads-replays");
+    std::fs::create_dir_all(&dir).unwrap();
+    // 64 MB (sparse) that no socket buffer holds: the body is in flight until its
+    // client has read it.
+    std::fs::File::create(dir.join("large.jsonl"))
+        .unwrap()
+        .set_len(64 << 20)
+        .unwrap();
+    let server = Server::start(&[
+        "--no-demo",
+        "--config",
+        file.to_str().unwrap(),
+        "--replay-dir",
+        dir.to_str().unwrap(),
+        "--max-connections-per-ip",
+        "20",
+    ]);
+    let attacker = [127, 0, 0, 2];
+    let from = |a: [u8; 4]| move |ip: std::net::Ipv4Addr| ip.octets() == a;
+    let mut held = Vec::new();
+    for _ in 0..20 {
+        let (status, stream) = download_from(attacker, &server, "large").await;
+        assert_eq!(status, 200);
+        held.push(stream);
+    }
+    // 300 more from the same address, each asking for the download too.
+    let (mut answers, mut most) = (std::collections::BTreeMap::new(), 0);
+    for k in 0..300 {
+        let (status, stream) = download_from(attacker, &server, "large").await;
+        *answers.entry(status).or_insert(0) += 1;
+        if status == 200 {
+            held.push(stream);
+        }
+        if k % 10 == 9 {
+            most = most.max(sockets_held(&server, from(attacker)));
+        }
+    }
+    assert!(
+        most <= 20,
+        "the server held {most} connections from one address at a cap of 20 (answers: {answers:?})"
+    );
+    assert_eq!(
+        answers[&429], 300,
+        "every connection over the cap is refused"
+    );
+    assert_eq!(sockets_held(&server, from(attacker)), 20);
+    assert_eq!(
+        server.metric("fieldhouse_sockets_refused_total{reason=\"per_ip\"}"),
+        300.0
+    );
+    // The total cap the same way: 12 more downloads from another address fill the 32
+    // places; 100 connections from a third are refused 503 and the server holds 32.
+    for _ in 0..12 {
+        let (status, stream) = download_from([127, 0, 0, 3], &server, "large").await;
+        assert_eq!(status, 200);
+        held.push(stream);
+    }
+    let (mut full, mut most) = (0, 0);
+    for k in 0..100 {
+        match download_from([127, 0, 0, 4], &server, "large").await {
+            (503, _) => full += 1,
+            (200, stream) => held.push(stream),
+            (other, _) => panic!("a connection over the total cap got {other}"),
+        }
+        if k % 10 == 9 {
+            most = most.max(sockets_held(&server, |_| true));
+        }
+    }
+    assert!(
+        most <= 32,
+        "the server held {most} connections at a cap of 32 ({full} of 100 refused)"
+    );
+    assert_eq!(full, 100);
+    // Let the downloads go: their places come back, and the refusals were counted.
+    drop(held);
+    common::until(
+        Duration::from_secs(10),
+        "the closed downloads' places come back",
+        || sockets_held(&server, |_| true) == 0,
+    )
+    .await;
+    assert_eq!(
+        server.metric("fieldhouse_sockets_refused_total{reason=\"full\"}"),
+        100.0
+    );
+}
+
+/// A client frame written by hand: its first byte (FIN, reserved bits, opcode), masked
+/// or not, any length.
+fn raw_frame(first: u8, masked: bool, payload: &[u8]) -> Vec<u8> {
+    let mask_bit = if masked { 0x80 } else { 0 };
+    let mut out = vec![first];
+    match payload.len() {
+        n if n < 126 => out.push(mask_bit | n as u8),
+        n if n <= 0xffff => {
+            out.push(mask_bit | 126);
+            out.extend((n as u16).to_be_bytes());
+        }
+        n => {
+            out.push(mask_bit | 127);
+            out.extend((n as u64).to_be_bytes());
+        }
+    }
+    if masked {
+        out.extend([7, 7, 7, 7]);
+        out.extend(payload.iter().map(|b| b ^ 7));
+    } else {
+        out.extend(payload);
+    }
+    out
+}
+
+/// Frames that break RFC 6455 get a close frame with 1002 (protocol error) on every
+/// socket kind, text that is not UTF-8 gets 1007, and a message over the size limit
+/// still gets 1009. Before, a protocol error ended the socket without a close frame.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn protocol_errors_are_closed_with_1002_on_every_socket_kind() {
+    let dir = common::server::empty_dir("protocol-errors");
+    let server = Server::start(&["--replay-dir", dir.to_str().unwrap()]);
+    let replays = server.get("/api/replays");
+    let replay = replays["replays"][0]["id"]
+        .as_str()
+        .expect("a demo is recorded")
+        .to_string();
+    let (id, tokens) = server.create(common::server::fielder_with_bot("realtime", 1000));
+    let play = format!(
+        "/ws/matches/{id}/play?token={}",
+        tokens["cf"].as_str().unwrap()
+    );
+    let close = |code: u16, reason: &[u8]| {
+        let mut payload = code.to_be_bytes().to_vec();
+        payload.extend(reason);
+        payload
+    };
+    let violations: Vec<(&str, Vec<u8>, u16)> = vec![
+        (
+            "a reserved bit set (RSV1)",
+            raw_frame(0x80 | 0x40 | 0x1, true, b"{}"),
+            1002,
+        ),
+        (
+            "reserved bits set (RSV2, RSV3)",
+            raw_frame(0x80 | 0x30 | 0x2, true, b"x"),
+            1002,
+        ),
+        ("an unmasked frame", raw_frame(0x81, false, b"{}"), 1002),
+        (
+            "a reserved data opcode (3)",
+            raw_frame(0x83, true, b"x"),
+            1002,
+        ),
+        (
+            "a reserved control opcode (0xB)",
+            raw_frame(0x8b, true, b""),
+            1002,
+        ),
+        (
+            "a continuation frame first",
+            raw_frame(0x80, true, b"x"),
+            1002,
+        ),
+        (
+            "a new message inside a fragmented one",
+            {
+                let mut bytes = raw_frame(0x01, true, b"{");
+                bytes.extend(raw_frame(0x81, true, b"}"));
+                bytes
+            },
+            1002,
+        ),
+        ("a fragmented ping", raw_frame(0x09, true, b"hi"), 1002),
+        (
+            "a ping of 126 bytes",
+            raw_frame(0x89, true, &[b'p'; 126]),
+            1002,
+        ),
+        (
+            "a close with a one-byte body",
+            raw_frame(0x88, true, &[3]),
+            1002,
+        ),
+        (
+            "a close with code 1005 (never sent)",
+            raw_frame(0x88, true, &close(1005, b"")),
+            1002,
+        ),
+        (
+            "a close with code 999",
+            raw_frame(0x88, true, &close(999, b"")),
+            1002,
+        ),
+        (
+            "a close with reserved code 2000",
+            raw_frame(0x88, true, &close(2000, b"")),
+            1002,
+        ),
+        (
+            "a close with code 5000",
+            raw_frame(0x88, true, &close(5000, b"")),
+            1002,
+        ),
+        (
+            "text that is not UTF-8",
+            raw_frame(0x81, true, &[b'{', 0xff, 0xfe, b'}']),
+            1007,
+        ),
+        (
+            "a close whose reason is not UTF-8",
+            raw_frame(0x88, true, &close(1000, &[0xc3, 0x28])),
+            1007,
+        ),
+        (
+            "a message over the size limit",
+            raw_frame(0x81, true, &vec![b' '; 5000]),
+            1009,
+        ),
+    ];
+    for path in [
+        "/ws/matches/demo-baseball".to_string(),
+        play.clone(),
+        format!("/ws/replays/{replay}"),
+    ] {
+        for (what, bytes, code) in &violations {
+            let mut socket = raw_socket(&server, &path).await;
+            // The server may close before it has read them all.
+            let _ = socket.write_all(bytes).await;
+            assert_eq!(
+                close_code(&mut socket).await,
+                Some(*code),
+                "{what} on {path}"
+            );
+        }
+    }
+    // 14 protocol errors and 2 bad texts on each of the three sockets.
+    assert_eq!(
+        server.metric("fieldhouse_closed_protocol_error_total"),
+        3.0 * 16.0
     );
 }

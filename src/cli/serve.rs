@@ -51,12 +51,14 @@ pub(super) struct ServeArgs {
     #[arg(long = "allow-host", value_name = "HOST")]
     allow_hosts: Vec<String>,
     /// Most connections (HTTP and WebSocket alike) one client address may hold open at
-    /// once (default 256). At the cap its longest-idle HTTP connection is closed to make
-    /// room, else the new one is answered 429.
+    /// once (default 256). At the cap its longest-idle HTTP connection (no request or
+    /// response in flight: a download is busy until its last byte) is closed and the new
+    /// one takes its place once it has; with none idle the new one is answered 429.
     #[arg(long, value_name = "N")]
     max_connections_per_ip: Option<usize>,
     /// Most connections in all (default: what the descriptor limit allows, less 64).
-    /// Near it new spectators are refused (503) so requests and admins still get in.
+    /// Near it new spectators are refused (503) so requests and admins still get in; at
+    /// it an idle connection makes room, else the new one is answered 503.
     #[arg(long, value_name = "N")]
     max_connections: Option<usize>,
     /// How long an ended match stays in the match list, seconds (default 600); at most

@@ -3,7 +3,8 @@
 //! a socket. The socket says `hello`, then carries what the match sends the agent one
 //! way and commands the other. Answers to perceptions are owed (`Owed`) and pass free
 //! of the rate limit; anything else pays. Bad input gets an `error` message and the
-//! socket stays open; an oversized message closes it with 1009, flooding with 1008.
+//! socket stays open; an oversized message closes it with 1009, flooding with 1008, a
+//! frame that breaks the WebSocket protocol with 1002.
 
 use super::admission::Admitted;
 use super::auth;

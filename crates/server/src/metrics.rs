@@ -28,6 +28,9 @@ pub struct Metrics {
     pub client_errors: AtomicU64,
     pub closed_for_size: AtomicU64,
     pub closed_for_rate: AtomicU64,
+    /// Sockets closed for breaking the WebSocket protocol (1002) or sending text that is
+    /// not UTF-8 (1007).
+    pub closed_for_protocol: AtomicU64,
     pub slow_clients_dropped: AtomicU64,
     pub replay_errors: AtomicU64,
     pub replays_deleted: AtomicU64,
@@ -124,6 +127,12 @@ impl Metrics {
             "Sockets closed for flooding (1008).",
             "counter",
             self.closed_for_rate.load(Relaxed),
+        );
+        counter(
+            "fieldhouse_closed_protocol_error_total",
+            "Sockets closed for a frame that breaks the WebSocket protocol (1002) or text that is not UTF-8 (1007).",
+            "counter",
+            self.closed_for_protocol.load(Relaxed),
         );
         counter(
             "fieldhouse_replay_errors_total",

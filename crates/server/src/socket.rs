@@ -1,8 +1,9 @@
 //! What every WebSocket the server holds shares, spectator, bot and replay viewer alike:
 //! the close codes, the `hello` limits and message budget a socket starts with, reading
-//! (what a read gave, and when it means the client is refused: 1009 for a message over
-//! the size limit, 1008 for flooding), writing under `send_timeout_ms`, and closing so
-//! the client gets the code. It lives apart from the sockets so that each of them, and
+//! (what a read gave, and when it means the client is refused: 1002 for a frame that
+//! breaks RFC 6455, 1007 for text that is not UTF-8, 1009 for a message over the size
+//! limit, 1008 for flooding), writing under `send_timeout_ms`, and closing so the client
+//! gets the code. It lives apart from the sockets so that each of them, and
 //! replays, uses one set of rules and none borrows from another socket's module.
 //!
 //! On shutdown every match ends: its sockets get `end` and close with 1001 (`ending`).
@@ -15,11 +16,15 @@ use futures_util::stream::{SplitSink, SplitStream};
 use futures_util::{SinkExt, StreamExt};
 use std::sync::atomic::Ordering::Relaxed;
 use std::time::Duration;
+use tokio_tungstenite::tungstenite::error::ProtocolError;
+use tokio_tungstenite::tungstenite::protocol::frame::coding::CloseCode;
 use tokio_tungstenite::tungstenite::protocol::CloseFrame;
 use tokio_tungstenite::tungstenite::{self, Message, Utf8Bytes};
 
 /// Close codes (RFC 6455).
 pub(super) const GOING_AWAY: u16 = 1001;
+pub(super) const PROTOCOL_ERROR: u16 = 1002;
+pub(super) const NOT_UTF8: u16 = 1007;
 pub(super) const POLICY: u16 = 1008;
 pub(super) const TOO_BIG: u16 = 1009;
 pub(super) const NORMAL: u16 = 1000;
@@ -65,10 +70,25 @@ pub(super) enum Read {
     TooBig,
     /// More control or fragment frames than the frame meter allows.
     Flood,
+    /// A frame RFC 6455 forbids: reserved bits set, an unmasked frame, a reserved
+    /// opcode, a continuation with nothing to continue, a data frame inside a fragmented
+    /// message, a fragmented or oversized control frame, a close with a code a client may
+    /// not send or a one-byte body.
+    Protocol,
+    /// A text message, or a close's reason, that is not UTF-8.
+    NotUtf8,
 }
 
+/// What the library made of the next frames. The library itself only answers a close
+/// whose code a client may not send (under 1000, 1004–1006, 1014–2999, 5000 up): it
+/// queues a 1002 close, which [`refusal`] then has sent. Every other protocol error it
+/// returns, leaving the socket to its owner, who must say 1002 (RFC 6455 §7.1.7, §7.4.1)
+/// rather than drop the connection without a word.
 pub(super) fn classify(incoming: Option<Result<Message, tungstenite::Error>>) -> Read {
     match incoming {
+        Some(Ok(Message::Close(Some(close)))) if close.code == CloseCode::Protocol => {
+            Read::Protocol
+        }
         None | Some(Ok(Message::Close(_))) => Read::Closed,
         Some(Ok(Message::Text(t))) => Read::Text(t),
         Some(Ok(Message::Binary(_))) => Read::Binary,
@@ -79,12 +99,19 @@ pub(super) fn classify(incoming: Option<Result<Message, tungstenite::Error>>) ->
         {
             Read::Flood
         }
+        // The client went without a close frame: nobody is left to tell.
+        Some(Err(tungstenite::Error::Protocol(ProtocolError::ResetWithoutClosingHandshake))) => {
+            Read::Closed
+        }
+        Some(Err(tungstenite::Error::Protocol(_))) => Read::Protocol,
+        Some(Err(tungstenite::Error::Utf8(_))) => Read::NotUtf8,
         Some(Err(_)) => Read::Closed,
     }
 }
 
-/// How a socket closes because of what its client sent, if it does: 1009 for a message
-/// over the size limit, 1008 for flooding. Counted in the metrics.
+/// How a socket closes because of what its client sent, if it does: 1002 for a
+/// protocol error, 1007 for text that is not UTF-8, 1009 for a message over the size
+/// limit, 1008 for flooding. Counted in the metrics.
 pub(super) fn refusal(
     read: &Read,
     metrics: &super::metrics::Metrics,
@@ -97,6 +124,14 @@ pub(super) fn refusal(
         Read::Flood => {
             metrics.closed_for_rate.fetch_add(1, Relaxed);
             Some((POLICY, "too many frames"))
+        }
+        Read::Protocol => {
+            metrics.closed_for_protocol.fetch_add(1, Relaxed);
+            Some((PROTOCOL_ERROR, "protocol error"))
+        }
+        Read::NotUtf8 => {
+            metrics.closed_for_protocol.fetch_add(1, Relaxed);
+            Some((NOT_UTF8, "text that is not UTF-8"))
         }
         _ => None,
     }
@@ -155,7 +190,7 @@ pub(super) async fn shut(
     code: u16,
     reason: &str,
 ) {
-    let _ = tokio::time::timeout(Duration::from_secs(1), sink.send(close(code, reason))).await;
+    let _ = tokio::time::timeout(Duration::from_secs(1), send_close(sink, code, reason)).await;
     let _ = tokio::time::timeout(Duration::from_secs(1), async {
         while let Some(Ok(message)) = stream.next().await {
             if matches!(message, Message::Close(_)) {
@@ -164,4 +199,16 @@ pub(super) async fn shut(
         }
     })
     .await;
+}
+
+/// Sends a close frame with `code`. If the client's own close came first, the library
+/// has its answer queued (a 1002 for a code a client may not send) and refuses a second
+/// close: that answer is what goes out.
+pub(super) async fn send_close<S>(sink: &mut S, code: u16, reason: &str)
+where
+    S: futures_util::Sink<Message> + Unpin,
+{
+    if sink.send(close(code, reason)).await.is_err() {
+        let _ = sink.flush().await;
+    }
 }

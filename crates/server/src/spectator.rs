@@ -4,7 +4,7 @@
 //! skips to the newest (counted as dropped), and one whose socket stops accepting data
 //! is disconnected, so it never holds up a tick or anyone else. Spectators only listen:
 //! what they send is charged to their budget and otherwise ignored, and an oversized
-//! message closes the socket with 1009, flooding with 1008.
+//! message closes the socket with 1009, flooding with 1008, a protocol error with 1002.
 //!
 //! [`Fanout`]: super::fanout::Fanout
 
@@ -12,13 +12,13 @@ use super::admission::AdmittedSpectator;
 use super::api::ApiError;
 use super::budget::{MessageBudget, Verdict};
 use super::fanout::{Member, Out, Wire, WireIo};
-use super::socket::{budget, classify, close, ending, limits, refusal, Read, NORMAL, POLICY};
+use super::socket::{budget, classify, ending, limits, refusal, send_close, Read, NORMAL, POLICY};
 use super::state::{AppState, MatchEntry};
 use super::upgrade::{FrameMeter, RawSocket, Upgrade};
 use axum::extract::{Path, State};
 use axum::response::{IntoResponse, Response};
 use fieldhouse_core::protocol::{encode, Hello, Role};
-use futures_util::{SinkExt, StreamExt};
+use futures_util::StreamExt;
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
 use std::time::Duration;
@@ -140,7 +140,7 @@ async fn listen(
                 closing = true;
                 match order {
                     Ok((code, reason)) => {
-                        let _ = socket.send(close(code, reason)).await;
+                        send_close(&mut socket, code, reason).await;
                         continue;
                     }
                     // The spectator task ends without closing: nothing more to read for.
@@ -170,7 +170,7 @@ async fn listen(
                 closing = true;
                 // No frame after the close.
                 wire.leave();
-                let _ = socket.send(close(code, reason)).await;
+                send_close(&mut socket, code, reason).await;
             }
             let _ = said.send(ending);
         }
