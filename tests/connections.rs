@@ -879,6 +879,12 @@ async fn protocol_errors_are_closed_with_1002_on_every_socket_kind() {
             raw_frame(0x81, true, &vec![b' '; 5000]),
             1009,
         ),
+        // Not an error: a close the server answers with its own, as RFC 6455 asks.
+        (
+            "a close with 1000",
+            raw_frame(0x88, true, &close(1000, b"bye")),
+            1000,
+        ),
     ];
     for path in [
         "/ws/matches/demo-baseball".to_string(),

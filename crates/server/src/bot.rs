@@ -10,7 +10,9 @@ use super::admission::Admitted;
 use super::auth;
 use super::budget::Verdict;
 use super::error::ApiError;
-use super::socket::{budget, classify, ending, limits, refusal, shut, Read, Sender, Sent, POLICY};
+use super::socket::{
+    answer_close, budget, classify, ending, limits, refusal, shut, Read, Sender, Sent, POLICY,
+};
 use super::state::{AppState, Control, MatchEntry, ToBot};
 use super::upgrade::{Socket, Upgrade};
 use axum::extract::{Path, Query, State};
@@ -216,8 +218,10 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
             }
         }
     };
-    if let Some((code, reason)) = closing {
-        shut(&mut sink, &mut stream, code, reason).await;
+    match closing {
+        Some((code, reason)) => shut(&mut sink, &mut stream, code, reason).await,
+        // The client closed (or went): its close, if it sent one, is answered.
+        None => answer_close(&mut sink).await,
     }
     let _ = entry
         .control

@@ -14,7 +14,7 @@ use super::error::ApiError;
 use super::range::{self, Wanted};
 use super::replay_dir;
 use super::socket::{
-    budget, classify, limits, refusal, shut, Read, Sender, Sent, GOING_AWAY, POLICY,
+    answer_close, budget, classify, limits, refusal, shut, Read, Sender, Sent, GOING_AWAY, POLICY,
 };
 use super::state::AppState;
 use super::upgrade::{Socket, Upgrade};
@@ -519,7 +519,10 @@ async fn view(
                 }
                 let text = match read {
                     Read::Text(t) => t,
-                    Read::Closed => return Ok(()),
+                    Read::Closed => {
+                        answer_close(send.sink).await;
+                        return Ok(());
+                    }
                     _ => continue,
                 };
                 match inbound.charge() {

@@ -201,6 +201,16 @@ pub(super) async fn shut(
     .await;
 }
 
+/// Answers a client's close, as RFC 6455 asks: the library queues the answer (the
+/// client's own code) when it reads the close, and it goes out on the next flush.
+/// Bounded, like every send: a client that closed may have stopped reading too.
+pub(super) async fn answer_close<S>(sink: &mut S)
+where
+    S: futures_util::Sink<Message> + Unpin,
+{
+    let _ = tokio::time::timeout(Duration::from_secs(1), sink.flush()).await;
+}
+
 /// Sends a close frame with `code`. If the client's own close came first, the library
 /// has its answer queued (a 1002 for a code a client may not send) and refuses a second
 /// close: that answer is what goes out.

@@ -12,7 +12,9 @@ use super::admission::AdmittedSpectator;
 use super::api::ApiError;
 use super::budget::{MessageBudget, Verdict};
 use super::fanout::{Member, Out, Wire, WireIo};
-use super::socket::{budget, classify, ending, limits, refusal, send_close, Read, NORMAL, POLICY};
+use super::socket::{
+    answer_close, budget, classify, ending, limits, refusal, send_close, Read, NORMAL, POLICY,
+};
 use super::state::{AppState, MatchEntry};
 use super::upgrade::{FrameMeter, RawSocket, Upgrade};
 use axum::extract::{Path, State};
@@ -175,6 +177,7 @@ async fn listen(
             let _ = said.send(ending);
         }
         if matches!(read, Read::Closed) {
+            answer_close(&mut socket).await;
             return;
         }
     }

@@ -207,7 +207,8 @@ class BadControl(FieldhouseError):
 
 class ConnectionClosed(FieldhouseError):
     """The server closed the socket without an ``end``: ``close_code`` says why (1008:
-    flooding or taken over, 1009: a message over the size limit, 1001: shutdown)."""
+    flooding or taken over, 1009: a message over the size limit, 1001: shutdown, 1002:
+    a frame that breaks the WebSocket protocol, 1007: text that is not UTF-8)."""
 
     code = "closed"
 
