@@ -96,6 +96,16 @@ fn write_replay(path: &Path, frames: u64, frame_bytes: usize, complete: bool) {
     out.flush().unwrap();
 }
 
+/// The names in `dir`, sorted.
+fn names_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
 /// The tick of the last whole frame written to `file`.
 fn last_tick_in(file: &Path) -> Option<u64> {
     let bytes = std::fs::read(file).unwrap();
@@ -590,14 +600,7 @@ async fn retention_deletes_the_oldest_replays_and_never_the_one_being_written() 
         "--replay-keep-days",
         "10",
     ]);
-    let present = || {
-        let mut names: Vec<String> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        names.sort();
-        names
-    };
+    let present = || names_in(&dir);
     let mut names = Vec::new();
     common::found_within(Duration::from_secs(10), || {
         names = present();
@@ -881,14 +884,7 @@ async fn retention_keeps_its_budget_with_more_replays_than_descriptors() {
             &budget_flag,
         ],
     );
-    let present = || {
-        let mut names: Vec<String> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        names.sort();
-        names
-    };
+    let present = || names_in(&dir);
     let mut names = Vec::new();
     common::found_within(Duration::from_secs(10), || {
         names = present();

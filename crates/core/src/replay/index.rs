@@ -28,7 +28,7 @@
 //! [`Index::grown`] walks on from there.
 
 use super::chunks::{self, Measured, Piece, Unpacker, MAX_CHUNK_BYTES, TRAILER_BYTES};
-use super::{chunked_header, parse_header, Encoding, MAX_HEADER_BYTES};
+use super::{chunked_header, parse_header, read_at, Encoding, MAX_HEADER_BYTES};
 use crate::sim::Scenario;
 use serde::Deserialize;
 use serde_json::Value;
@@ -192,20 +192,6 @@ fn next_line(reader: &mut impl BufRead, buf: &mut Vec<u8>, max: usize) -> io::Re
             return Ok(Line::Whole);
         }
     }
-}
-
-/// Reads into `buf` from `at` until it is full or the file ends; returns how much.
-fn read_up_to(file: &File, buf: &mut [u8], at: u64) -> io::Result<usize> {
-    let mut got = 0;
-    while got < buf.len() {
-        match file.read_at(&mut buf[got..], at + got as u64) {
-            Ok(0) => break,
-            Ok(n) => got += n,
-            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Ok(got)
 }
 
 impl Index {
@@ -384,7 +370,7 @@ impl Index {
                     pos = 0;
                     let had = buf.len();
                     buf.resize(had + WALK_READ, 0);
-                    let got = read_up_to(file, &mut buf[had..], at + had as u64)
+                    let got = read_at(file, &mut buf[had..], at + had as u64)
                         .map_err(|e| e.to_string())?;
                     buf.truncate(had + got);
                     ended = got == 0;

@@ -107,7 +107,7 @@ impl Encoding {
     /// The encoding of an opened file, from its first bytes.
     pub fn of_file(file: &std::fs::File) -> Result<Encoding, String> {
         let mut start = [0; 4];
-        let got = read_at(file, &mut start, 0)?;
+        let got = read_at(file, &mut start, 0).map_err(|e| e.to_string())?;
         Encoding::of(&start[..got])
     }
 
@@ -596,7 +596,7 @@ pub fn peek(file: &std::fs::File) -> Result<(Value, Option<Value>), String> {
 }
 
 /// Reads `buf.len()` bytes at `at`, or fewer if the file ends first; returns how many.
-fn read_at(file: &std::fs::File, buf: &mut [u8], at: u64) -> Result<usize, String> {
+pub(crate) fn read_at(file: &std::fs::File, buf: &mut [u8], at: u64) -> io::Result<usize> {
     use std::os::unix::fs::FileExt;
     let mut filled = 0;
     while filled < buf.len() {
@@ -604,7 +604,7 @@ fn read_at(file: &std::fs::File, buf: &mut [u8], at: u64) -> Result<usize, Strin
             Ok(0) => break,
             Ok(n) => filled += n,
             Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e.to_string()),
+            Err(e) => return Err(e),
         }
     }
     Ok(filled)
@@ -621,7 +621,7 @@ fn peek_plain(mut file: &std::fs::File) -> Result<(Value, Option<Value>), String
     let len = file.metadata().map_err(|e| e.to_string())?.len();
     let start = len.saturating_sub(TAIL_BYTES);
     let mut tail = vec![0; (len - start) as usize];
-    let filled = read_at(file, &mut tail, start)?;
+    let filled = read_at(file, &mut tail, start).map_err(|e| e.to_string())?;
     tail.truncate(filled);
     let footer = tail
         .strip_suffix(b"\n")
@@ -664,7 +664,7 @@ fn chunked_footer(file: &std::fs::File) -> Result<Option<Value>, String> {
     let len = file.metadata().map_err(|e| e.to_string())?.len();
     let trailer_at = len.saturating_sub(chunks::TRAILER_BYTES as u64);
     let mut trailer = [0; chunks::TRAILER_BYTES];
-    if read_at(file, &mut trailer, trailer_at)? < trailer.len() {
+    if read_at(file, &mut trailer, trailer_at).map_err(|e| e.to_string())? < trailer.len() {
         return Ok(None);
     }
     let Some((at, chunk_len)) = chunks::read_trailer(&trailer) else {
@@ -674,7 +674,7 @@ fn chunked_footer(file: &std::fs::File) -> Result<Option<Value>, String> {
         return Ok(None);
     }
     let mut chunk = vec![0; chunk_len as usize];
-    if read_at(file, &mut chunk, at)? < chunk.len() {
+    if read_at(file, &mut chunk, at).map_err(|e| e.to_string())? < chunk.len() {
         return Ok(None);
     }
     let mut unpacker = chunks::Unpacker::new(at).map_err(|e| e.to_string())?;
