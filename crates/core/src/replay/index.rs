@@ -584,7 +584,7 @@ impl Index {
     }
 
     /// The ticks of the file's first and last frames (None without frames), looked for
-    /// in at most [`ENDS_LOOKED_AT`] blocks from each end.
+    /// in at most 64 blocks from each end.
     pub fn ends(
         &self,
         file: &File,
