@@ -17,11 +17,15 @@
 //!   match catches up on late ticks, one after another, but never more than a second's
 //!   worth: further behind, the cadence restarts from now. `fast` ticks at once, every
 //!   time it is asked ([`Wake::Now`]: no timer at all; the shell takes what the sockets
-//!   said between ticks). `lockstep` ticks like `realtime` until a tick perceives for
-//!   seated bots; then the next tick waits until every seated bot has answered that
+//!   said between ticks). `lockstep` with a bot seated never waits for the clock: a tick
+//!   on which no perception is owed plays at once, as in `fast`; after a tick that
+//!   perceives for the seated bots, the next waits until every one has answered that
 //!   perception (a command for its tick or a later one) and plays at once, or until the
-//!   scenario's `lockstep_deadline_ms` has passed, whichever comes first; the cadence
-//!   then starts again a period after that tick.
+//!   scenario's `lockstep_deadline_ms` has passed, whichever comes first. So the match
+//!   goes at its bots' pace, whatever their perceptions' period (a basketball player
+//!   perceives every 15th tick: the 14 between used to run in real time, which held a
+//!   learner to 4 steps a second). With no bot seated, `lockstep` ticks like `realtime`
+//!   (for its spectators), its cadence starting a period after the last tick.
 //! * **Commands.** A command must be for a tick in the window of `in_window` (not
 //!   more than four perceptions late, not after the next perception's tick): otherwise
 //!   its bot gets `stale_tick` or `future_tick`, and the command neither acts nor counts
@@ -209,6 +213,8 @@ impl MatchDriver {
             (true, _, _) => Wake::Never,
             (false, Mode::Fast, _) => Wake::Now,
             (false, Mode::Lockstep, Some(until)) => Wake::At(until),
+            // Seated bots are owed nothing until the next perception: no clock to wait for.
+            (false, Mode::Lockstep, None) if self.seated() => Wake::Now,
             (false, _, _) => Wake::At(self.next_tick),
         }
     }
@@ -236,6 +242,7 @@ impl MatchDriver {
                 // The deadline: the tick goes without the silent bots.
                 self.next_tick = now + self.period;
             }
+            (Mode::Lockstep, None) if self.seated() => self.next_tick = now + self.period,
             _ => {
                 if now < self.next_tick {
                     return;
@@ -315,6 +322,11 @@ impl MatchDriver {
         }
     }
 
+    /// Whether a bot plays any agent.
+    fn seated(&self) -> bool {
+        self.seats.iter().any(Option::is_some)
+    }
+
     fn all_answered(&self) -> bool {
         let tick = self.session.world.tick();
         self.seats
@@ -333,8 +345,7 @@ impl MatchDriver {
         if let Some(frame) = frame {
             self.outputs.push_back(Output::Frame { tick, frame });
         }
-        let seated = self.seats.iter().any(Option::is_some);
-        if self.mode != Mode::Fast && tick.is_multiple_of(self.perceive_every) && seated {
+        if self.mode != Mode::Fast && tick.is_multiple_of(self.perceive_every) && self.seated() {
             self.perceive();
             if self.mode == Mode::Lockstep {
                 self.waiting_until = Some(now + self.deadline);
@@ -604,7 +615,8 @@ mod tests {
         let mut d = driver("lockstep", json!({}));
         d.handle(Event::BotJoin { agent: 0, conn: 1 }, Duration::ZERO);
         d.handle(Event::BotJoin { agent: 1, conn: 2 }, Duration::ZERO);
-        assert_eq!(d.poll_timeout(), Wake::At(10 * MS));
+        // With bots seated, a tick that owes them nothing plays at once.
+        assert_eq!(d.poll_timeout(), Wake::Now);
         d.handle_timeout(10 * MS);
         let out = outputs(&mut d);
         assert_eq!(perceptions(&out), vec![(0, 1, 1), (1, 2, 1)]);
@@ -666,6 +678,58 @@ mod tests {
         assert_eq!(d.poll_timeout(), Wake::At(810 * MS));
         d.handle_timeout(810 * MS);
         assert_eq!(tick(&d), 3);
+    }
+
+    /// A lock-step basketball match at 60 Hz whose `o1` is a bot slot: its players
+    /// perceive every 15th tick.
+    fn basketball_lockstep() -> MatchDriver {
+        let scenario = Scenario::from_value(json!({
+            "sport": "basketball",
+            "mode": "lockstep",
+            "tick_hz": 60.0,
+            "frame_hz": 30.0,
+            "lockstep_deadline_ms": 1000,
+            "agents": [
+                {"id": "o1", "team": "offense", "strategy": "simple", "bot": true},
+                {"id": "o2", "team": "offense", "strategy": "simple"},
+                {"id": "d1", "team": "defense", "strategy": "defense"}
+            ]
+        }))
+        .unwrap();
+        let world = World::new(&scenario, Some(crate::fixtures::cmu_capabilities())).unwrap();
+        let session = Session::new(world, "m".into(), scenario.tick_hz, scenario.frame_hz);
+        MatchDriver::new(session, &scenario)
+    }
+
+    #[test]
+    fn lockstep_plays_the_ticks_between_perceptions_at_once_and_waits_only_for_its_bots() {
+        let mut d = basketball_lockstep();
+        assert_eq!(d.perceive_every, 15);
+        // No bot yet: real time, for the spectators.
+        assert_eq!(d.poll_timeout(), Wake::At(d.period));
+        d.handle(Event::BotJoin { agent: 0, conn: 1 }, MS);
+        // The clock stands still from here: the match goes at the bot's pace alone.
+        let now = 2 * MS;
+        for perception in 1..=20u64 {
+            let mut played = 0;
+            while d.poll_timeout() == Wake::Now {
+                d.handle_timeout(now);
+                played += 1;
+                assert!(played <= 15, "ticks owed nothing are at most a perception's period");
+            }
+            let tick = tick(&d);
+            assert_eq!(tick, 15 * perception, "a tick that perceives, then a wait");
+            assert_eq!(d.poll_timeout(), Wake::At(now + 1000 * MS));
+            let out = outputs(&mut d);
+            assert_eq!(perceptions(&out), vec![(0, 1, tick)]);
+            assert!(!out.contains(&Output::Overrun));
+            // The answer plays the next tick at once, whatever the clock says.
+            d.handle(stand(0, 1, tick), now);
+            assert_eq!(self::tick(&d), tick + 1);
+        }
+        // The bot gone, real time again: a period after the last tick.
+        d.handle(Event::BotLeave { agent: 0, conn: 1 }, now);
+        assert_eq!(d.poll_timeout(), Wake::At(now + d.period));
     }
 
     #[test]

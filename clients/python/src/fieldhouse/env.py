@@ -28,8 +28,9 @@ basketball episode may start a few ticks into its first possession.
 * Reward: 1 on the step whose tick the agent caught a ball (its perception's ``caught``
   count rose), else 0.
 
-**Basketball** players perceive every 15 ticks (0.25 s of play); the 14 ticks between run
-in real time on the server (PROTOCOL.md, "Modes"), so a step takes at least 0.25 s.
+**Basketball** players perceive every 15 ticks (0.25 s of play); the server plays the 14
+ticks between at once (PROTOCOL.md, "Modes"), so a step takes as long as the agents take to
+answer, not 0.25 s.
 
 * Observation: ``Box(7 + 7·P,)`` float32 for P players, :data:`COURT_OBSERVATION` then
   :data:`PLAYER_OBSERVATION` for each player in the hello's order (offense first):
