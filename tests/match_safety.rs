@@ -326,6 +326,58 @@ async fn answer_every_perception(
     (answers, errors, None)
 }
 
+/// A lock-step basketball match, `o1` a bot that answers each perception at once: the
+/// 14 ticks between its perceptions do not wait for the clock (they ran in real time,
+/// four perceptions a second), so its possessions go at the bot's pace.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_lockstep_basketball_bot_plays_its_possessions_at_its_own_pace() {
+    let server = Server::start(&["--no-demo"]);
+    let (id, tokens) = server.create(json!({
+        "sport": "basketball",
+        "mode": "lockstep",
+        "lockstep_deadline_ms": 1000,
+        "agents": [
+            {"id": "o1", "team": "offense", "strategy": "costmap", "bot": true},
+            {"id": "o2", "team": "offense", "strategy": "costmap"},
+            {"id": "d1", "team": "defense", "strategy": "defense"}
+        ],
+        "options": {"possessions": 10}
+    }));
+    let token = tokens["o1"].as_str().unwrap();
+    let mut bot = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
+    assert_eq!(next(&mut bot).await["type"], "hello");
+    let started = Instant::now();
+    let (mut perceptions, mut last) = (0u64, 0u64);
+    let end = loop {
+        let m = next(&mut bot).await;
+        match m["type"].as_str() {
+            Some("perception") => {
+                let tick = m["tick"].as_u64().unwrap();
+                assert!(tick > last, "perceptions in order: {tick} after {last}");
+                if perceptions > 0 {
+                    assert_eq!(tick - last, 15, "a perception every 15th tick");
+                }
+                (perceptions, last) = (perceptions + 1, tick);
+                send(&mut bot, stand(tick)).await;
+            }
+            Some("end") => break m,
+            _ => {}
+        }
+    };
+    let wall_s = started.elapsed().as_secs_f64();
+    let played_s = end["tick"].as_u64().unwrap() as f64 / 60.0;
+    println!("{perceptions} perceptions, {played_s:.0} s of play in {wall_s:.2} s");
+    assert_eq!(end["reason"], "finished");
+    assert!(perceptions > 100, "{perceptions} perceptions");
+    // In real time this would take as long as the play; at the bot's pace it takes a
+    // small part of it, whatever the machine (a perception and its answer are some
+    // hundreds of microseconds).
+    assert!(
+        played_s > 5.0 * wall_s,
+        "{played_s:.0} s of play took {wall_s:.1} s"
+    );
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_lockstep_bot_answering_each_perception_once_is_never_rate_limited() {
     let (server, id, mut bot) = fast_lockstep_bot("lockstep-limits").await;

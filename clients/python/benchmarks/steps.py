@@ -1,21 +1,28 @@
 """Environment steps per second over loopback, and where the time goes.
 
     cargo build --release
-    FIELDHOUSE_BIN=target/release/fieldhouse python clients/python/benchmarks/steps.py
+    FIELDHOUSE_BIN=target/release/fieldhouse python clients/python/benchmarks/steps.py --runs 5
 
 Starts its own server (``fieldhouse serve --no-demo`` on a free port) and measures, one
 after the other:
 
 * ``bot loop``: one fielder's bare protocol loop on :class:`fieldhouse.Socket` (a
-  perception in, a command out, nothing else): the floor the environment stands on;
-* ``env fly ball, 1 bot``: :class:`FieldhouseParallelEnv` stepping one fielder through
-  scripted balls (a step is a tick; its frame read on the spectator socket for rewards);
-* ``env basketball, 2 bots``: ``o1`` and ``d1`` of the 2-v-1 (a step is 15 ticks, of
-  which the server plays 14 in real time: at most 4 steps a second by design).
+  perception in, a command out, nothing else): the floor the environments stand on;
+* ``gym fly ball, 1 fielder``: :class:`FieldhouseGymEnv` stepping one fielder through
+  scripted balls (a step is a tick);
+* ``pz fly ball, 2 fielders``: :class:`FieldhouseParallelEnv`, two fielders, the same
+  balls (a step is a tick, both fielders acting);
+* ``pz basketball, 2 bots``: ``o1`` and ``d1`` of the 2-v-1 (a step is 15 ticks, every
+  agent acting once; the server plays the 14 between perceptions at once);
+* ``4 × gym fly ball, vector``: four Gymnasium environments stepped in parallel by
+  ``gymnasium.vector.AsyncVectorEnv`` (a process each) against the one server; a step
+  of the vector is four environment steps, and the figure counts environment steps.
 
 For each: steps per second (wall clock), and the CPU time per step of this process
-(the client) and of the server process (from /proc), so a figure below target says
-whose time it is. Actions are constant, so no policy's cost is counted.
+(the client; for the vector, its worker processes are not in it) and of the server
+process (from /proc), so a figure below target says whose time it is. Actions are
+constant, so no policy's cost is counted. With ``--runs N`` each is measured N times,
+one after the other, and the medians close the report.
 """
 
 from __future__ import annotations
@@ -24,12 +31,19 @@ import argparse
 import asyncio
 import os
 import platform
+import statistics
 import time
 
+import gymnasium
 import numpy as np
 
 from fieldhouse import LocalServer, Socket
-from fieldhouse.env import FieldhouseParallelEnv, basketball_scenario, fly_ball_scenario
+from fieldhouse.env import (
+    FieldhouseGymEnv,
+    FieldhouseParallelEnv,
+    basketball_scenario,
+    fly_ball_scenario,
+)
 
 # Thirty flies to centre field, one after the other: an episode long enough that a reset
 # (a match created and seated) does not enter the figure.
@@ -118,36 +132,93 @@ def run_env(server: LocalServer, name: str, scenario: dict, steps: int, action) 
     return m.row(name, done)
 
 
+def run_gym(server: LocalServer, name: str, steps: int) -> str:
+    env = FieldhouseGymEnv(
+        server.url, fly_ball_scenario(launches=LAUNCHES), admin_token=server.admin_token
+    )
+    env.reset(seed=1)
+    action = np.zeros(2, np.float32)
+    done = 0
+    with Meter(server.pid) as m:
+        while done < steps:
+            _, _, terminated, truncated, _ = env.step(action)
+            done += 1
+            if terminated or truncated:
+                env.reset()
+    env.close()
+    return m.row(name, done)
+
+
+def run_vector(server: LocalServer, name: str, envs: int, steps: int) -> str:
+    """``envs`` Gymnasium environments in worker processes, ``steps`` vector steps."""
+    url, token = server.url, server.admin_token
+    make = [
+        lambda: FieldhouseGymEnv(url, fly_ball_scenario(launches=LAUNCHES), admin_token=token)
+        for _ in range(envs)
+    ]
+    vector = gymnasium.vector.AsyncVectorEnv(make)
+    vector.reset(seed=1)
+    actions = np.zeros((envs, 2), np.float32)
+    with Meter(server.pid) as m:
+        for _ in range(steps):
+            vector.step(actions)
+    vector.close()
+    return m.row(name, steps * envs)
+
+
+def median_rows(rows: list[str]) -> str:
+    """The median steps/s of each measurement's rows."""
+    rates: dict[str, list[float]] = {}
+    for row in rows:
+        name, rest = row[:26].strip(), row[26:].split()
+        rates.setdefault(name, []).append(float(rest[2]))
+    return "\n".join(
+        f"{name:<26} median {statistics.median(r):>8.0f} steps/s   runs: "
+        + ", ".join(f"{x:.0f}" for x in r)
+        for name, r in rates.items()
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--bin", help="the server binary (default $FIELDHOUSE_BIN)")
     parser.add_argument("--steps", type=int, default=5000, help="fly-ball steps (default 5000)")
-    parser.add_argument("--basketball-steps", type=int, default=40, help="default 40 (10 s)")
+    parser.add_argument(
+        "--basketball-steps", type=int, default=1500, help="basketball steps (default 1500)"
+    )
+    parser.add_argument("--runs", type=int, default=1, help="measure each this many times")
     args = parser.parse_args()
+    rows = []
     with LocalServer(args.bin) as server:
         print(
             f"server {server.binary}; Python {platform.python_version()} on {platform.machine()}, "
             f"{os.cpu_count()} CPUs"
         )
-        print(bot_loop(server, args.steps))
-        print(
-            run_env(
-                server,
-                "env fly ball, 1 bot",
-                fly_ball_scenario(launches=LAUNCHES),
-                args.steps,
-                np.zeros(2, np.float32),
-            )
-        )
-        print(
-            run_env(
-                server,
-                "env basketball, 2 bots",
-                basketball_scenario(possessions=20),
-                args.basketball_steps,
-                0,
-            )
-        )
+        for _ in range(args.runs):
+            measured = [
+                bot_loop(server, args.steps),
+                run_gym(server, "gym fly ball, 1 fielder", args.steps),
+                run_env(
+                    server,
+                    "pz fly ball, 2 fielders",
+                    fly_ball_scenario(fielders=2, launches=LAUNCHES),
+                    args.steps,
+                    np.zeros(2, np.float32),
+                ),
+                run_env(
+                    server,
+                    "pz basketball, 2 bots",
+                    basketball_scenario(possessions=200),
+                    args.basketball_steps,
+                    0,
+                ),
+                run_vector(server, "4 × gym fly ball, vector", 4, args.steps // 4),
+            ]
+            for row in measured:
+                print(row, flush=True)
+            rows += measured
+    if args.runs > 1:
+        print(median_rows(rows))
 
 
 if __name__ == "__main__":

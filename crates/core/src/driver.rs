@@ -715,7 +715,10 @@ mod tests {
             while d.poll_timeout() == Wake::Now {
                 d.handle_timeout(now);
                 played += 1;
-                assert!(played <= 15, "ticks owed nothing are at most a perception's period");
+                assert!(
+                    played <= 15,
+                    "ticks owed nothing are at most a perception's period"
+                );
             }
             let tick = tick(&d);
             assert_eq!(tick, 15 * perception, "a tick that perceives, then a wait");
