@@ -447,6 +447,50 @@ async fn frame_dense_replays_cost_their_bytes_not_their_frames() {
     assert!(peak < 40_000, "peak memory grew {peak} kB");
 }
 
+/// A match created with `?record=false` leaves nothing in the replay directory (a
+/// learner's episodes by the thousand made a nameless file each); one without the
+/// query is recorded as before; a query that says anything else is refused.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn matches_are_recorded_unless_created_with_record_false() {
+    let dir = empty_dir("record-false");
+    std::fs::create_dir_all(&dir).unwrap();
+    let server = Server::start(&["--no-demo", "--replay-dir", dir.to_str().unwrap()]);
+    let scenario = common::server::fielder_with_bot("realtime", 1000);
+    let (unrecorded, _) = server.create_at("/api/matches?record=false", scenario.clone());
+    let (recorded, _) = server.create_at("/api/matches?record=true", scenario.clone());
+    let (by_default, _) = server.create(scenario.clone());
+    let files = || names_in(&dir);
+    common::until(
+        Duration::from_secs(10),
+        "the recorded matches' files",
+        || {
+            let names = files();
+            names.iter().any(|n| n.starts_with(&recorded))
+                && names.iter().any(|n| n.starts_with(&by_default))
+        },
+    )
+    .await;
+    assert!(
+        !files().iter().any(|n| n.starts_with(&unrecorded)),
+        "{:?}",
+        files()
+    );
+    let shown = server.get(&format!("/api/matches/{unrecorded}"));
+    assert_eq!(shown["replay"], Value::Null, "{shown}");
+    assert!(server.get(&format!("/api/matches/{recorded}"))["replay"].is_string());
+    for query in ["record=no", "record=", "recrod=false"] {
+        let refused = ureq::post(&server.http(&format!("/api/matches?{query}")))
+            .set("Authorization", &format!("Bearer {ADMIN}"))
+            .send_json(scenario.clone())
+            .unwrap_err();
+        let ureq::Error::Status(400, answer) = refused else {
+            panic!("{query}: {refused}")
+        };
+        let body: Value = answer.into_json().unwrap();
+        assert_eq!(body["error"]["code"], "bad_query", "{query}: {body}");
+    }
+}
+
 /// A server whose settings file says `settings`.
 fn server_with(name: &str, settings: &str, flags: &[&str]) -> (Server, PathBuf) {
     let dir = empty_dir(name);

@@ -90,7 +90,12 @@ impl Server {
 
     /// Creates a match; returns its id and bot tokens.
     pub(crate) fn create(&self, scenario: Value) -> (String, Value) {
-        let doc: Value = ureq::post(&self.http("/api/matches"))
+        self.create_at("/api/matches", scenario)
+    }
+
+    /// [`Server::create`] through `path` (`/api/matches` with a query).
+    pub(crate) fn create_at(&self, path: &str, scenario: Value) -> (String, Value) {
+        let doc: Value = ureq::post(&self.http(path))
             .set("Authorization", &format!("Bearer {ADMIN}"))
             .send_json(scenario)
             .expect("created")

@@ -8,7 +8,7 @@ use super::slot::Slot;
 use super::state::{AppState, Control, MatchEntry};
 use super::sweep;
 use axum::body::Bytes;
-use axum::extract::{FromRequestParts, Path, State};
+use axum::extract::{FromRequestParts, Path, Query, State};
 use axum::http::request::Parts;
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::{IntoResponse, Response};
@@ -16,6 +16,7 @@ use axum::Json;
 use fieldhouse_core::driver::Event;
 use fieldhouse_core::sim::Scenario;
 use serde_json::{json, Value};
+use std::collections::HashMap;
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
 
@@ -107,8 +108,10 @@ pub async fn show(
 pub async fn create(
     State(app): State<Arc<AppState>>,
     _: Admin,
+    Query(query): Query<HashMap<String, String>>,
     body: Bytes,
 ) -> Result<Response, ApiError> {
+    let record = recorded(&query)?;
     let scenario = Scenario::from_json(&body).map_err(|e| {
         ApiError::new(
             StatusCode::UNPROCESSABLE_ENTITY,
@@ -116,7 +119,7 @@ pub async fn create(
             e.to_string(),
         )
     })?;
-    let (id, entry) = start(&app, scenario, None)?;
+    let (id, entry) = start(&app, scenario, None, record)?;
     let tokens: serde_json::Map<String, Value> = entry
         .tokens
         .iter()
@@ -130,11 +133,30 @@ pub async fn create(
         .into_response())
 }
 
-/// Starts a match; `id` picks its id (the demos), else a random one.
+/// Whether a new match is recorded, as its query says: `record=false` leaves it out of
+/// the replay directory (a learner's thousands of episodes need no replays), `true`
+/// (the default) records it if the server records at all. Anything else is refused.
+fn recorded(query: &HashMap<String, String>) -> Result<bool, ApiError> {
+    let bad = |message: String| ApiError::new(StatusCode::BAD_REQUEST, "bad_query", message);
+    if let Some(other) = query.keys().find(|k| *k != "record") {
+        return Err(bad(format!(
+            "unknown query parameter \"{other}\": a match takes only record=true or record=false"
+        )));
+    }
+    match query.get("record").map(String::as_str) {
+        None | Some("true") => Ok(true),
+        Some("false") => Ok(false),
+        Some(other) => Err(bad(format!("record \"{other}\" is neither true nor false"))),
+    }
+}
+
+/// Starts a match; `id` picks its id (the demos), else a random one; `record`: whether
+/// it is recorded (if the server records matches).
 pub fn start(
     app: &Arc<AppState>,
     scenario: Scenario,
     id: Option<String>,
+    record: bool,
 ) -> Result<(String, Arc<MatchEntry>), ApiError> {
     let slot = Slot::reserve(&app.metrics, app.config.max_matches).ok_or_else(|| {
         ApiError::new(
@@ -144,7 +166,7 @@ pub fn start(
         )
     })?;
     let id = id.unwrap_or_else(|| auth::new_token()[..12].to_string());
-    let entry = match_task::spawn(app, id.clone(), scenario, slot).map_err(|e| {
+    let entry = match_task::spawn(app, id.clone(), scenario, slot, record).map_err(|e| {
         ApiError::new(
             StatusCode::UNPROCESSABLE_ENTITY,
             "bad_scenario",

@@ -41,7 +41,7 @@ pub fn scenarios() -> Vec<(&'static str, Scenario)> {
 
 pub fn start_all(app: &Arc<AppState>) {
     for (id, scenario) in scenarios() {
-        match api::start(app, scenario, Some(id.to_string())) {
+        match api::start(app, scenario, Some(id.to_string()), true) {
             Ok(_) => tracing::info!(id, "demo match started"),
             Err(e) => tracing::warn!(id, error = ?e, "demo match could not start"),
         }

@@ -37,12 +37,14 @@ struct Bot {
 }
 
 /// Builds the world a scenario describes and starts its task, which holds `slot` until
-/// it ends. Returns the match and the bot tokens of its bot-controlled agents.
+/// it ends, recording it if `record` and the server records matches. Returns the match
+/// and the bot tokens of its bot-controlled agents.
 pub fn spawn(
     app: &Arc<AppState>,
     id: String,
     scenario: Scenario,
     slot: Slot,
+    record: bool,
 ) -> Result<Arc<MatchEntry>, ScenarioError> {
     let world = World::new(&scenario, Some(app.caps.clone()))?;
     let agent_ids = world.agent_ids();
@@ -71,26 +73,30 @@ pub fn spawn(
     let driver = MatchDriver::new(session, &scenario);
     let creation_error = Mutex::new(None);
     let replay = Arc::new(Mutex::new(None));
-    let started = app.replay_dir.as_deref().and_then(|dir| {
-        let header = replay::header(&info, &scenario, app.caps.source.fingerprint());
-        let files = InDir {
-            app: app.clone(),
-            dir: dir.to_path_buf(),
-            stem: format!("{id}-{}", unix_seconds()),
-            current: replay.clone(),
-        };
-        let limit = recording_limit(&app.config, &scenario);
-        let queued = app.replays.queued.clone();
-        let made = Recording::start(files, header, limit, queued, recording::CUT_AFTER)
-            .map_err(|e| e.to_string())
-            .and_then(|(r, _)| r.frame(0, first.clone()).map(|()| r));
-        made.map_err(|e| {
-            app.metrics.replay_errors.fetch_add(1, Relaxed);
-            tracing::warn!(error = %e, "cannot record this match; it runs unrecorded");
-            *creation_error.lock().expect("not poisoned") = Some(e);
-        })
-        .ok()
-    });
+    let started = app
+        .replay_dir
+        .as_deref()
+        .filter(|_| record)
+        .and_then(|dir| {
+            let header = replay::header(&info, &scenario, app.caps.source.fingerprint());
+            let files = InDir {
+                app: app.clone(),
+                dir: dir.to_path_buf(),
+                stem: format!("{id}-{}", unix_seconds()),
+                current: replay.clone(),
+            };
+            let limit = recording_limit(&app.config, &scenario);
+            let queued = app.replays.queued.clone();
+            let made = Recording::start(files, header, limit, queued, recording::CUT_AFTER)
+                .map_err(|e| e.to_string())
+                .and_then(|(r, _)| r.frame(0, first.clone()).map(|()| r));
+            made.map_err(|e| {
+                app.metrics.replay_errors.fetch_add(1, Relaxed);
+                tracing::warn!(error = %e, "cannot record this match; it runs unrecorded");
+                *creation_error.lock().expect("not poisoned") = Some(e);
+            })
+            .ok()
+        });
     let recorder = started;
     let (publish, published) = watch::channel(Published {
         seq: 0,
@@ -467,7 +473,7 @@ mod tests {
         let (app, _stop) = app();
         let scenario = Scenario::from_value(serde_json::json!({"sport": "baseball"})).unwrap();
         let slot = Slot::reserve(&app.metrics, 1).unwrap();
-        let entry = spawn(&app, "m".into(), scenario, slot).unwrap();
+        let entry = spawn(&app, "m".into(), scenario, slot, true).unwrap();
         assert!(
             Slot::reserve(&app.metrics, 1).is_none(),
             "the match holds the place"
