@@ -18,7 +18,7 @@ export function showLobby() {
       const [live, recorded] = await Promise.all([getJson("/api/matches"), getJson(`/api/replays?limit=${REPLAYS_SHOWN}`)]);
       if (stopped) return;
       $("matches").innerHTML = live.matches.length
-        ? live.matches.map(matchRow).join("")
+        ? matchRows(live.matches)
         : `<tr><td colspan="5" class="muted">no matches</td></tr>`;
       const recording = new Set(live.matches.filter((m) => m.status === "running").map((m) => m.replay));
       $("replays").innerHTML = recorded.replays.length
@@ -39,6 +39,22 @@ async function getJson(path) {
   const response = await fetch(path, { cache: "no-store" });
   if (!response.ok) throw new Error(`${path}: HTTP ${response.status}`);
   return response.json();
+}
+
+/**
+ * The matches running first, then the ended ones with a name; ended matches without one
+ * (a learner's episodes, an evaluation's games: the server keeps ended matches listed
+ * for a while so clients can read their results) are counted in a line, not listed.
+ */
+function matchRows(matches) {
+  const running = matches.filter((m) => m.status === "running");
+  const ended = matches.filter((m) => m.status !== "running");
+  const named = ended.filter((m) => m.name);
+  const unnamed = ended.length - named.length;
+  const hidden = unnamed
+    ? `<tr><td colspan="5" class="muted">and ${unnamed} ended ${unnamed === 1 ? "match" : "matches"} without a name, not listed</td></tr>`
+    : "";
+  return running.concat(named).map(matchRow).join("") + hidden;
 }
 
 // Every string from the server is escaped and every number coerced before it goes

@@ -102,6 +102,21 @@ async function main() {
   // The motion source is named for visitors without any path of the server's.
   const source = await page.locator("#source").textContent();
   check(/^motion: CMU motion capture, embedded: \d+ clips and their mirror images$/.test(source), `lobby: names the motion source without a path: ${source}`);
+  // Ended matches without a name (a learner's episodes) are counted, not listed; an
+  // ended match with a name still is. (A fast match of a second of play ends at once.)
+  const admin = { Authorization: "Bearer browser-test-admin-token" };
+  const ended = [];
+  for (const name of [undefined, undefined, "a named match"]) {
+    const made = await page.request.post(`${base}/api/matches?record=false`, {
+      headers: admin, data: { sport: "baseball", mode: "fast", duration_s: 1, ...(name ? { name } : {}) },
+    });
+    check(made.status() === 201, `lobby: a match that ends at once is created (${made.status()})`);
+    ended.push((await made.json()).id);
+  }
+  await page.locator("#matches", { hasText: "and 2 ended matches without a name, not listed" }).waitFor({ timeout: 10_000 });
+  await page.locator(`#matches a[href="#/matches/${ended[2]}"]`).waitFor({ timeout: 10_000 });
+  check(await page.locator(`#matches a[href="#/matches/${ended[0]}"]`).count() === 0, "lobby: an ended match without a name is not listed");
+  passed("lobby: ended matches without a name are counted, not listed");
   await shot("lobby");
 
   // Hostile replay files: every string shows as text, nothing runs, and the page's
