@@ -26,7 +26,9 @@ LAUNCHES = [
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--server", default="http://127.0.0.1:7878")
+    parser.add_argument(
+        "--server", help="the server's URL (default: $FIELDHOUSE_URL, else http://127.0.0.1:7878)"
+    )
     parser.add_argument("--sport", choices=["baseball", "basketball"], default="baseball")
     parser.add_argument("--episodes", type=int, default=3)
     parser.add_argument("--seed", type=int, default=1)

@@ -1,11 +1,13 @@
 """Every test runs against the real server binary: ``fieldhouse serve`` started once per
 session on a free loopback port (``$FIELDHOUSE_BIN``, default the repository's
-target/debug/fieldhouse), recording replays into a temporary directory."""
+``${CARGO_TARGET_DIR:-target}/debug/fieldhouse``), recording replays into a temporary
+directory."""
 
 from __future__ import annotations
 
 import os
 import pathlib
+import socket
 
 import pytest
 
@@ -14,9 +16,15 @@ from fieldhouse import LocalServer
 REPO = pathlib.Path(__file__).resolve().parents[3]
 
 
+def default_binary() -> pathlib.Path:
+    """Where cargo builds the server in this repository: ``CARGO_TARGET_DIR`` (relative
+    to the workspace root, where scripts/python-tests runs cargo) or ``target``."""
+    return REPO / (os.environ.get("CARGO_TARGET_DIR") or "target") / "debug" / "fieldhouse"
+
+
 @pytest.fixture(scope="session")
 def server(tmp_path_factory):
-    binary = os.environ.get("FIELDHOUSE_BIN", str(REPO / "target" / "debug" / "fieldhouse"))
+    binary = os.environ.get("FIELDHOUSE_BIN") or str(default_binary())
     replays = tmp_path_factory.mktemp("replays")
     with LocalServer(binary, args=["--replay-dir", str(replays)]) as s:
         yield s
@@ -25,3 +33,12 @@ def server(tmp_path_factory):
 @pytest.fixture
 def client(server):
     return server.client()
+
+
+@pytest.fixture
+def closed_port_url():
+    """A loopback address nothing listens on: a port the system handed out, closed again."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    return f"http://127.0.0.1:{port}"

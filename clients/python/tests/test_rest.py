@@ -106,3 +106,38 @@ def test_replays_are_listed_a_page_at_a_time_newest_first(client):
     assert len(client.list_replays(limit=2)) == 2
     with pytest.raises(BadQuery):
         client._json("GET", "/api/replays?limit=0")
+
+
+def test_without_a_server_the_error_says_how_to_start_one(closed_port_url):
+    for call in (
+        lambda c: c.list_matches(),
+        lambda c: c.create_match(ONE_BALL),
+        lambda c: c.delete_match("m"),
+    ):
+        with pytest.raises(FieldhouseError) as e:
+            call(Client(closed_port_url, "t" * 16))
+        assert e.value.code == "unreachable"
+        message = str(e.value)
+        assert closed_port_url in message
+        assert "fieldhouse serve" in message and "cargo run --release -- serve" in message
+
+
+def test_the_url_comes_from_the_argument_then_fieldhouse_url_then_the_default(monkeypatch):
+    monkeypatch.delenv("FIELDHOUSE_URL", raising=False)
+    assert Client().url == "http://127.0.0.1:7878"
+    monkeypatch.setenv("FIELDHOUSE_URL", "http://fieldhouse.example:9000/")
+    assert Client().url == "http://fieldhouse.example:9000"
+    assert Client("http://127.0.0.1:1").url == "http://127.0.0.1:1"
+
+
+def test_a_match_created_with_record_false_keeps_no_replay(client):
+    kept = client.create_match(ONE_BALL)
+    unrecorded = client.create_match(ONE_BALL, record=False)
+    try:
+        assert wait_ended(client, kept.id)["replay"] is not None
+        assert wait_ended(client, unrecorded.id)["replay"] is None
+        matches = {r["match"] for r in client.list_replays()}
+        assert kept.id in matches and unrecorded.id not in matches
+    finally:
+        client.delete_match(kept.id)
+        client.delete_match(unrecorded.id)

@@ -1,6 +1,23 @@
 """A PettingZoo ``ParallelEnv`` over a lock-step match, and a single-agent Gymnasium
 wrapper (needs the ``env`` extra: ``pip install './clients/python[env]'``).
 
+**Registered environments.** Importing this module registers two Gymnasium ids (or name
+the module in the id: ``gymnasium.make("fieldhouse.env:fieldhouse/FlyBall-v0")``):
+
+* ``fieldhouse/FlyBall-v0``: one fielder (``f0``) and :func:`fly_ball_scenario`'s fly to
+  centre field; ``max_episode_steps`` 1250 (the longest flight the server simulates is
+  20 s, 1200 ticks). Keywords: ``launches``, ``sport``, and the environment's own.
+* ``fieldhouse/Basketball-v0``: one bot player (``agent="o1"``, or ``"o2"``, ``"d1"``) in
+  :func:`basketball_scenario`'s 2-v-1, the others on their built-in brains, for
+  ``possessions=2``; ``max_episode_steps`` 200 (a possession lasts at most its 24 s
+  shot clock, 96 steps). Registered ``nondeterministic``: an episode may start a few
+  ticks into its first possession (see below).
+
+Every environment finds its server at ``url=``, else ``$FIELDHOUSE_URL``, else
+``http://127.0.0.1:7878``, and creates and deletes its matches with ``admin_token=``,
+else ``$FIELDHOUSE_ADMIN_TOKEN``. A server that does not answer is a
+:class:`~fieldhouse.errors.FieldhouseError` (``unreachable``) that says how to start one.
+
 **Episodes.** :meth:`FieldhouseParallelEnv.reset` creates a ``lockstep`` match on the
 server from the scenario (sport, line-up: the agents with ``"bot": true`` are the
 environment's agents; the others play their built-in strategies) with the match seed
@@ -10,11 +27,20 @@ command per agent for the tick it perceived; the server plays on once every bot 
 answered (PROTOCOL.md, "Modes") and the next perceptions are the observations. The match's
 ``end`` (the last scripted ball dead, ``options.possessions`` played, ``duration_s``) ends
 the episode for every agent (*termination*); ``max_steps`` cuts it short (*truncation*).
-:meth:`~FieldhouseParallelEnv.close` (and the next ``reset``) deletes the match.
+:meth:`~FieldhouseParallelEnv.close` (and the next ``reset``) deletes the match, and so
+does a ``reset`` that fails once the match is created: an episode leaves nothing behind.
+Its matches are not recorded unless ``record=True`` (then the replay is named ``name``,
+default ``"fieldhouse env"``, which the lobby also shows for the live match).
 
 Until the bots are seated the match ticks in real time, its agents on their built-in
 brains: :func:`fly_ball_scenario` therefore hits its first ball half a second in, and a
 basketball episode may start a few ticks into its first possession.
+
+**Rendering.** The environments draw nothing themselves (``render_modes`` is empty):
+a match is watched live on the server's spectator page, at :attr:`spectator_url`
+(``{url}/#/matches/{match_id}``). ``render()`` returns None and warns with that
+address, as Gymnasium asks of an environment without a render mode; a ``render_mode``
+is refused with it.
 
 **Fielders** (baseball, cricket) perceive every tick, so a step is one tick (1/60 s).
 
@@ -23,6 +49,15 @@ basketball episode may start a few ticks into its first possession.
   ``alpha``, ``d_alpha_dt``, ``distance_m``, ``t`` (0 between balls; rates 0 on a ball's
   first tick), then the fielder's own ``x``, ``z``, ``vx``, ``vz``, ``home_x``, ``home_z``
   (m, m/s). These are exactly the perception's fields (PROTOCOL.md, "`perception`").
+  Their bounds are what the server lets a match do (:func:`fielder_observation_space`):
+  ``alpha`` within ±π, ``d_alpha_dt`` within ±π·``tick_hz`` (a bearing changes by at
+  most half a turn between ticks), ``t`` at most 20 s (the longest flight), the speeds
+  within the body's ``max_speed_m_s``, the homes within 250 m of the batter (or the
+  scenario's farthest), the position within the home's distance plus what the top
+  speed covers between two launches (which put the fielder back home), ``distance_m``
+  that plus the farthest a 70 m/s ball (the fastest launch) goes in 20 s. ``tan_psi``
+  and ``d_tan_psi_dt`` are unbounded: a ball passing over the eye makes them as large
+  as it likes.
 * Action: ``Box(-1, 1, (2,))``: an acceleration ``[ax, az]`` in units of the body's
   ``max_accel_m_s2``, sent as ``accelerate`` (the server clips its length to the body).
 * Reward: 1 on the step whose tick the agent caught a ball (its perception's ``caught``
@@ -36,7 +71,10 @@ answer, not 0.25 s.
   :data:`PLAYER_OBSERVATION` for each player in the hello's order (offense first):
   ``shot_clock_s``, the ball's ``x``, ``y``, ``z`` and state one-hot (``held``, ``pass``,
   ``shot``); per player ``x``, ``z``, ``cos heading``, ``sin heading``, ``has_ball``,
-  ``is_self``, ``offense``.
+  ``is_self``, ``offense``. Bounds (:func:`court_observation_space`): the shot clock
+  from 0 to ``options.shot_clock_s`` (24), positions on the half court (x 0 to 14 m,
+  z ±7.5 m) and the 1 m beyond its lines a run may use, the ball's height 0 to 5 m (a
+  shot's arc peaks near 4.1 m), the rest 0 to 1 or ±1.
 * Action: ``Discrete(10 + P)``: 0 ``stand``, 1 ``shoot``, 2 to 9 ``move_to`` a point 2 m
   away at bearing ``k·45°`` (k = action − 2, clamped to the court), 10 + i ``pass`` to
   player i. An action the player cannot take (a shot without the ball, a pass to a
@@ -44,6 +82,11 @@ answer, not 0.25 s.
   ``rejected``.
 * Reward: the offense's points scored during the step, for each offensive player; their
   negative for each defender.
+
+An observation outside its space would mean the server did something these bounds say
+it cannot: it is clipped into the space, with a ``RuntimeWarning`` naming the fields. An
+action outside its space (a wrong shape or type, out of range, NaN) is a ``ValueError``
+naming the agent, the action and the space, raised before any command is sent.
 
 A fielder's rewards come from its own perceptions (``caught``), so a fly-ball environment
 holds only its bots' sockets. Basketball's come from the match's frames, read on a
@@ -58,6 +101,8 @@ from __future__ import annotations
 import asyncio
 import copy
 import math
+import reprlib
+import warnings
 from typing import Any
 
 import gymnasium
@@ -90,6 +135,26 @@ BALL_STATES = ("held", "pass", "shot")
 FLY_SPORTS = ("baseball", "cricket")
 MOVE_M = 2.0
 COURT = {"length_m": 14.0, "width_m": 15.0}
+
+#: The scenario's ``name`` for an environment's matches, unless given another.
+DEFAULT_NAME = "fieldhouse env"
+
+# What the server allows a fly-ball match (crates/core/src/sim/fly), which bounds what a
+# fielder can perceive.
+MAX_FLIGHT_S = 20.0  # a ball is simulated for at most 20 s
+FARTHEST_HOME_M = 250.0  # a fielder's home is at most 250 m from the batter
+HUMAN_MAX_SPEED_M_S = 8.5  # a body without scenario limits
+DEFAULT_PAUSE_S = 2.0  # between one ball's end and the next launch
+# The ball leaves the bat at most 70 m/s, 1 m up; drag only takes energy away, spin
+# (a force across the motion) none, and falling 1 m adds less than 0.2 m/s: its ground
+# point stays within 70.2 m/s x 21 s (20 s and a tick of at least 1/1 Hz) < 1500 m of
+# the batter.
+BALL_RANGE_M = 1500.0
+
+# What the server allows a basketball match (crates/core/src/basketball).
+SHOT_CLOCK_S = 24.0  # options.shot_clock_s by default
+RUN_OFF_M = 1.0  # a move may carry a player this far beyond the lines, never farther
+BALL_TOP_M = 5.0  # the highest the ball goes is a shot's arc, about 4.1 m
 
 # The first ball of fly_ball_scenario: a fly to centre field, hit once the bots are seated.
 DEFAULT_LAUNCH = {"time_s": 0.5, "speed_m_s": 36.0, "elevation_deg": 40.0, "azimuth_deg": 45.0}
@@ -135,45 +200,126 @@ def basketball_scenario(bots: tuple[str, ...] = ("o1", "d1"), possessions: int =
     }
 
 
+def fielder_observation_space(scenario: dict) -> spaces.Box:
+    """The observation space of the scenario's bot fielders (one for all of them, so that
+    a policy can be shared): each of :data:`FIELDER_OBSERVATION` within what the server
+    lets this scenario's match do (the module's doc says how)."""
+    tick_s = 1.0 / (scenario.get("tick_hz") or 60.0)
+    bots = [a for a in scenario.get("agents") or [] if a.get("bot")]
+    # A home the scenario leaves out is the default line-up's: within the farthest allowed.
+    homes = [math.hypot(*a["position"]) if a.get("position") else FARTHEST_HOME_M for a in bots]
+    home = max(homes, default=FARTHEST_HOME_M)
+    speed = max(
+        ((a.get("limits") or {}).get("max_speed_m_s", HUMAN_MAX_SPEED_M_S) for a in bots),
+        default=HUMAN_MAX_SPEED_M_S,
+    )
+    # Each launch puts the fielder back home at rest; until the next, it runs at most
+    # `speed` for a flight and the dead time after it, the pause or until a scripted time
+    # (a bot's fielder follows its orders between balls too). Two ticks cover rounding.
+    options = scenario.get("options") or {}
+    pause_s = options.get("pause_s")
+    pause_s = DEFAULT_PAUSE_S if pause_s is None else pause_s
+    launch_times = [launch.get("time_s", 0.0) for launch in options.get("launches") or []]
+    away_s = MAX_FLIGHT_S + max([pause_s, *launch_times]) + 2 * tick_s
+    reach = home + speed * away_s
+    bounds = {
+        "ball_in_play": (0.0, 1.0),
+        # (ball height - eye) / distance: a ball passing over the eye (distance near 0)
+        # makes tan psi, and its rate, as large as it likes.
+        "tan_psi": (-np.inf, np.inf),
+        "d_tan_psi_dt": (-np.inf, np.inf),
+        "alpha": (-math.pi, math.pi),
+        # The server wraps the bearing's change to half a turn, over at least a tick.
+        "d_alpha_dt": (-math.pi / tick_s, math.pi / tick_s),
+        "distance_m": (0.0, reach + BALL_RANGE_M),
+        "t": (0.0, MAX_FLIGHT_S + tick_s),
+        "x": (-reach, reach),
+        "z": (-reach, reach),
+        "vx": (-speed, speed),
+        "vz": (-speed, speed),
+        "home_x": (-home, home),
+        "home_z": (-home, home),
+    }
+    low, high = zip(*(bounds[name] for name in FIELDER_OBSERVATION), strict=True)
+    return spaces.Box(np.array(low, np.float32), np.array(high, np.float32), dtype=np.float32)
+
+
+def court_observation_space(scenario: dict) -> spaces.Box:
+    """The observation space of the scenario's bot basketball players: the
+    :data:`COURT_OBSERVATION`, then :data:`PLAYER_OBSERVATION` for each player, each
+    within what the server lets the match do (the module's doc says how)."""
+    options = scenario.get("options") or {}
+    shot_clock_s = options.get("shot_clock_s") or SHOT_CLOCK_S
+    x = (-RUN_OFF_M, COURT["length_m"] + RUN_OFF_M)
+    z = (-COURT["width_m"] / 2 - RUN_OFF_M, COURT["width_m"] / 2 + RUN_OFF_M)
+    flag = (0.0, 1.0)
+    # The ball is held by a player, passed between two, or shot from one to the basket:
+    # on the ground it is where the players are.
+    court = [(0.0, shot_clock_s), x, (0.0, BALL_TOP_M), z, flag, flag, flag]
+    player = [x, z, (-1.0, 1.0), (-1.0, 1.0), flag, flag, flag]
+    low, high = zip(*court, *player * len(scenario["agents"]), strict=True)
+    return spaces.Box(np.array(low, np.float32), np.array(high, np.float32), dtype=np.float32)
+
+
 class FieldhouseParallelEnv(ParallelEnv):
     """The bot agents of ``scenario`` on the server at ``url`` (see the module's doc).
 
+    ``url`` defaults to ``$FIELDHOUSE_URL``, else ``http://127.0.0.1:7878``;
     ``admin_token`` (default ``FIELDHOUSE_ADMIN_TOKEN``) creates and deletes the matches.
     ``max_steps`` truncates an episode; ``deadline_ms`` is how long the server waits for
-    a command before playing a tick without it.
+    a command before playing a tick without it. ``record=True`` keeps a replay of each
+    episode's match (on a server started with ``--replay-dir``), named ``name``.
     """
 
     metadata = {"name": "fieldhouse_v0", "render_modes": []}
 
     def __init__(
         self,
-        url: str,
-        scenario: dict,
+        url: str | None = None,
+        scenario: dict | None = None,
         *,
         admin_token: str | None = None,
         max_steps: int | None = None,
         deadline_ms: int = 5000,
+        record: bool = False,
+        name: str | None = None,
+        render_mode: str | None = None,
     ):
+        if scenario is None:
+            raise TypeError("a scenario is needed: fly_ball_scenario(), basketball_scenario()")
         agents = scenario.get("agents")
         if not agents or not any(a.get("bot") for a in agents):
             raise ValueError('the scenario needs agents, at least one with "bot": true')
         self.client = Client(url, admin_token)
+        if render_mode is not None:
+            raise ValueError(
+                f"render_mode {render_mode!r}: fieldhouse environments draw nothing "
+                f"themselves; watch a match live on the server's spectator page, "
+                f"{self.client.url}/#/matches/<match id> (the environment's spectator_url "
+                "once reset)"
+            )
+        self.render_mode = None
         self.scenario = copy.deepcopy(scenario)
         self.scenario.update(mode="lockstep", lockstep_deadline_ms=deadline_ms)
-        self.scenario["frame_hz"] = self.scenario.get("tick_hz", 60.0)
+        self.scenario["frame_hz"] = self.scenario.get("tick_hz") or 60.0
+        self.scenario["name"] = name or self.scenario.get("name") or DEFAULT_NAME
+        self.record = record
         self.sport = self.scenario["sport"]
         self.fly = self.sport in FLY_SPORTS
         self.max_steps = max_steps
         self.possible_agents = [a["id"] for a in agents if a.get("bot")]
         self.agents: list[str] = []
         if self.fly:
-            obs = spaces.Box(-np.inf, np.inf, (len(FIELDER_OBSERVATION),), np.float32)
+            obs = fielder_observation_space(self.scenario)
             act: spaces.Space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+            self._observation_names = list(FIELDER_OBSERVATION)
         else:
-            players = len(agents)
-            size = len(COURT_OBSERVATION) + len(PLAYER_OBSERVATION) * players
-            obs = spaces.Box(-np.inf, np.inf, (size,), np.float32)
-            act = spaces.Discrete(10 + players)
+            obs = court_observation_space(self.scenario)
+            act = spaces.Discrete(10 + len(agents))
+            self._observation_names = [
+                *COURT_OBSERVATION,
+                *(f"{field}[{i}]" for i in range(len(agents)) for field in PLAYER_OBSERVATION),
+            ]
         self.observation_spaces = {a: obs for a in self.possible_agents}
         self.action_spaces = {a: act for a in self.possible_agents}
         self.match_id: str | None = None
@@ -193,6 +339,21 @@ class FieldhouseParallelEnv(ParallelEnv):
     def action_space(self, agent: str) -> spaces.Space:
         return self.action_spaces[agent]
 
+    @property
+    def spectator_url(self) -> str | None:
+        """The spectator page's live view of the episode's match (None between episodes)."""
+        return None if self.match_id is None else self.client.view_url(self.match_id)
+
+    def render(self) -> None:
+        """Draws nothing: a match is watched live on the server's spectator page. Returns
+        None, as Gymnasium and PettingZoo ask of an environment without a render mode,
+        and warns with the page's address."""
+        where = self.spectator_url or self.client.view_url() + " (the lobby: no match yet)"
+        gymnasium.logger.warn(
+            f"fieldhouse environments draw nothing themselves: watch the match live on the "
+            f"server's spectator page, {where}"
+        )
+
     # --- episodes --------------------------------------------------------------------
 
     def reset(self, seed: int | None = None, options: dict | None = None):
@@ -203,9 +364,15 @@ class FieldhouseParallelEnv(ParallelEnv):
             self._seeds = np.random.default_rng(seed)
         scenario = copy.deepcopy(self.scenario)
         scenario["seed"] = int(seed) if seed is not None else int(self._seeds.integers(1 << 31))
-        created = self.client.create_match(scenario)
+        created = self.client.create_match(scenario, record=self.record)
         self.match_id = created.id
-        self._run(self._seat(created.bot_tokens))
+        try:
+            self._run(self._seat(created.bot_tokens))
+        except BaseException:
+            # A match whose bots could not be seated is no episode: delete it rather than
+            # leave it to the server (and, recorded, to the lobby).
+            self._end_match()
+            raise
         self.agents = list(self.possible_agents)
         self.steps = 0
         observations = {a: self._observe(a) for a in self.agents}
@@ -215,7 +382,13 @@ class FieldhouseParallelEnv(ParallelEnv):
     def step(self, actions: dict):
         if not self.agents:
             raise RuntimeError("step() after the episode ended: call reset()")
-        ended, rewards, rejected = self._run(self._play(actions))
+        # Every action is checked before any is sent: a refused step changes nothing.
+        commands = {}
+        for agent in self.agents:
+            if agent not in actions:
+                raise KeyError(f"no action for agent {agent!r}")
+            commands[agent] = self._command(agent, actions[agent])
+        ended, rewards, rejected = self._run(self._play(commands))
         self.steps += 1
         truncated = not ended and self.max_steps is not None and self.steps >= self.max_steps
         agents = self.agents
@@ -228,9 +401,11 @@ class FieldhouseParallelEnv(ParallelEnv):
         return observations, {a: rewards[a] for a in agents}, terminations, truncations, infos
 
     def close(self) -> None:
-        self._end_match()
-        if not self._loop.is_closed():
-            self._loop.close()
+        try:
+            self._end_match()
+        finally:
+            if not self._loop.is_closed():
+                self._loop.close()
 
     # --- the match's sockets ---------------------------------------------------------
 
@@ -290,17 +465,10 @@ class FieldhouseParallelEnv(ParallelEnv):
             if kind == "error" and rejected is not None:
                 rejected.append(f"{message['code']}: {message['message']}")
 
-    async def _play(self, actions: dict):
+    async def _play(self, commands: dict[str, str]):
         """One step: a command per agent, then the next perceptions and the frames up to
         their tick. Returns whether the match ended, the rewards and the refusals."""
-        for agent in self.agents:
-            if agent not in actions:
-                raise KeyError(f"no action for agent {agent!r}")
-            tick = self._perceptions[agent]["tick"]
-            text = '{"type":"command","tick":%d,"action":%s}' % (
-                tick,
-                self._action(agent, actions[agent]),
-            )
+        for agent, text in commands.items():
             try:
                 await self._bots[agent].send_text(text)
             except ConnectionClosed:
@@ -359,9 +527,21 @@ class FieldhouseParallelEnv(ParallelEnv):
 
     def _observe(self, agent: str) -> np.ndarray:
         p = self._perceptions[agent]["perception"]
-        if self.fly:
-            return fielder_observation(p)
-        return self._court_observation(agent, p)
+        obs = fielder_observation(p) if self.fly else self._court_observation(agent, p)
+        space = self.observation_spaces[agent]
+        outside = (obs < space.low) | (obs > space.high)
+        if outside.any():
+            # The bounds are what the server allows; past them it changed, or they were
+            # wrong. Keep the promise the space makes, and say so.
+            names = [n for n, out in zip(self._observation_names, outside, strict=True) if out]
+            warnings.warn(
+                f"agent {agent!r}'s observation is outside its space at {', '.join(names)}: "
+                f"clipped into it",
+                RuntimeWarning,
+                stacklevel=3,
+            )
+            np.clip(obs, space.low, space.high, out=obs)
+        return obs
 
     def _court_observation(self, agent: str, p: dict) -> np.ndarray:
         ball = p["ball"]
@@ -390,13 +570,21 @@ class FieldhouseParallelEnv(ParallelEnv):
             )
         return np.asarray(out, np.float32)
 
+    def _command(self, agent: str, action: Any) -> str:
+        """The command's JSON for the agent's action on its perceived tick (built by
+        hand: one step sends many)."""
+        tick = self._perceptions[agent]["tick"]
+        return '{"type":"command","tick":%d,"action":%s}' % (tick, self._action(agent, action))
+
     def _action(self, agent: str, action: Any) -> str:
-        """The action's JSON for the command (built by hand: one step sends many)."""
+        """The action's JSON, or a ValueError if it is not in the agent's action space."""
         if self.fly:
-            # Plain floats: numpy's clip costs more than the rest of this on two numbers.
-            ax, az = (min(max(float(v), -1.0), 1.0) for v in action)
+            ax, az = self._acceleration(agent, action)
             limit = self._perceptions[agent]["perception"]["limits"]["max_accel_m_s2"]
             return '{"kind":"accelerate","accel":[%r,%r]}' % (ax * limit, az * limit)
+        if not self.action_spaces[agent].contains(action):
+            n = self.action_spaces[agent].n
+            raise self._bad_action(agent, action, f"an integer from 0 to {n - 1}")
         a = int(action)
         if a == 0:
             return '{"kind":"stand"}'
@@ -411,6 +599,38 @@ class FieldhouseParallelEnv(ParallelEnv):
             z = min(max(me["position"][1] + MOVE_M * math.sin(bearing), -half), half)
             return '{"kind":"move_to","target":[%r,%r]}' % (x, z)
         return '{"kind":"pass","to":"%s"}' % self._players[a - 10]
+
+    def _acceleration(self, agent: str, action: Any) -> tuple[float, float]:
+        """A fielder's action as two floats in [-1, 1]. Checked by hand rather than by
+        ``Box.contains``, which costs more than the rest of a step's client work and
+        refuses a float64 array (what numpy gives by default) for a float32 space."""
+        try:
+            a = action if isinstance(action, np.ndarray) else np.asarray(action)
+        except ValueError:  # a ragged list
+            raise self._bad_action(agent, action, "an array") from None
+        if a.shape != (2,) or a.dtype.kind not in "fiu":
+            raise self._bad_action(agent, action, "an array of two numbers")
+        ax, az = a.tolist()
+        # NaN fails both comparisons.
+        if not (-1.0 <= ax <= 1.0 and -1.0 <= az <= 1.0):
+            raise self._bad_action(agent, action, "each from -1 to 1 (clip a policy's output)")
+        return ax, az
+
+    def _bad_action(self, agent: str, action: Any, expected: str) -> ValueError:
+        space = self.action_spaces[agent]
+        if isinstance(action, np.ndarray):  # on one line, with what a list would not show
+            given = f"{reprlib.repr(action.tolist())} (shape {action.shape}, {action.dtype})"
+        else:
+            given = reprlib.repr(action)
+        meaning = (
+            "an acceleration [ax, az] in units of the body's maximum"
+            if self.fly
+            else "0 stand, 1 shoot, 2 to 9 move 2 m at (a-2)*45 degrees, 10+i pass to player i"
+        )
+        return ValueError(
+            f"the action for agent {agent!r}, {given}, is not in its action space {space}: "
+            f"expected {expected} ({meaning})"
+        )
 
     def _caught(self, agent: str) -> int:
         """The balls the fielder has caught so far, as its latest perception says."""
@@ -442,11 +662,13 @@ def fielder_observation(p: dict) -> np.ndarray:
 
 class FieldhouseGymEnv(gymnasium.Env):
     """A Gymnasium environment over a scenario with exactly one bot agent: the parallel
-    environment's spaces, observations and rewards for that agent."""
+    environment's spaces, observations and rewards for that agent. The keywords are
+    :class:`FieldhouseParallelEnv`'s (``admin_token``, ``max_steps``, ``deadline_ms``,
+    ``record``, ``name``)."""
 
     metadata = {"render_modes": []}
 
-    def __init__(self, url: str, scenario: dict, **kwargs: Any):
+    def __init__(self, url: str | None = None, scenario: dict | None = None, **kwargs: Any):
         self.parallel = FieldhouseParallelEnv(url, scenario, **kwargs)
         if len(self.parallel.possible_agents) != 1:
             raise ValueError(
@@ -457,7 +679,13 @@ class FieldhouseGymEnv(gymnasium.Env):
         self.observation_space = self.parallel.observation_space(self.agent)
         self.action_space = self.parallel.action_space(self.agent)
 
+    @property
+    def spectator_url(self) -> str | None:
+        """The spectator page's live view of the episode's match (None between episodes)."""
+        return self.parallel.spectator_url
+
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        # Seeds self.np_random, as Gymnasium asks; the match's seed is ``seed`` itself.
         super().reset(seed=seed)
         observations, infos = self.parallel.reset(seed=seed, options=options)
         return observations[self.agent], infos[self.agent]
@@ -467,5 +695,53 @@ class FieldhouseGymEnv(gymnasium.Env):
         a = self.agent
         return obs[a], rewards[a], terms[a], truncs[a], infos[a]
 
+    def render(self) -> None:
+        """Draws nothing: see :meth:`FieldhouseParallelEnv.render`."""
+        return self.parallel.render()
+
     def close(self) -> None:
         self.parallel.close()
+
+
+def fly_ball_env(
+    url: str | None = None,
+    *,
+    launches: list[dict] | None = None,
+    sport: str = "baseball",
+    **kwargs: Any,
+) -> FieldhouseGymEnv:
+    """``fieldhouse/FlyBall-v0``: one fielder, ``f0``, and :func:`fly_ball_scenario`'s
+    ``launches``; ``kwargs`` go to :class:`FieldhouseGymEnv`."""
+    return FieldhouseGymEnv(url, fly_ball_scenario(1, launches, sport), **kwargs)
+
+
+def basketball_env(
+    url: str | None = None, *, agent: str = "o1", possessions: int = 2, **kwargs: Any
+) -> FieldhouseGymEnv:
+    """``fieldhouse/Basketball-v0``: ``agent`` (``o1``, ``o2`` or ``d1``) played by the
+    environment in :func:`basketball_scenario`'s 2-v-1, for ``possessions``; ``kwargs``
+    go to :class:`FieldhouseGymEnv`."""
+    return FieldhouseGymEnv(url, basketball_scenario((agent,), possessions), **kwargs)
+
+
+def _register() -> None:
+    """Registers the ids with Gymnasium. Gymnasium 1.x no longer loads third-party ids
+    from package entry points, so importing this module (or naming it in the id,
+    ``fieldhouse.env:fieldhouse/FlyBall-v0``) is what makes them known."""
+    ids = {
+        # The longest flight the server simulates is 20 s: 1200 ticks, and the 0.5 s
+        # before the launch.
+        "fieldhouse/FlyBall-v0": dict(entry_point=fly_ball_env, max_episode_steps=1250),
+        # Two possessions of at most a 24 s shot clock, 96 steps each. The first may
+        # have begun a few ticks before the bot was seated, so a seed alone does not
+        # fix an episode.
+        "fieldhouse/Basketball-v0": dict(
+            entry_point=basketball_env, max_episode_steps=200, nondeterministic=True
+        ),
+    }
+    for env_id, spec in ids.items():
+        if env_id not in gymnasium.registry:
+            gymnasium.register(env_id, **spec)
+
+
+_register()

@@ -19,6 +19,16 @@ from typing import Any
 
 from .errors import FieldhouseError, error_for
 
+#: Where ``fieldhouse serve`` listens unless told otherwise.
+DEFAULT_URL = "http://127.0.0.1:7878"
+
+
+def server_url(url: str | None = None) -> str:
+    """The server to talk to: ``url`` if given, else ``$FIELDHOUSE_URL``, else
+    :data:`DEFAULT_URL` (a training script run elsewhere is pointed at its server by the
+    environment, without a change to its code)."""
+    return url or os.environ.get("FIELDHOUSE_URL") or DEFAULT_URL
+
 
 class _NoRedirects(urllib.request.HTTPRedirectHandler):
     """fieldhouse never answers with a redirect, and following one would send the request,
@@ -45,18 +55,21 @@ class CreatedMatch:
 
 
 class Client:
-    """A fieldhouse server's REST API at ``url`` (``http://127.0.0.1:7878``).
+    """A fieldhouse server's REST API at ``url`` (default: ``$FIELDHOUSE_URL``, else
+    ``http://127.0.0.1:7878``).
 
     ``admin_token`` (default: ``FIELDHOUSE_ADMIN_TOKEN``) is needed to create and delete
     matches; listing and replays need none. Every request is bounded: an answer takes at
     most ``timeout_s`` in all (``download_timeout_s`` for a replay) and holds at most
     ``max_answer_bytes`` (``max_download_bytes`` for a replay); past either the request
-    raises ``FieldhouseError`` (``timeout``, ``too_large``).
+    raises ``FieldhouseError`` (``timeout``, ``too_large``). A server that cannot be
+    reached (none listening, a wrong address) is ``FieldhouseError`` ``unreachable``,
+    whose message says how to start one.
     """
 
     def __init__(
         self,
-        url: str,
+        url: str | None = None,
         admin_token: str | None = None,
         timeout_s: float = 10.0,
         *,
@@ -64,7 +77,7 @@ class Client:
         download_timeout_s: float = 600.0,
         max_download_bytes: int = 4 * 2**30,
     ):
-        self.url = url.rstrip("/")
+        self.url = server_url(url).rstrip("/")
         self.admin_token = admin_token or os.environ.get("FIELDHOUSE_ADMIN_TOKEN")
         self.timeout_s = timeout_s
         self.max_answer_bytes = max_answer_bytes
@@ -73,9 +86,13 @@ class Client:
 
     # --- matches ---------------------------------------------------------------------
 
-    def create_match(self, scenario: dict) -> CreatedMatch:
-        """Creates a match from a scenario (``proto/scenario.schema.json``)."""
-        body = self._json("POST", "/api/matches", scenario, admin=True)
+    def create_match(self, scenario: dict, *, record: bool = True) -> CreatedMatch:
+        """Creates a match from a scenario (``proto/scenario.schema.json``). With
+        ``record=False`` a server that records matches (``--replay-dir``) keeps no replay
+        of this one (``POST /api/matches?record=false``): a learner's thousands of
+        episodes would each leave one in the lobby."""
+        path = "/api/matches" if record else "/api/matches?record=false"
+        body = self._json("POST", path, scenario, admin=True)
         return CreatedMatch(id=body["id"], bot_tokens=body.get("bot_tokens", {}))
 
     def list_matches(self) -> list[dict]:
@@ -154,6 +171,13 @@ class Client:
         """Where a spectator of ``match_id`` connects."""
         return self.ws_url(f"/ws/matches/{_segment(match_id)}")
 
+    def view_url(self, match_id: str | None = None) -> str:
+        """The spectator page, for a browser: the live view of ``match_id`` (the page's
+        route ``#/matches/ID``), or the lobby of every match."""
+        if match_id is None:
+            return f"{self.url}/"
+        return f"{self.url}/#/matches/{_segment(match_id)}"
+
     # --- plumbing --------------------------------------------------------------------
 
     def _json(self, method: str, path: str, body: Any = None, *, admin: bool = False) -> Any:
@@ -197,6 +221,15 @@ class Client:
                 return _read(answer, f"{method} {path}", limit, deadline, into)
         except urllib.error.HTTPError as e:
             raise _http_error(e) from None
+        except urllib.error.URLError as e:
+            # No answer at all: most often no server was started. Say how to start one,
+            # rather than leave a socket error that names neither fieldhouse nor the fix.
+            raise FieldhouseError(
+                f"{method} {path}: no fieldhouse server answers at {self.url} ({e.reason}). "
+                "Start one with `fieldhouse serve` (or `cargo run --release -- serve` in a "
+                "clone of the repository), or point url= or FIELDHOUSE_URL at a running one",
+                code="unreachable",
+            ) from None
 
 
 def _read(answer: Any, what: str, limit: int, deadline: float, into: Any) -> Any:
