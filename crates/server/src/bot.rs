@@ -146,6 +146,10 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
     } else {
         loop {
             tokio::select! {
+                // What the match queued for this bot goes out before the end it published
+                // after it: the last tick's perception (a catch on the last ball, say)
+                // was lost when the end won the race.
+                biased;
                 outgoing = out_rx.recv() => {
                     let Some(ToBot { text, perception, replaced }) = outgoing else { break None };
                     if send.text(text).await != Sent::Ok {
@@ -162,7 +166,12 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
                     let end = published.borrow_and_update().end.clone();
                     match (changed, end) {
                         (_, Some(end)) => {
-                            if send.text(end).await != Sent::Ok {
+                            // Anything queued before the end still goes first.
+                            let mut sent = Sent::Ok;
+                            while let (Sent::Ok, Ok(queued)) = (&sent, out_rx.try_recv()) {
+                                sent = send.text(queued.text).await;
+                            }
+                            if sent != Sent::Ok || send.text(end).await != Sent::Ok {
                                 break None;
                             }
                             break Some(ending(&shutdown));
