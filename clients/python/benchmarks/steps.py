@@ -16,7 +16,9 @@ after the other:
   agent acting once; the server plays the 14 between perceptions at once);
 * ``4 × gym fly ball, vector``: four Gymnasium environments stepped in parallel by
   ``gymnasium.vector.AsyncVectorEnv`` (a process each) against the one server; a step
-  of the vector is four environment steps, and the figure counts environment steps.
+  of the vector is four environment steps, and the figure counts environment steps;
+* ``4 × fly ball, one loop``: the same four in :class:`FieldhouseVectorEnv`, stepped
+  together on one event loop in this process.
 
 For each: steps per second (wall clock), and the CPU time per step of this process
 (the client; for the vector, its worker processes are not in it) and of the server
@@ -44,6 +46,7 @@ from fieldhouse.env import (
     basketball_scenario,
     fly_ball_scenario,
 )
+from fieldhouse.vector import FieldhouseVectorEnv
 
 # Thirty flies to centre field, one after the other: an episode long enough that a reset
 # (a match created and seated) does not enter the figure.
@@ -166,6 +169,20 @@ def run_vector(server: LocalServer, name: str, envs: int, steps: int) -> str:
     return m.row(name, steps * envs)
 
 
+def run_one_loop(server: LocalServer, name: str, envs: int, steps: int) -> str:
+    """``envs`` environments on one event loop, ``steps`` vector steps."""
+    vector = FieldhouseVectorEnv(
+        envs, server.url, fly_ball_scenario(launches=LAUNCHES), admin_token=server.admin_token
+    )
+    vector.reset(seed=1)
+    actions = np.zeros((envs, 2), np.float32)
+    with Meter(server.pid) as m:
+        for _ in range(steps):
+            vector.step(actions)
+    vector.close()
+    return m.row(name, steps * envs)
+
+
 def median_rows(rows: list[str]) -> str:
     """The median steps/s of each measurement's rows."""
     rates: dict[str, list[float]] = {}
@@ -213,6 +230,7 @@ def main() -> None:
                     0,
                 ),
                 run_vector(server, "4 × gym fly ball, vector", 4, args.steps // 4),
+                run_one_loop(server, "4 × fly ball, one loop", 4, args.steps // 4),
             ]
             for row in measured:
                 print(row, flush=True)

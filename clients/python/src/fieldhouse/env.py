@@ -269,6 +269,9 @@ class FieldhouseParallelEnv(ParallelEnv):
     ``max_steps`` truncates an episode; ``deadline_ms`` is how long the server waits for
     a command before playing a tick without it. ``record=True`` keeps a replay of each
     episode's match (on a server started with ``--replay-dir``), named ``name``.
+    ``loop``: an event loop to share with other environments stepped together
+    (:class:`fieldhouse.vector.FieldhouseVectorEnv`), which its owner closes; by default
+    the environment has its own.
     """
 
     metadata = {"name": "fieldhouse_v0", "render_modes": []}
@@ -284,6 +287,7 @@ class FieldhouseParallelEnv(ParallelEnv):
         record: bool = False,
         name: str | None = None,
         render_mode: str | None = None,
+        loop: asyncio.AbstractEventLoop | None = None,
     ):
         if scenario is None:
             raise TypeError("a scenario is needed: fly_ball_scenario(), basketball_scenario()")
@@ -325,7 +329,8 @@ class FieldhouseParallelEnv(ParallelEnv):
         self.match_id: str | None = None
         self.steps = 0
         self._seeds = np.random.default_rng()
-        self._loop = asyncio.new_event_loop()
+        self._owns_loop = loop is None
+        self._loop = loop or asyncio.new_event_loop()
         self._bots: dict[str, Socket] = {}
         self._spectator: Socket | None = None
         self._perceptions: dict[str, dict] = {}
@@ -380,15 +385,22 @@ class FieldhouseParallelEnv(ParallelEnv):
         return observations, infos
 
     def step(self, actions: dict):
+        return self._finish(*self._run(self._play(self._commands(actions))))
+
+    def _commands(self, actions: dict) -> dict[str, str]:
+        """Each agent's action as its command's text. Every action is checked before any
+        is sent: a refused step changes nothing."""
         if not self.agents:
             raise RuntimeError("step() after the episode ended: call reset()")
-        # Every action is checked before any is sent: a refused step changes nothing.
         commands = {}
         for agent in self.agents:
             if agent not in actions:
                 raise KeyError(f"no action for agent {agent!r}")
             commands[agent] = self._command(agent, actions[agent])
-        ended, rewards, rejected = self._run(self._play(commands))
+        return commands
+
+    def _finish(self, ended: bool, rewards: dict, rejected: dict):
+        """A step's five results, from what :meth:`_play` brought back."""
         self.steps += 1
         truncated = not ended and self.max_steps is not None and self.steps >= self.max_steps
         agents = self.agents
@@ -404,7 +416,7 @@ class FieldhouseParallelEnv(ParallelEnv):
         try:
             self._end_match()
         finally:
-            if not self._loop.is_closed():
+            if self._owns_loop and not self._loop.is_closed():
                 self._loop.close()
 
     # --- the match's sockets ---------------------------------------------------------
