@@ -159,28 +159,26 @@ def run_vector(server: LocalServer, name: str, envs: int, steps: int) -> str:
         lambda: FieldhouseGymEnv(url, fly_ball_scenario(launches=LAUNCHES), admin_token=token)
         for _ in range(envs)
     ]
-    vector = gymnasium.vector.AsyncVectorEnv(make)
-    vector.reset(seed=1)
-    actions = np.zeros((envs, 2), np.float32)
-    with Meter(server.pid) as m:
-        for _ in range(steps):
-            vector.step(actions)
-    vector.close()
-    return m.row(name, steps * envs)
+    return time_vector(server, name, gymnasium.vector.AsyncVectorEnv(make), steps)
 
 
 def run_one_loop(server: LocalServer, name: str, envs: int, steps: int) -> str:
     """``envs`` environments on one event loop, ``steps`` vector steps."""
-    vector = FieldhouseVectorEnv(
-        envs, server.url, fly_ball_scenario(launches=LAUNCHES), admin_token=server.admin_token
-    )
+    scenario = fly_ball_scenario(launches=LAUNCHES)
+    vector = FieldhouseVectorEnv(envs, server.url, scenario, admin_token=server.admin_token)
+    return time_vector(server, name, vector, steps)
+
+
+def time_vector(server: LocalServer, name: str, vector, steps: int) -> str:
+    """``steps`` steps of a vector of fly-ball environments standing still, counted as
+    environment steps; the vector is closed after."""
     vector.reset(seed=1)
-    actions = np.zeros((envs, 2), np.float32)
+    actions = np.zeros((vector.num_envs, 2), np.float32)
     with Meter(server.pid) as m:
         for _ in range(steps):
             vector.step(actions)
     vector.close()
-    return m.row(name, steps * envs)
+    return m.row(name, steps * vector.num_envs)
 
 
 def median_rows(rows: list[str]) -> str:
