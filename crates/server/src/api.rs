@@ -137,7 +137,7 @@ pub async fn create(
 /// the replay directory (a learner's thousands of episodes need no replays), `true`
 /// (the default) records it if the server records at all. Anything else is refused.
 fn recorded(query: &HashMap<String, String>) -> Result<bool, ApiError> {
-    let bad = |message: String| ApiError::new(StatusCode::BAD_REQUEST, "bad_query", message);
+    let bad = ApiError::bad_query;
     if let Some(other) = query.keys().find(|k| *k != "record") {
         return Err(bad(format!(
             "unknown query parameter \"{other}\": a match takes only record=true or record=false"

@@ -42,6 +42,10 @@ impl ApiError {
     pub fn forbidden(message: &str) -> Self {
         Self::new(StatusCode::FORBIDDEN, "forbidden", message)
     }
+    /// A query parameter the route does not take, or a value it cannot.
+    pub fn bad_query(message: impl Into<String>) -> Self {
+        Self::new(StatusCode::BAD_REQUEST, "bad_query", message)
+    }
 }
 
 impl IntoResponse for ApiError {

@@ -190,14 +190,19 @@ impl Connections {
             return Err(Refused::Full);
         }
         open.total += 1;
+        Ok(self.place_for(open, ip))
+    }
+
+    /// A new connection's place, counted against `ip` (the total is the caller's).
+    fn place_for(self: &Arc<Self>, open: &mut Open, ip: IpAddr) -> Conn {
         *open.per_ip.entry(ip).or_default() += 1;
         open.next_id += 1;
-        Ok(Conn {
+        Conn {
             id: open.next_id,
             ip,
             state: Arc::default(),
             connections: self.clone(),
-        })
+        }
     }
 
     /// Closes the longest-idle HTTP connection, to free a descriptor.
@@ -241,14 +246,17 @@ impl Conn {
     /// Between requests: may be closed to make room.
     fn idle(&self) {
         let mut open = self.connections.open.lock().expect("not poisoned");
-        open.idle.insert(
-            self.id,
-            Idle {
-                ip: self.ip,
-                since: Instant::now(),
-                state: self.state.clone(),
-            },
-        );
+        self.idle_in(&mut open);
+    }
+
+    /// Files this connection as idle from now, in `open` (held locked).
+    fn idle_in(&self, open: &mut Open) {
+        let idle = Idle {
+            ip: self.ip,
+            since: Instant::now(),
+            state: self.state.clone(),
+        };
+        open.idle.insert(self.id, idle);
     }
 
     /// A request is in flight: not to be closed until it and its response are done.
@@ -262,14 +270,7 @@ impl Conn {
     fn done(&self) {
         let mut open = self.connections.open.lock().expect("not poisoned");
         if self.state.in_flight.fetch_sub(1, Relaxed) == 1 {
-            open.idle.insert(
-                self.id,
-                Idle {
-                    ip: self.ip,
-                    since: Instant::now(),
-                    state: self.state.clone(),
-                },
-            );
+            self.idle_in(&mut open);
         }
     }
 }
@@ -297,14 +298,7 @@ impl Drop for Conn {
             match heir {
                 Some((ip, heir)) => {
                     release(&mut open, self.ip);
-                    *open.per_ip.entry(ip).or_default() += 1;
-                    open.next_id += 1;
-                    let place = Conn {
-                        id: open.next_id,
-                        ip,
-                        state: Arc::default(),
-                        connections: self.connections.clone(),
-                    };
+                    let place = self.connections.place_for(&mut open, ip);
                     // Its heir gave up after all: the place goes back, below (a Conn
                     // dropped under the lock would wait for it for ever).
                     heir.send(place).err()

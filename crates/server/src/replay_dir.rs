@@ -135,7 +135,7 @@ impl Entry {
     /// When it was last written, in nanoseconds since 1970: what the listing's order
     /// and retention's age go by.
     pub fn modified_ns(&self) -> i128 {
-        i128::from(self.meta.mtime()) * 1_000_000_000 + i128::from(self.meta.mtime_nsec())
+        modified_ns(&self.meta)
     }
 
     /// Opens it to read, as [`open`] opens a replay: the checks again, on the handle
@@ -214,6 +214,11 @@ pub fn scan(dir: &Path) -> io::Result<Vec<Entry>> {
     Ok(found)
 }
 
+/// When a file was last written, in nanoseconds since 1970.
+fn modified_ns(meta: &Metadata) -> i128 {
+    i128::from(meta.mtime()) * 1_000_000_000 + i128::from(meta.mtime_nsec())
+}
+
 /// Which file an index is of: the same inode at the same size and time of change is
 /// the same content (a file being written grows, and gets a new index).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -230,7 +235,7 @@ impl Version {
             dev: meta.dev(),
             ino: meta.ino(),
             len: meta.len(),
-            mtime_ns: i128::from(meta.mtime()) * 1_000_000_000 + i128::from(meta.mtime_nsec()),
+            mtime_ns: modified_ns(meta),
         }
     }
 }

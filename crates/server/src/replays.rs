@@ -124,7 +124,7 @@ struct Page {
 
 impl Page {
     fn asked(query: &HashMap<String, String>) -> Result<Page, ApiError> {
-        let bad = |message: String| ApiError::new(StatusCode::BAD_REQUEST, "bad_query", message);
+        let bad = ApiError::bad_query;
         let limit = match query.get("limit") {
             None => PAGE,
             Some(n) => n
@@ -393,9 +393,12 @@ impl Viewed {
         }
     }
 
-    /// Frames from `next` on, a batch of them, into `ahead`; `next` moves past them.
-    /// None read: the replay's end.
-    async fn fill(&self, next: &mut At, ahead: &mut VecDeque<Frame>) -> Result<(), String> {
+    /// If `ahead` is empty, frames from `next` on, a batch of them, into it; `next`
+    /// moves past them. Still empty after: the replay's end.
+    async fn top_up(&self, next: &mut At, ahead: &mut VecDeque<Frame>) -> Result<(), String> {
+        if !ahead.is_empty() {
+            return Ok(());
+        }
         let from = *next;
         let (frames, after) = self
             .blocking(move |index, file, cache| {
@@ -477,11 +480,9 @@ async fn view(
     loop {
         tokio::select! {
             _ = tokio::time::sleep_until(due), if playing && !ended => {
-                if ahead.is_empty() {
-                    if let Err(why) = viewed.fill(&mut next, &mut ahead).await {
-                        ended = cannot_read_on(send, id, &why, &end).await?;
-                        continue;
-                    }
+                if let Err(why) = viewed.top_up(&mut next, &mut ahead).await {
+                    ended = cannot_read_on(send, id, &why, &end).await?;
+                    continue;
                 }
                 let Some(frame) = ahead.pop_front() else {
                     ended = true;
@@ -489,11 +490,9 @@ async fn view(
                     continue;
                 };
                 send.deliver(frame.text).await?;
-                if ahead.is_empty() {
-                    if let Err(why) = viewed.fill(&mut next, &mut ahead).await {
-                        ended = cannot_read_on(send, id, &why, &end).await?;
-                        continue;
-                    }
+                if let Err(why) = viewed.top_up(&mut next, &mut ahead).await {
+                    ended = cannot_read_on(send, id, &why, &end).await?;
+                    continue;
                 }
                 match ahead.front() {
                     Some(following) => {
@@ -582,9 +581,7 @@ async fn view(
                                 (next, ended) = (first, false);
                                 ahead.clear();
                                 for _ in 0..=lead {
-                                    if ahead.is_empty() {
-                                        viewed.fill(&mut next, &mut ahead).await.map_err(|_| Sent::Failed)?;
-                                    }
+                                    viewed.top_up(&mut next, &mut ahead).await.map_err(|_| Sent::Failed)?;
                                     let Some(frame) = ahead.pop_front() else { break };
                                     send.deliver(frame.text).await?;
                                 }

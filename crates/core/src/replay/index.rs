@@ -1011,7 +1011,7 @@ mod tests {
     }
 
     #[test]
-    fn a_grown_file_is_walked_on_and_an_endless_line_is_not_read_for_ever() {
+    fn a_torn_line_ends_the_readable_part_and_an_endless_one_is_not_read_for_ever() {
         let torn = file_of(
             format!("{HEADER}\n{{\"type\":\"frame\",\"tick\":0}}\n{{\"type\":\"fra").as_bytes(),
         );
