@@ -599,3 +599,107 @@ fn a_replay_written_before_format_2_still_reads() {
     let csv = stdout(&format!("replay export {}", fixture.display()));
     assert_eq!(csv.lines().count(), 1 + 2 * frames.len());
 }
+
+/// `replay paths` on a run whose answers are known in closed form: the fielder runs a
+/// half circle of radius 5 m from (50, −5) to (50, 5), bulging away from home plate,
+/// while the ball stays 30 m from it straight toward home, its elevation's tangent rising
+/// at a constant rate. The bulge is −0.5 and the run 5π m; a constant rate gives no
+/// drift; the ball always dead ahead, on the line to home, puts the image on one
+/// vertical line (no bend); and the line of sight turns as the fielder's bearing from
+/// home does.
+#[test]
+fn paths_measure_a_run_known_in_closed_form() {
+    let dir = scratch("paths-closed-form");
+    let (recorded, _) = run(&dir, FIELDERS, "recorded.jsonl");
+    let header = lines(&recorded).remove(0);
+    let mut text = header + "\n";
+    let ticks = 120;
+    for k in 0..=ticks {
+        let s = k as f64 / ticks as f64;
+        let theta = std::f64::consts::PI * s;
+        let (x, z) = (50.0 + 5.0 * theta.sin(), -5.0 * theta.cos());
+        let height = 1.7 + 30.0 * (0.1 + 0.2 * s);
+        let ahead = 30.0 / x.hypot(z);
+        let (ball_x, ball_z) = (x - ahead * x, z - ahead * z);
+        let mut events = vec![];
+        if k == 0 {
+            events.push(serde_json::json!({"kind": "launch", "ball": 1,
+                "launch": {"speed_m_s": 30.0}, "landing": [20.0, 5.0]}));
+        }
+        if k == ticks {
+            events.push(
+                serde_json::json!({"kind": "caught", "ball": 1, "by": "chapman",
+                "at": [x, z], "flight_time_s": s}),
+            );
+        }
+        let frame = serde_json::json!({"type": "frame", "match": "a", "tick": k,
+            "time_s": s, "ball": {"position": [ball_x, height, ball_z], "state": "flight"},
+            "agents": [{"id": "chapman", "position": [x, z], "heading": 0.0, "speed": 0.0}],
+            "score": {}, "events": events});
+        text += &format!("{frame}\n");
+    }
+    let file = dir.join("half-circle.jsonl");
+    std::fs::write(&file, text).unwrap();
+    let doc = json(&format!("replay paths {} --json", file.display()));
+    let runs = doc["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 1, "{doc}");
+    let r = &runs[0];
+    assert_eq!(
+        (r["agent"].as_str(), r["ball"].as_u64()),
+        (Some("chapman"), Some(1))
+    );
+    assert_eq!(r["caught"], true);
+    assert_eq!(r["shape"], "bulges_away_from_home");
+    let close = |key: &str, expected: f64, tolerance: f64| {
+        let got = r[key].as_f64().unwrap_or_else(|| panic!("{key}: {r}"));
+        assert!(
+            (got - expected).abs() < tolerance,
+            "{key}: {got}, not {expected}"
+        );
+    };
+    close("bulge", -0.5, 1e-3);
+    close("run_m", 5.0 * std::f64::consts::PI, 1e-2);
+    close("rate_drift", 0.0, 1e-9);
+    // The last look is the frame before the catch's: in a recorded match the ball is
+    // already dead in that one's frame, where the run only ends.
+    let bearing = |k: f64| {
+        let theta = std::f64::consts::PI * k / ticks as f64;
+        (-5.0 * theta.cos()).atan2(50.0 + 5.0 * theta.sin())
+    };
+    let sweep = (bearing(ticks as f64 - 1.0) - bearing(0.0)).to_degrees();
+    close("bearing_sweep_deg", sweep, 1e-6);
+    close("image_bend", 0.0, 1e-6);
+    assert_eq!(doc["fielders"]["chapman"]["catch_rate"], 1.0);
+}
+
+/// On a real run, `replay paths` finds every fielder under every ball, and its catches
+/// are the ones the match's own score counted.
+#[test]
+fn paths_count_the_catches_the_score_counts() {
+    let dir = scratch("paths-score");
+    let every_tick = FIELDERS.replace("seed = 5", "seed = 5\nframe_hz = 60.0");
+    let (file, doc) = run(&dir, &every_tick, "fielders.jsonl.zst");
+    let paths = json(&format!("replay paths {} --json", file.display()));
+    let runs = paths["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2 * 3, "two fielders under three balls: {paths}");
+    let caught = runs.iter().filter(|r| r["caught"] == true).count() as u64;
+    assert_eq!(Some(caught), doc["result"]["caught"].as_u64(), "{paths}");
+    for r in runs {
+        assert!(
+            r["run_m"].as_f64().unwrap() > 1.0,
+            "every fielder runs: {r}"
+        );
+    }
+    let table = stdout(&format!("replay paths {}", file.display()));
+    assert!(table.contains("3 finished balls"), "{table}");
+    assert!(
+        table.contains("chapman") && table.contains("lot-optical"),
+        "{table}"
+    );
+    assert_reads_well(&table);
+    let err = failure(&format!(
+        "replay paths {}",
+        dir.join("absent.jsonl").display()
+    ));
+    assert!(err.contains("absent.jsonl"), "{err}");
+}

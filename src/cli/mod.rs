@@ -14,6 +14,7 @@ mod glyphs;
 mod heatmap;
 mod loadgen;
 mod motion;
+mod paths;
 mod plots;
 mod replay;
 mod run;

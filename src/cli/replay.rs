@@ -1,5 +1,5 @@
-//! `fieldhouse replay info | verify | export`: what a replay file holds, whether it plays
-//! back identically, and its positions for other tools.
+//! `fieldhouse replay info | verify | export | paths`: what a replay file holds, whether it
+//! plays back identically, its positions for other tools, and its fielders' runs measured.
 
 use super::basketball::CapabilityArgs;
 use clap::{Args, Subcommand, ValueEnum};
@@ -56,6 +56,20 @@ enum ReplayCommand {
         /// The same as --format csv (the default), kept for scripts that pass it.
         #[arg(long, conflicts_with = "format")]
         csv: bool,
+    },
+    /// Every fielder's run under every fly ball, measured as `catch-sweep` measures the
+    /// built-in strategies: catches, path shape and bulge, ṙ drift, image bend and the
+    /// bearing's sweep (docs/catching.md). For bots, whose brains the server cannot see.
+    #[command(
+        after_help = "Record every tick (\"frame_hz\" equal to \"tick_hz\") for the measures to \
+        see every look; a file at 30 Hz gives them every other one.\n\
+        Example: fieldhouse run balls.toml --out balls.jsonl && fieldhouse replay paths balls.jsonl"
+    )]
+    Paths {
+        file: PathBuf,
+        /// Print one JSON document: a summary per fielder and every run.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -138,6 +152,9 @@ pub(super) fn run(args: ReplayArgs, out: &mut impl Write) -> anyhow::Result<()> 
                 ExportFormat::Csv => export_csv(&replay, out),
                 ExportFormat::Jsonl => export_frames(&replay, out),
             }
+        }
+        ReplayCommand::Paths { file, json } => {
+            super::paths::paths(&replay::read(&file)?, json, out)
         }
     }
 }

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gymnasium.vector import AutoresetMode
 
 from fieldhouse.env import FieldhouseGymEnv, fly_ball_scenario
 from fieldhouse.vector import FieldhouseVectorEnv
@@ -68,3 +69,49 @@ def test_an_ended_episode_is_reset_on_the_next_step_and_close_ends_every_match(s
     finally:
         vector.close()
     assert {m["id"] for m in client.list_matches() if m["status"] == "running"} <= before
+
+
+def test_without_autoreset_an_ended_episode_waits_for_its_reset_and_options_pick_the_balls(
+    server,
+):
+    # Constructed with two balls; each episode is given one through reset's options.
+    two_balls = fly_ball_scenario(launches=LAUNCHES)
+    vector = FieldhouseVectorEnv(
+        2,
+        server.url,
+        two_balls,
+        admin_token=server.admin_token,
+        autoreset_mode=AutoresetMode.DISABLED,
+    )
+    stand = np.zeros((2, 2), np.float32)
+    try:
+        assert vector.metadata["autoreset_mode"] == AutoresetMode.DISABLED
+        vector.reset(seed=3, options={"launches": LAUNCHES[:1]})
+        ids = [env.match_id for env in vector.envs]
+        steps = 0
+        while steps < 2000:
+            steps += 1
+            observations, _, terminations, _, _ = vector.step(stand)
+            if terminations.all():
+                break
+        # One ball of about 4 s (240 ticks) after half a second: the second ball (the
+        # scenario's) would have taken as long again.
+        assert steps < 400, f"{steps} steps: the episode played the scenario's two balls"
+        # Ended episodes stay ended: the same observation, no reward, no new match.
+        again, rewards, terminations, truncations, _ = vector.step(stand)
+        assert np.array_equal(again, observations) and rewards.tolist() == [0.0, 0.0]
+        assert terminations.all() and not truncations.any()
+        assert [env.match_id for env in vector.envs] == ids
+        # A masked reset starts environment 0 alone.
+        mask = np.array([True, False])
+        observations, _ = vector.reset(options={"reset_mask": mask})
+        assert vector.envs[0].match_id != ids[0] and vector.envs[1].match_id == ids[1]
+        assert np.array_equal(observations[1], again[1])
+        _, _, terminations, _, _ = vector.step(stand)
+        assert terminations.tolist() == [False, True]
+        with pytest.raises(ValueError, match="reset_mask"):
+            vector.reset(options={"reset_mask": np.array([1, 0])})
+    finally:
+        vector.close()
+    with pytest.raises(ValueError, match="NEXT_STEP .* or DISABLED"):
+        FieldhouseVectorEnv(1, server.url, two_balls, autoreset_mode=AutoresetMode.SAME_STEP)

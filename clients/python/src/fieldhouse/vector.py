@@ -11,7 +11,13 @@ together, so the server plays the matches while the client reads what has come b
 and nothing is pickled.
 
 Autoreset is Gymnasium's default, *next step*: the step after an environment's episode
-ends resets it (a new match) and returns its first observation, with reward 0.
+ends resets it (a new match) and returns its first observation, with reward 0. With
+``autoreset_mode=AutoresetMode.DISABLED`` an environment whose episode ended waits for
+``reset(options={"reset_mask": mask})`` (or a plain ``reset()``): until then each step
+leaves it alone and repeats its last observation, with reward 0 and the flags it ended
+with. That suits an evaluator stepping several episodes of unequal length to their
+ends (a population of policies, one per environment), where an autoreset would start
+matches nobody wants.
 """
 
 from __future__ import annotations
@@ -33,10 +39,22 @@ class FieldhouseVectorEnv(VectorEnv):
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP}
 
     def __init__(
-        self, num_envs: int, url: str | None = None, scenario: dict | None = None, **kwargs: Any
+        self,
+        num_envs: int,
+        url: str | None = None,
+        scenario: dict | None = None,
+        *,
+        autoreset_mode: AutoresetMode = AutoresetMode.NEXT_STEP,
+        **kwargs: Any,
     ):
         if num_envs < 1:
             raise ValueError(f"num_envs {num_envs}: at least one environment")
+        if autoreset_mode not in (AutoresetMode.NEXT_STEP, AutoresetMode.DISABLED):
+            raise ValueError(
+                f"autoreset_mode {autoreset_mode}: NEXT_STEP (the default) or DISABLED"
+            )
+        self.autoreset_mode = autoreset_mode
+        self.metadata = {**self.metadata, "autoreset_mode": autoreset_mode}
         self._loop = asyncio.new_event_loop()
         self.envs = [
             FieldhouseParallelEnv(url, scenario, loop=self._loop, **kwargs) for _ in range(num_envs)
@@ -53,22 +71,34 @@ class FieldhouseVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
         self._autoreset = np.zeros(num_envs, dtype=bool)
+        # DISABLED: each environment's last step, repeated while its episode is over.
+        self._observations = np.zeros((num_envs, *self.single_observation_space.shape))
+        self._ended = np.zeros((2, num_envs), dtype=bool)
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
-        """Resets every environment: with ``seed`` an int, environment i gets ``seed + i``
-        (as Gymnasium's vector environments do); a list gives each its own."""
+        """Resets every environment, or those of ``options["reset_mask"]`` (a bool array):
+        with ``seed`` an int, environment i gets ``seed + i`` (as Gymnasium's vector
+        environments do); a list gives each its own. The other options are the
+        episode's scenario options (:meth:`FieldhouseParallelEnv.reset`)."""
         super().reset(seed=seed)
+        options = dict(options or {})
+        mask = np.asarray(options.pop("reset_mask", np.ones(self.num_envs, dtype=bool)))
+        if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
+            raise ValueError(
+                f"options['reset_mask'] must be a bool array of shape ({self.num_envs},), "
+                f"got {mask!r}"
+            )
         if seed is None or isinstance(seed, int):
             seeds = [None if seed is None else seed + i for i in range(self.num_envs)]
         else:
             seeds = list(seed)
             if len(seeds) != self.num_envs:
                 raise ValueError(f"{len(seeds)} seeds for {self.num_envs} environments")
-        observations = [
-            self._reset_one(env, s, options) for env, s in zip(self.envs, seeds, strict=True)
-        ]
-        self._autoreset[:] = False
-        return np.stack(observations), {}
+        for i in np.flatnonzero(mask):
+            self._observations[i] = self._reset_one(self.envs[i], seeds[i], options or None)
+        self._autoreset[mask] = False
+        self._ended[:, mask] = False
+        return self._observations.astype(self.single_observation_space.dtype), {}
 
     def step(self, actions):
         n = self.num_envs
@@ -82,22 +112,22 @@ class FieldhouseVectorEnv(VectorEnv):
         }
         played = self._loop.run_until_complete(self._play_all(playing))
         results = dict(zip(playing, played, strict=True))
-        observations = []
         rewards = np.zeros(n, dtype=np.float64)
-        terminations = np.zeros(n, dtype=bool)
-        truncations = np.zeros(n, dtype=bool)
         for i, env in enumerate(self.envs):
             if i not in results:
-                # The episode ended on the step before: this step starts the next.
-                observations.append(self._reset_one(env, None, None))
-                continue
+                if self.autoreset_mode == AutoresetMode.NEXT_STEP:
+                    # The episode ended on the step before: this step starts the next.
+                    self._observations[i] = self._reset_one(env, None, None)
+                    self._ended[:, i] = False
+                continue  # DISABLED: left alone until reset
             obs, reward, term, trunc, _ = env._finish(*results[i])
-            observations.append(obs[self.agent])
+            self._observations[i] = obs[self.agent]
             rewards[i] = reward[self.agent]
-            terminations[i] = term[self.agent]
-            truncations[i] = trunc[self.agent]
+            self._ended[:, i] = term[self.agent], trunc[self.agent]
+        terminations, truncations = self._ended.copy()
         self._autoreset = terminations | truncations
-        return np.stack(observations), rewards, terminations, truncations, {}
+        observations = self._observations.astype(self.single_observation_space.dtype)
+        return observations, rewards, terminations, truncations, {}
 
     def close_extras(self, **kwargs: Any) -> None:
         try:

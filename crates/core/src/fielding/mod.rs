@@ -17,7 +17,8 @@ pub use catch_zone::CatchZone;
 pub(crate) use fielder::Fielder;
 pub use fielder::{FielderConfig, Step};
 pub use observer::Observer;
-pub(crate) use path_shape::{OpticalFit, PathShape};
+pub(crate) use path_shape::OpticalFit;
+pub use path_shape::{PathShape, RunWatch, Signatures};
 pub use strategy::{Brain, Forecast, LotReference, StrategyKind};
 pub use sweep::{
     LaunchDistribution, SpareBin, StrategySummary, Sweep, SweepCase, SweepReport, SPARE_BINS_S,

@@ -17,9 +17,12 @@ use serde::Serialize;
 /// convex), so they name nothing here.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub(crate) enum PathShape {
+pub enum PathShape {
+    /// Its largest deviation is under 2 % of the chord (or 0.25 m).
     Straight,
+    /// It bends toward the batter.
     BulgesTowardHome,
+    /// It bends away from the batter.
     BulgesAwayFromHome,
 }
 
@@ -37,6 +40,72 @@ impl PathShape {
         } else {
             PathShape::BulgesAwayFromHome
         }
+    }
+}
+
+/// What one fielder's run under one ball says about the catching theories: the path's
+/// shape and bulge, and the optical signatures of OAC (`rate_drift`), LOT (`image_bend`)
+/// and Chapman's lateral law (`bearing_sweep_deg`), each `None` where the run gave it
+/// too little to measure (see `fieldhouse catch-sweep`'s columns and docs/catching.md).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Signatures {
+    /// Straight, or which way it bulges.
+    pub shape: PathShape,
+    /// The largest deviation from the chord over the chord, positive toward home.
+    pub bulge: Option<f64>,
+    /// How much d(tan ψ)/dt changed relative to its mean: 0 under OAC.
+    pub rate_drift: Option<f64>,
+    /// How far the ball's image strayed from a straight line: 0 under LOT.
+    pub image_bend: Option<f64>,
+    /// How far the ball's bearing from the fielder turned, degrees: 0 under Chapman's
+    /// lateral law.
+    pub bearing_sweep_deg: Option<f64>,
+}
+
+impl Signatures {
+    pub(crate) fn of(path: &[DVec2], home: DVec2, optical: &OpticalFit) -> Signatures {
+        Signatures {
+            shape: PathShape::of(path, home),
+            bulge: bulge(path, home),
+            rate_drift: optical.rate_drift(),
+            image_bend: optical.image_bend(),
+            bearing_sweep_deg: optical.bearing_sweep_deg(),
+        }
+    }
+}
+
+/// One fielder's run under one ball, watched from outside a look at a time: where the
+/// fielder was and where the ball was. A sweep knows its strategies' runs from the
+/// inside; this measures a run whose brain the measurer cannot see (a bot's, read from a
+/// match's recorded frames) with the very same signatures.
+#[derive(Debug, Clone, Default)]
+pub struct RunWatch {
+    path: Vec<DVec2>,
+    optical: OpticalFit,
+}
+
+impl RunWatch {
+    /// The fielder at `fielder` on the ground sees the ball at `ball` at time `t`, its
+    /// eye `eye` m up, home plate at `home`.
+    pub fn look(&mut self, t: f64, ball: DVec3, fielder: DVec2, home: DVec2, eye: f64) {
+        self.path.push(fielder);
+        self.optical.add(t, ball, fielder, home, eye);
+    }
+
+    /// Where the fielder was as the ball's flight ended (caught or landed): the run's
+    /// last point, though the ball is no longer seen there.
+    pub fn arrive(&mut self, fielder: DVec2) {
+        self.path.push(fielder);
+    }
+
+    /// The run's signatures so far.
+    pub fn signatures(&self, home: DVec2) -> Signatures {
+        Signatures::of(&self.path, home, &self.optical)
+    }
+
+    /// How far the fielder ran, m.
+    pub fn path_length_m(&self) -> f64 {
+        self.path.windows(2).map(|w| (w[1] - w[0]).length()).sum()
     }
 }
 

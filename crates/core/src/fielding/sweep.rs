@@ -1,9 +1,8 @@
 //! Many launches, every strategy on the same balls: the experiment that compares the
 //! catching theories.
 
-use super::path_shape::bulge;
 use super::trial::{forecast, Trial, TrialConfig, TrialResult};
-use super::{Observer, PathShape, StrategyKind};
+use super::{Observer, PathShape, Signatures, StrategyKind};
 use crate::physics::{AirModel, BallSpec, Flight, Launch};
 use glam::DVec2;
 use rand::{Rng, SeedableRng};
@@ -179,11 +178,7 @@ struct Tally {
     peak_accel: f64,
     peak_speed: f64,
     mean_accel: f64,
-    shape: PathShape,
-    bulge: Option<f64>,
-    rate_drift: Option<f64>,
-    image_bend: Option<f64>,
-    bearing_sweep_deg: Option<f64>,
+    signatures: Signatures,
 }
 
 impl Sweep {
@@ -288,11 +283,7 @@ impl Sweep {
                             peak_accel: r.peak_accel,
                             peak_speed: r.peak_speed,
                             mean_accel: r.mean_accel,
-                            shape: PathShape::of(&r.path, home),
-                            bulge: bulge(&r.path, home),
-                            rate_drift: r.optical.rate_drift(),
-                            image_bend: r.optical.image_bend(),
-                            bearing_sweep_deg: r.optical.bearing_sweep_deg(),
+                            signatures: Signatures::of(&r.path, home, &r.optical),
                         }
                     })
                     .collect();
@@ -324,7 +315,8 @@ fn summarise<'a>(
     let caught = count(&|_, t| t.caught);
     let catchable = count(&|c, _| c);
     let caught_catchable = count(&|c, t| c && t.caught);
-    let share = |shape: PathShape| count(&|_, t| t.shape == shape) as f64 / n.max(1) as f64;
+    let share =
+        |shape: PathShape| count(&|_, t| t.signatures.shape == shape) as f64 / n.max(1) as f64;
     let mean = |f: &dyn Fn(&Tally) -> f64| {
         tallies.iter().map(|(_, t)| f(t)).sum::<f64>() / n.max(1) as f64
     };
@@ -359,10 +351,10 @@ fn summarise<'a>(
         share_straight: share(PathShape::Straight),
         share_bulging_toward_home: share(PathShape::BulgesTowardHome),
         share_bulging_away_from_home: share(PathShape::BulgesAwayFromHome),
-        median_bulge: median(&|t| t.bulge),
+        median_bulge: median(&|t| t.signatures.bulge),
         by_time_to_spare,
-        median_rate_drift: median(&|t| t.rate_drift),
-        median_image_bend: median(&|t| t.image_bend),
-        median_bearing_sweep_deg: median(&|t| t.bearing_sweep_deg),
+        median_rate_drift: median(&|t| t.signatures.rate_drift),
+        median_image_bend: median(&|t| t.signatures.image_bend),
+        median_bearing_sweep_deg: median(&|t| t.signatures.bearing_sweep_deg),
     }
 }
