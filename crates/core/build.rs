@@ -46,11 +46,50 @@ fn main() {
         pack.extend_from_slice(&(bytes.len() as u64).to_le_bytes());
         pack.extend_from_slice(&bytes);
     }
+    source_digest(&root);
     let compressed = zstd::bulk::compress(&pack, LEVEL).expect("zstd compresses in memory");
     let out = PathBuf::from(std::env::var_os("OUT_DIR").expect("set by cargo")).join("mocap.zst");
     fs::File::create(&out)
         .and_then(|mut f| f.write_all(&compressed))
         .unwrap_or_else(|e| panic!("writing {}: {e}", out.display()));
+}
+
+/// The source that decides a motion graph and its cost maps (`src/motion`,
+/// `src/costmap`), digested into `FIELDHOUSE_CAPABILITY_SOURCE_DIGEST`: the cache of
+/// graphs and maps keys on it, so an edit to how either is built can never be served the
+/// old ones, whether or not its author remembered to bump a version.
+fn source_digest(root: &Path) {
+    use sha2::{Digest, Sha256};
+    let mut files = Vec::new();
+    for dir in ["src/motion", "src/costmap"] {
+        println!("cargo:rerun-if-changed={dir}");
+        rust_files(&root.join(dir), &mut files);
+    }
+    files.sort();
+    let mut hash = Sha256::new();
+    for path in &files {
+        let rel = path.strip_prefix(root).expect("under the crate");
+        hash.update(rel.to_string_lossy().as_bytes());
+        hash.update([0]);
+        hash.update(fs::read(path).unwrap_or_else(|e| panic!("reading {}: {e}", path.display())));
+        hash.update([0]);
+    }
+    let hex: String = hash.finalize()[..8]
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    println!("cargo:rustc-env=FIELDHOUSE_CAPABILITY_SOURCE_DIGEST={hex}");
+}
+
+fn rust_files(dir: &Path, files: &mut Vec<PathBuf>) {
+    for entry in fs::read_dir(dir).into_iter().flatten().flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            rust_files(&path, files);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            files.push(path);
+        }
+    }
 }
 
 /// Every `<behaviour>/*.bvh`, `*.asf` and `*.amc` under `data` (the kinds the loader

@@ -6,7 +6,7 @@ use super::motion::GraphArgs;
 use anyhow::Context;
 use clap::Args;
 use fieldhouse::costmap::{
-    cache, root_speed, BuildParams, Grid, Method, Obstacle, Start, WATCHED_POINTS,
+    cache, root_speed, BuildParams, CostMap, Grid, Method, Obstacle, Start, WATCHED_POINTS,
 };
 use fieldhouse::motion::MotionGraph;
 use fieldhouse::words::{figure, plural};
@@ -176,18 +176,27 @@ pub(super) fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()>
     if let Some(b) = &bar {
         b.set_message(format!("{} cost map", graph.behaviour));
     }
-    let (mut maps, from_cache) = cache::build_or_load(
+    // The graph is this command's own choice (its window and threshold, or the
+    // automatic one), so its digest keys the maps.
+    let inputs = (graph.params, graph.digest(), &params, [start]);
+    let (cache::Cached { mut maps, .. }, from_cache) = cache::build_or_load(
         cache_dir.as_deref(),
         library.source.fingerprint(),
-        &graph,
-        &params,
-        &[start],
-        &mut |done| {
-            if let Some(b) = &bar {
-                b.set_position(done);
-            }
+        &graph.behaviour,
+        &inputs,
+        || {
+            let maps = CostMap::build_from(&graph, &params, &[start], &mut |done| {
+                if let Some(b) = &bar {
+                    b.set_position(done);
+                }
+            });
+            Ok::<_, std::convert::Infallible>(cache::Cached {
+                graph: graph.clone(),
+                maps,
+            })
         },
-    );
+    )
+    .unwrap_or_else(|never| match never {});
     if let Some(b) = bar {
         b.finish_and_clear();
     }

@@ -151,35 +151,31 @@ impl Mover {
         cache_dir: Option<&Path>,
         progress: &mut dyn FnMut(Stage),
     ) -> Result<Mover, GraphError> {
-        let owned = library.ground_clips(behaviour);
-        let clips: Vec<_> = owned.iter().collect();
-        progress(Stage::Graph {
-            behaviour,
-            frames: clips.iter().map(|c| c.frame_count()).sum(),
-        });
-        let graph = MotionGraph::build_auto(behaviour, &clips, &AUTO_WINDOWS)?;
         let params = BuildParams {
             depth: HORIZON_FRAMES,
             ..BuildParams::default()
         };
-        let states = start_states(&graph);
-        let starts: Vec<u32> = states.iter().map(|s| s.node).collect();
-        let mut searching = false;
-        let (maps, cached) = cache::build_or_load(
+        let (cache::Cached { graph, mut maps }, cached) = cache::build_or_load(
             cache_dir,
             library.source.fingerprint(),
-            &graph,
-            &params,
-            &starts,
-            &mut |_| {
-                if !searching {
-                    searching = true;
-                    progress(Stage::Map { behaviour });
-                }
+            behaviour,
+            &(AUTO_WINDOWS, &params),
+            || {
+                let owned = library.ground_clips(behaviour);
+                let clips: Vec<_> = owned.iter().collect();
+                progress(Stage::Graph {
+                    behaviour,
+                    frames: clips.iter().map(|c| c.frame_count()).sum(),
+                });
+                let graph = MotionGraph::build_auto(behaviour, &clips, &AUTO_WINDOWS)?;
+                let starts: Vec<u32> = start_states(&graph).iter().map(|s| s.node).collect();
+                progress(Stage::Map { behaviour });
+                let maps = CostMap::build_from(&graph, &params, &starts, &mut |_| {});
+                Ok::<_, GraphError>(cache::Cached { graph, maps })
             },
-        );
+        )?;
+        let states = start_states(&graph);
         progress(Stage::Ready { behaviour, cached });
-        let mut maps = maps;
         // The stance and its mirror image reach left and right alike (maps[0] is the
         // stance; its twin, if any, comes next).
         if let Some(t) = states.iter().position(|s| s.name == STANDING_MIRRORED) {

@@ -1,57 +1,100 @@
-//! Cost maps cached on disk, keyed by everything that decides them: the motion data's
-//! fingerprint, the behaviour, the graph itself (a digest of its nodes and edges, so a
-//! change to how graphs are built can never be served stale maps) and its parameters,
-//! the build parameters, and the code version.
+//! A behaviour's motion graph and its cost maps, cached on disk together, keyed by
+//! everything that decides them: the motion data's fingerprint, the behaviour, the
+//! windows the automatic graph choice tries, the build parameters, the crate version and
+//! a digest of the source that builds graphs and maps (`build.rs`), so that no change to
+//! how they are made can ever be served stale ones.
 //!
-//! A map is written to a temporary file, synced, then renamed into place, so an
-//! interrupted build never leaves a half-written map behind; a file that does not parse
-//! (corrupt, or from an older format) is ignored and rebuilt.
+//! **The file** is binary and checked: an 8-byte magic, the format version (u32), the
+//! payload's length (u64) and its SHA-256, then the payload ([`postcard`]: the graph,
+//! then the maps). A file that is not a cache, is of another format, is cut short, fails
+//! its checksum or does not decode is refused with a message saying which, logged, and
+//! rebuilt. It is written to a temporary file, synced, then renamed into place, so an
+//! interrupted build never leaves half a file behind.
 
-use super::{BuildParams, CostMap};
-use crate::motion::{GraphParams, MotionGraph};
-use serde::Serialize;
+use super::CostMap;
+use crate::motion::MotionGraph;
+use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use thiserror::Error;
 
-/// Bump when the meaning of a cached map changes without the crate version changing
-/// (3: `search` follows every short walk from the start exactly, so its maps improved;
-/// 4: graphs keep every clip, without the jump shots; 5: search splits at choices only
-/// and adds random walks near the start).
-const CACHE_FORMAT: u32 = 5;
+/// Bump when the file's layout or the meaning of what it holds changes in a way the
+/// source digest cannot see (6: binary, the graph beside its maps).
+pub const CACHE_FORMAT: u32 = 6;
 
-#[derive(Serialize)]
-struct Key<'a> {
-    format: u32,
-    version: &'static str,
-    motion: &'a str,
-    behaviour: &'a str,
-    graph: &'a GraphParams,
-    graph_digest: String,
-    build: &'a BuildParams,
-    starts: &'a [u32],
-    search: (usize, usize),
+/// What every cache file starts with.
+const MAGIC: &[u8; 8] = b"fhcache\n";
+/// Magic, format, payload length, SHA-256.
+const HEADER_BYTES: usize = 8 + 4 + 8 + 32;
+
+/// The source files that build graphs and maps, digested by `build.rs`.
+const SOURCE_DIGEST: &str = env!("FIELDHOUSE_CAPABILITY_SOURCE_DIGEST");
+
+/// What a cache file holds: a behaviour's graph and its maps, one per start state.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct Cached {
+    /// The motion graph.
+    pub graph: MotionGraph,
+    /// Its cost maps.
+    pub maps: Vec<CostMap>,
 }
 
-/// The file the maps of `graph` with these inputs live in under `dir`.
+/// Why a cache file was not used.
+#[derive(Debug, Error, PartialEq, Eq)]
+pub enum CacheError {
+    /// It does not start with the magic.
+    #[error("not a fieldhouse cache file")]
+    Foreign,
+    /// Another format version wrote it.
+    #[error("cache format {found}; this build reads format {CACHE_FORMAT}")]
+    Format {
+        /// The file's.
+        found: u32,
+    },
+    /// Fewer (or more) bytes than its header says.
+    #[error("{actual} bytes of payload where the header says {declared}: cut short or padded")]
+    Length {
+        /// What the header says.
+        declared: u64,
+        /// What the file has.
+        actual: u64,
+    },
+    /// The payload is not what was written.
+    #[error("corrupt: the payload's SHA-256 does not match the header's")]
+    Checksum,
+    /// The payload does not decode, or decodes into parts that do not fit together
+    /// (a writer's bug, or a hostile file, as the checksum held).
+    #[error("the payload does not decode: {0}")]
+    Decode(String),
+}
+
+#[derive(Serialize)]
+struct Key<'a, I> {
+    format: u32,
+    version: &'static str,
+    source: &'static str,
+    motion: &'a str,
+    behaviour: &'a str,
+    inputs: &'a I,
+}
+
+/// The file the graph and maps of `behaviour` live in under `dir`, for the motion data
+/// `motion_fingerprint` and `inputs`: whatever else decides them (the graph's windows or
+/// parameters, the maps' [`BuildParams`](super::BuildParams), start states a caller chose).
 pub fn path_for(
     dir: &Path,
     motion_fingerprint: &str,
-    graph: &MotionGraph,
-    build: &BuildParams,
-    starts: &[u32],
+    behaviour: &str,
+    inputs: &impl Serialize,
 ) -> PathBuf {
-    let behaviour = graph.behaviour.as_str();
     let key = Key {
         format: CACHE_FORMAT,
         version: env!("CARGO_PKG_VERSION"),
+        source: SOURCE_DIGEST,
         motion: motion_fingerprint,
         behaviour,
-        graph: &graph.params,
-        graph_digest: graph.digest(),
-        build,
-        starts,
-        search: (build.search.heading_bins, build.search.sub_cells),
+        inputs,
     };
     let digest = Sha256::digest(serde_json::to_vec(&key).expect("keys serialise"));
     let hex: String = digest[..8].iter().map(|b| format!("{b:02x}")).collect();
@@ -59,7 +102,7 @@ pub fn path_for(
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
         .collect();
-    dir.join(format!("costmap-{safe}-{}-{hex}.json", build.method.name()))
+    dir.join(format!("capability-{safe}-{hex}.bin"))
 }
 
 /// The default cache directory: `$XDG_CACHE_HOME/fieldhouse`, else `~/.cache/fieldhouse`.
@@ -70,56 +113,106 @@ pub fn default_dir() -> Option<PathBuf> {
         .map(|d| d.join("fieldhouse"))
 }
 
-/// The maps of `graph` with `params` from each of `starts` (nodes): read from the cache
-/// under `dir` if it holds them, else built (telling `progress` 0 as it starts, then as
-/// [`CostMap::build`] does) and stored there. A cache that cannot be written is logged
-/// and otherwise ignored: the maps are still good. Returns the maps and whether they came
-/// from the cache.
-pub fn build_or_load(
+/// The graph and maps of `behaviour`: read from the cache under `dir` if it holds them,
+/// else made by `build` and stored there. A cache that cannot be read or written is
+/// logged and otherwise ignored: what `build` makes is still good. Returns them and
+/// whether they came from the cache.
+pub fn build_or_load<E>(
     dir: Option<&Path>,
     motion_fingerprint: &str,
-    graph: &MotionGraph,
-    params: &BuildParams,
-    starts: &[u32],
-    progress: &mut dyn FnMut(u64),
-) -> (Vec<CostMap>, bool) {
-    let file = dir.map(|d| path_for(d, motion_fingerprint, graph, params, starts));
-    if let Some(maps) = file.as_deref().and_then(load) {
-        if maps.len() == starts.len() {
-            return (maps, true);
+    behaviour: &str,
+    inputs: &impl Serialize,
+    build: impl FnOnce() -> Result<Cached, E>,
+) -> Result<(Cached, bool), E> {
+    let file = dir.map(|d| path_for(d, motion_fingerprint, behaviour, inputs));
+    if let Some(file) = &file {
+        match std::fs::read(file) {
+            Ok(bytes) => match decode(&bytes) {
+                Ok(cached) => return Ok((cached, true)),
+                Err(e) => tracing::warn!(
+                    file = %file.display(),
+                    error = %e,
+                    "ignoring a cached motion graph and its cost maps, and rebuilding them"
+                ),
+            },
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => tracing::warn!(file = %file.display(), error = %e, "cannot read the cache"),
         }
     }
-    progress(0);
-    let maps = CostMap::build_from(graph, params, starts, progress);
+    let cached = build()?;
     if let Some(file) = &file {
-        if let Err(e) = store(file, &maps) {
+        if let Err(e) = store(file, &cached) {
             tracing::warn!(file = %file.display(), error = %e, "could not cache the cost maps");
         }
     }
-    (maps, false)
+    Ok((cached, false))
 }
 
-/// The cached maps at `path`, if there is a readable file of them.
-pub fn load(path: &Path) -> Option<Vec<CostMap>> {
-    let bytes = std::fs::read(path).ok()?;
-    match serde_json::from_slice(&bytes) {
-        Ok(maps) => Some(maps),
-        Err(e) => {
-            tracing::warn!(path = %path.display(), error = %e, "ignoring an unreadable cached cost map");
-            None
-        }
+/// A cache file's bytes.
+pub fn encode(cached: &Cached) -> Vec<u8> {
+    let payload = postcard::to_stdvec(cached).expect("graphs and maps serialise");
+    let mut bytes = Vec::with_capacity(HEADER_BYTES + payload.len());
+    bytes.extend_from_slice(MAGIC);
+    bytes.extend_from_slice(&CACHE_FORMAT.to_le_bytes());
+    bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    bytes.extend_from_slice(&Sha256::digest(&payload));
+    bytes.extend_from_slice(&payload);
+    bytes
+}
+
+/// What a cache file holds, or why it cannot be used. Any bytes are safe to give it:
+/// nothing is decoded before the length and checksum hold, and decoding allocates no
+/// more than the payload could describe.
+pub fn decode(bytes: &[u8]) -> Result<Cached, CacheError> {
+    if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
+        return Err(CacheError::Foreign);
     }
+    if bytes.len() < HEADER_BYTES {
+        return Err(CacheError::Length {
+            declared: 0,
+            actual: 0,
+        });
+    }
+    let found = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
+    if found != CACHE_FORMAT {
+        return Err(CacheError::Format { found });
+    }
+    let declared = u64::from_le_bytes(bytes[12..20].try_into().expect("8 bytes"));
+    let payload = &bytes[HEADER_BYTES..];
+    if declared != payload.len() as u64 {
+        return Err(CacheError::Length {
+            declared,
+            actual: payload.len() as u64,
+        });
+    }
+    if Sha256::digest(payload).as_slice() != &bytes[20..52] {
+        return Err(CacheError::Checksum);
+    }
+    decode_payload(payload)
 }
 
-/// Writes `maps` to `path` atomically (temporary file, sync, rename).
-pub fn store(path: &Path, maps: &[CostMap]) -> std::io::Result<()> {
+/// The graph and maps in a payload, checked to fit together (every index in range), so
+/// that nothing read from a file can make a later lookup fail.
+pub fn decode_payload(payload: &[u8]) -> Result<Cached, CacheError> {
+    let cached: Cached =
+        postcard::from_bytes(payload).map_err(|e| CacheError::Decode(e.to_string()))?;
+    cached.graph.check().map_err(CacheError::Decode)?;
+    for (i, map) in cached.maps.iter().enumerate() {
+        map.check(&cached.graph)
+            .map_err(|e| CacheError::Decode(format!("map {i}: {e}")))?;
+    }
+    Ok(cached)
+}
+
+/// Writes `cached` to `path` atomically (temporary file, sync, rename).
+pub fn store(path: &Path, cached: &Cached) -> std::io::Result<()> {
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir)?;
     }
     let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
     let result = (|| {
         let mut file = std::fs::File::create(&tmp)?;
-        file.write_all(&serde_json::to_vec(maps).map_err(std::io::Error::other)?)?;
+        file.write_all(&encode(cached))?;
         file.sync_all()?;
         std::fs::rename(&tmp, path)
     })();
@@ -132,12 +225,10 @@ pub fn store(path: &Path, maps: &[CostMap]) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::costmap::Method;
+    use crate::costmap::{BuildParams, Method};
     use crate::fixtures;
 
-    #[test]
-    fn a_map_round_trips_and_the_key_follows_every_input() {
-        let dir = std::env::temp_dir().join(format!("fieldhouse-cache-{}", std::process::id()));
+    fn cached() -> (Cached, BuildParams) {
         let graph = fixtures::graph();
         let params = BuildParams {
             method: Method::Search,
@@ -146,28 +237,93 @@ mod tests {
             ..BuildParams::default()
         };
         let map = CostMap::build(&graph, &params, &mut |_| {});
-        let path = path_for(&dir, "abc", &graph, &params, &[3]);
-        assert!(load(&path).is_none());
-        store(&path, std::slice::from_ref(&map)).unwrap();
-        let back = load(&path).unwrap().pop().unwrap();
-        assert_eq!(back.costs, map.costs);
-        assert_eq!(back.paths, map.paths);
-        assert_ne!(path_for(&dir, "abc", &graph, &params, &[4]), path);
+        (
+            Cached {
+                graph,
+                maps: vec![map],
+            },
+            params,
+        )
+    }
+
+    #[test]
+    fn the_graph_and_its_maps_round_trip_and_the_key_follows_every_input() {
+        let dir = tempfile::tempdir().unwrap();
+        let (cached, params) = cached();
+        let path = path_for(dir.path(), "abc", "run", &([10, 8], &params));
+        store(&path, &cached).unwrap();
+        let back = decode(&std::fs::read(&path).unwrap()).unwrap();
+        assert_eq!(back.graph.digest(), cached.graph.digest());
+        assert_eq!(back.maps[0].costs, cached.maps[0].costs);
+        assert_eq!(back.maps[0].paths, cached.maps[0].paths);
         // Any change of input gives another file.
-        let other = BuildParams {
+        let deeper = BuildParams {
             depth: 31,
             ..params.clone()
         };
-        assert_ne!(path_for(&dir, "abc", &graph, &other, &[3]), path);
-        assert_ne!(path_for(&dir, "abd", &graph, &params, &[3]), path);
-        // So does another graph with the same parameters (here, one clip fewer).
-        let clips = fixtures::library();
-        let fewer: Vec<&crate::motion::Clip> = clips.iter().skip(1).collect();
-        let smaller = MotionGraph::build("run", &fewer, graph.params).unwrap();
-        assert_ne!(path_for(&dir, "abc", &smaller, &params, &[3]), path);
-        // A corrupt file is ignored, not trusted.
-        std::fs::write(&path, b"{\"method\": \"mc\", \"costs\": [1, 2").unwrap();
-        assert!(load(&path).is_none());
-        std::fs::remove_dir_all(&dir).unwrap();
+        for other in [
+            path_for(dir.path(), "abd", "run", &([10, 8], &params)),
+            path_for(dir.path(), "abc", "dribble", &([10, 8], &params)),
+            path_for(dir.path(), "abc", "run", &([10], &params)),
+            path_for(dir.path(), "abc", "run", &([10, 8], &deeper)),
+        ] {
+            assert_ne!(other, path);
+        }
+    }
+
+    #[test]
+    fn a_foreign_cut_corrupt_or_older_file_is_refused_saying_which() {
+        let (cached, _) = cached();
+        let good = encode(&cached);
+        assert_eq!(
+            decode(b"{\"method\": \"mc\"}").unwrap_err(),
+            CacheError::Foreign
+        );
+        let cut = &good[..good.len() - 1];
+        assert!(matches!(decode(cut), Err(CacheError::Length { .. })));
+        assert!(matches!(
+            decode(&good[..10]),
+            Err(CacheError::Length { .. })
+        ));
+        let mut flipped = good.clone();
+        let last = flipped.len() - 1;
+        flipped[last] ^= 1;
+        assert_eq!(decode(&flipped).unwrap_err(), CacheError::Checksum);
+        let mut older = good.clone();
+        older[8..12].copy_from_slice(&5u32.to_le_bytes());
+        assert_eq!(decode(&older).unwrap_err(), CacheError::Format { found: 5 });
+        // A payload whose checksum holds but which is not a graph and maps.
+        let junk = b"not postcard at all";
+        let mut forged = Vec::new();
+        forged.extend_from_slice(MAGIC);
+        forged.extend_from_slice(&CACHE_FORMAT.to_le_bytes());
+        forged.extend_from_slice(&(junk.len() as u64).to_le_bytes());
+        forged.extend_from_slice(&Sha256::digest(junk));
+        forged.extend_from_slice(junk);
+        assert!(matches!(decode(&forged), Err(CacheError::Decode(_))));
+        assert!(decode(&good).is_ok());
+    }
+
+    #[test]
+    fn a_refused_file_is_rebuilt_and_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let (cached, params) = cached();
+        let path = path_for(dir.path(), "abc", "run", &params);
+        std::fs::write(&path, b"fhcache\ngarbage").unwrap();
+        let mut builds = 0;
+        let mut build = || {
+            builds += 1;
+            Ok::<_, ()>(Cached {
+                graph: cached.graph.clone(),
+                maps: cached.maps.clone(),
+            })
+        };
+        let (_, from_cache) =
+            build_or_load(Some(dir.path()), "abc", "run", &params, &mut build).unwrap();
+        assert!(!from_cache);
+        let (_, from_cache) =
+            build_or_load(Some(dir.path()), "abc", "run", &params, &mut build).unwrap();
+        assert!(from_cache);
+        assert_eq!(builds, 1);
     }
 }

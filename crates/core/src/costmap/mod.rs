@@ -210,6 +210,39 @@ pub struct CostMap {
 }
 
 impl CostMap {
+    /// Whether a map read from elsewhere (a cache file) fits `graph` as a built one does:
+    /// a cost and a path per cell, its start a node, its paths' edges the graph's.
+    pub(crate) fn check(&self, graph: &MotionGraph) -> Result<(), String> {
+        let cells = self.grid.n.checked_mul(self.grid.n).unwrap_or(usize::MAX);
+        if self.grid.n == 0 || self.costs.len() != cells || self.paths.len() != cells {
+            return Err(format!(
+                "{} costs and {} paths on a grid of {} cells a side",
+                self.costs.len(),
+                self.paths.len(),
+                self.grid.n
+            ));
+        }
+        if !(self.grid.cell_m > 0.0 && self.grid.cell_m.is_finite()) {
+            return Err(format!("cells of {} m", self.grid.cell_m));
+        }
+        if self.start_node as usize >= graph.node_count() {
+            return Err(format!(
+                "start node {} of {}",
+                self.start_node,
+                graph.node_count()
+            ));
+        }
+        if self
+            .paths
+            .iter()
+            .flatten()
+            .any(|&e| e as usize >= graph.edges.len())
+        {
+            return Err("a path along an edge the graph does not have".into());
+        }
+        Ok(())
+    }
+
     /// Builds a map of `graph` with `params`. `progress` is told how many walks are done
     /// (Monte Carlo) now and then, so a caller can show a progress bar.
     pub fn build(

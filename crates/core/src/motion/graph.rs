@@ -9,12 +9,12 @@ use super::Clip;
 use glam::DVec3;
 use petgraph::algo::tarjan_scc;
 use petgraph::graph::{DiGraph, NodeIndex};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::ops::ControlFlow;
 use thiserror::Error;
 
 /// How a motion graph is built.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct GraphParams {
     /// Frames compared on each side of a transition (10 at 30 fps: Kovar's ⅓ s), which
     /// is also the blend length at playback.
@@ -64,7 +64,7 @@ pub enum GraphError {
 }
 
 /// An edge of the graph: play from node `from` to node `to`, moving the root by `step`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Edge {
     /// The node the edge leaves.
     pub from: u32,
@@ -79,7 +79,7 @@ pub struct Edge {
 }
 
 /// Counts a user checks a graph by.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct GraphStats {
     /// Frames of all the clips: the nodes before pruning.
     pub frames: usize,
@@ -111,7 +111,7 @@ pub struct GraphStats {
 }
 
 /// How much of one clip the graph kept, and how it is joined to the rest.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ClipCoverage {
     /// The clip's name.
     pub name: String,
@@ -145,7 +145,7 @@ pub struct Constraints {
 /// The motion graph of one behaviour (Kovar et al. 2002): every kept frame a node, the
 /// clips' own next frames and the transitions between similar frames as edges, pruned to
 /// the largest strongly connected component.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct MotionGraph {
     /// The behaviour its clips show, e.g. `run`.
     pub behaviour: String,
@@ -517,6 +517,58 @@ impl MotionGraph {
             })
             .min_by(|&a, &b| off(&self.nodes[a as usize]).total_cmp(&off(&self.nodes[b as usize])))
             .unwrap_or(0)
+    }
+
+    /// Whether the parts of a graph read from elsewhere (a cache file) fit together as
+    /// a built one's do, so that no index into them can fall outside: every edge's ends
+    /// are nodes, the edges are grouped by node as `out_start` says, every node has its
+    /// pose, every node's clip is named. `Err` says what does not fit.
+    pub(crate) fn check(&self) -> Result<(), String> {
+        let nodes = self.nodes.len();
+        if nodes == 0 || nodes > u32::MAX as usize {
+            return Err(format!("{nodes} nodes"));
+        }
+        if let Some(e) = self
+            .edges
+            .iter()
+            .find(|e| e.from as usize >= nodes || e.to as usize >= nodes)
+        {
+            return Err(format!("an edge {} → {} among {nodes} nodes", e.from, e.to));
+        }
+        let grouped = self.out_start.len() == nodes + 1
+            && self.out_start.first() == Some(&0)
+            && self.out_start.last() == Some(&self.edges.len())
+            && self.out_start.windows(2).all(|w| w[0] <= w[1])
+            && (0..nodes).all(|n| {
+                self.edges[self.out_start[n]..self.out_start[n + 1]]
+                    .iter()
+                    .all(|e| e.from as usize == n)
+            });
+        if !grouped {
+            return Err("edges not grouped by node as out_start says".into());
+        }
+        if self.joints == 0 || self.poses.len() != nodes * self.joints {
+            return Err(format!(
+                "{} pose points for {nodes} nodes of {} joints",
+                self.poses.len(),
+                self.joints
+            ));
+        }
+        if self.joint_names.len() != self.joints || self.joint_parents.len() != self.joints {
+            return Err("joint names or parents not one per joint".into());
+        }
+        if self
+            .joint_parents
+            .iter()
+            .flatten()
+            .any(|&p| p >= self.joints)
+        {
+            return Err("a joint's parent is no joint".into());
+        }
+        if self.nodes.iter().any(|n| n.clip >= self.clip_names.len()) {
+            return Err("a node of an unnamed clip".into());
+        }
+        Ok(())
     }
 
     /// A node's joints in its character frame (root at the origin on the ground, facing +x).

@@ -3,13 +3,13 @@
 
 use super::Clip;
 use glam::DVec2;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// The root's motion over one edge, in the character's own frame at the edge's start:
 /// `dx` forward, `dz` sideways toward +z (the body's right: with y up and right-handed
 /// axes a body facing +x has +z on its right), `dheading` the turn in radians, positive
 /// toward +z (a right turn).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct RootStep {
     /// Forward, m.
     pub(crate) dx: f64,
@@ -50,7 +50,7 @@ pub fn wrap_angle(a: f64) -> f64 {
 /// A node: frame `frame` of clip `clip` (an index into [`MotionGraph::clip_names`](super::MotionGraph::clip_names)), with
 /// how the body moves around it, averaged over ⅔ s (about a stride) so the hips' sway
 /// within a stride does not count as turning.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Node {
     /// The clip, an index into the graph's clip names.
     pub clip: usize,
