@@ -3,18 +3,15 @@ it, against the real server; and what its fielder is allowed to see."""
 
 from __future__ import annotations
 
-import sys
-
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
 from fieldhouse.env import FIELDER_OBSERVATION
 from fieldhouse.vector import FieldhouseVectorEnv
 
-from .conftest import REPO
+from .conftest import load_example
 
-sys.path.insert(0, str(REPO / "clients" / "python" / "examples"))
-import learn_to_catch  # noqa: E402
+learn_to_catch = load_example("learn_to_catch")
 
 
 def test_a_short_training_does_better_than_its_random_start_on_balls_it_never_saw(server):
