@@ -163,7 +163,7 @@ def play(venv: FieldhouseVectorEnv, weights: np.ndarray, launches: list[dict]) -
     """Each environment's fielder plays ``launches`` with its own weights, all episodes
     stepped together until the last ends (``venv`` must not autoreset)."""
     n, balls = venv.num_envs, len(launches)
-    obs, _ = venv.reset(options={"launches": launches})
+    obs, _ = venv.reset(options={"scenario_options": {"launches": launches}})
     policy = Policy(n)
     caught = np.zeros((n, balls), bool)
     miss = np.full((n, balls), np.nan)
@@ -293,8 +293,9 @@ def evaluate_learned(
         # One seed's balls per environment: reset each on its own.
         for i, s in enumerate(seeds):
             mask = np.arange(len(seeds)) == i
-            launches = draw_launches(np.random.default_rng(s), balls)
-            obs, _ = venv.reset(seed=s, options={"reset_mask": mask, "launches": launches})
+            balls_of_seed = {"launches": draw_launches(np.random.default_rng(s), balls)}
+            options = {"reset_mask": mask, "scenario_options": balls_of_seed}
+            obs, _ = venv.reset(seed=s, options=options)
         policy = Policy(len(seeds))
         stacked = np.repeat(weights[None], len(seeds), axis=0)
         done = np.zeros(len(seeds), bool)

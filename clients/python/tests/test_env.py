@@ -410,15 +410,17 @@ def test_an_observation_past_its_bounds_is_clipped_into_its_space_with_a_warning
     env.close()
 
 
-def test_reset_options_the_server_refuses_are_a_bad_scenario_naming_the_field(server):
+def test_scenario_options_the_server_refuses_are_a_bad_scenario_naming_the_field(server):
     env = FieldhouseGymEnv(server.url, fly_ball_scenario(), admin_token=server.admin_token)
     steep = {"time_s": 0.5, "speed_m_s": 30.0, "elevation_deg": 95.0, "azimuth_deg": 45.0}
     try:
         with pytest.raises(BadScenario, match=r"launches\[0\]\.elevation_deg"):
-            env.reset(seed=1, options={"launches": [steep]})
+            env.reset(seed=1, options={"scenario_options": {"launches": [steep]}})
         assert env.parallel.match_id is None
-        # The environment's own scenario is untouched: the next episode plays it.
-        observation, _ = env.reset(seed=1)
+        # The environment's own scenario is untouched: the next episode plays it. An
+        # option that is not a scenario's is not used, and said so.
+        with pytest.warns(UserWarning, match=r"\['launches'\] are not used"):
+            observation, _ = env.reset(seed=1, options={"launches": [steep]})
         assert env.observation_space.contains(observation)
     finally:
         env.close()
