@@ -443,8 +443,10 @@ async fn frame_dense_replays_cost_their_bytes_not_their_frames() {
     let peak = memory_kb(&server, "VmHWM:").saturating_sub(before);
     eprintln!("6 viewers in turn of a {size_kb} kB frame-dense replay: peak resident memory {peak} kB over {before} kB");
     // Each viewer decodes a block of at most 4 MiB and its frames' places; the index
-    // is a few kilobytes.
-    assert!(peak < 40_000, "peak memory grew {peak} kB");
+    // is a few kilobytes. An index per frame would take some 580 MB here; what the
+    // bound leaves beyond the blocks is the allocator's (its arenas grow with the
+    // threads that run at once: 31 MB measured idle, 41 MB with the machine busy).
+    assert!(peak < 64_000, "peak memory grew {peak} kB");
 }
 
 /// A match created with `?record=false` leaves nothing in the replay directory (a
@@ -672,9 +674,22 @@ async fn retention_deletes_the_oldest_replays_and_never_the_one_being_written() 
     .await
     .unwrap_or_else(|| panic!("retention never left only the recording: {names:?}"));
     assert!(precious.exists(), "a link's target is never deleted");
-    assert!(server.metric("fieldhouse_replays_deleted_total") >= 5.0);
-    let log = server.log.lock().unwrap().join("\n");
-    assert!(log.contains("deleted an old replay"), "{log}");
+    // The count and the log line follow each deletion: on a busy machine, a moment
+    // later.
+    common::until(
+        Duration::from_secs(5),
+        "the deletions were never counted and logged",
+        || {
+            server.metric("fieldhouse_replays_deleted_total") >= 5.0
+                && server
+                    .log
+                    .lock()
+                    .unwrap()
+                    .iter()
+                    .any(|l| l.contains("deleted an old replay"))
+        },
+    )
+    .await;
     // The recording goes on.
     let recording = present()
         .into_iter()

@@ -1,7 +1,9 @@
 """Learning to catch: an evolution strategy trains a fielder from what it sees, then meets
 Chapman's and McBeath's fielders on balls it never trained on.
 
-    FIELDHOUSE_BIN=target/release/fieldhouse python learn_to_catch.py --minutes 10
+    cargo build --release   # then, from the repository's root:
+    export FIELDHOUSE_BIN=target/release/fieldhouse
+    python clients/python/examples/learn_to_catch.py --minutes 10
 
 The script starts its own server (``fieldhouse serve``, recording into a temporary
 directory) and needs the ``env`` extra (numpy, gymnasium). It prints how training went,
@@ -161,7 +163,7 @@ def play(venv: FieldhouseVectorEnv, weights: np.ndarray, launches: list[dict]) -
     """Each environment's fielder plays ``launches`` with its own weights, all episodes
     stepped together until the last ends (``venv`` must not autoreset)."""
     n, balls = venv.num_envs, len(launches)
-    obs, _ = venv.reset(options={"launches": launches})
+    obs, _ = venv.reset(options={"scenario_options": {"launches": launches}})
     policy = Policy(n)
     caught = np.zeros((n, balls), bool)
     miss = np.full((n, balls), np.nan)
@@ -291,8 +293,9 @@ def evaluate_learned(
         # One seed's balls per environment: reset each on its own.
         for i, s in enumerate(seeds):
             mask = np.arange(len(seeds)) == i
-            launches = draw_launches(np.random.default_rng(s), balls)
-            obs, _ = venv.reset(seed=s, options={"reset_mask": mask, "launches": launches})
+            balls_of_seed = {"launches": draw_launches(np.random.default_rng(s), balls)}
+            options = {"reset_mask": mask, "scenario_options": balls_of_seed}
+            obs, _ = venv.reset(seed=s, options=options)
         policy = Policy(len(seeds))
         stacked = np.repeat(weights[None], len(seeds), axis=0)
         done = np.zeros(len(seeds), bool)
@@ -372,6 +375,26 @@ def summary(runs: list[dict]) -> dict:
     }
 
 
+def save_weights(path: pathlib.Path, weights: np.ndarray) -> None:
+    """The weights as JSON, each row a mapping from feature to weight."""
+    rows = {
+        o: dict(zip(FEATURES, map(float, row), strict=True))
+        for o, row in zip(OUTPUTS, weights, strict=True)
+    }
+    path.write_text(json.dumps(rows, indent=1) + "\n")
+
+
+def load_weights(path: pathlib.Path) -> np.ndarray:
+    """Weights that :func:`save_weights` wrote (a feature left out weighs 0)."""
+    rows = json.loads(path.read_text())
+    unknown = {f for row in rows.values() for f in row} - set(FEATURES)
+    if set(rows) != set(OUTPUTS) or unknown:
+        raise ValueError(
+            f"{path}: rows {sorted(rows)} (want {OUTPUTS}), unknown features {unknown}"
+        )
+    return np.array([[rows[o].get(f, 0.0) for f in FEATURES] for o in OUTPUTS])
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--minutes", type=float, default=15.0, help="training time at most")
@@ -390,33 +413,44 @@ def main() -> None:
         help="held-out seeds, comma-separated: each draws --eval-balls balls",
     )
     parser.add_argument("--eval-balls", type=int, default=100)
+    parser.add_argument("--save", help="write the trained weights to this JSON file")
+    parser.add_argument(
+        "--load", help="evaluate the weights in this JSON file (from --save) without training"
+    )
     parser.add_argument("--fieldhouse", help="the binary (default: $FIELDHOUSE_BIN, PATH)")
     args = parser.parse_args()
     seeds = [int(s) for s in args.eval_seeds.split(",")]
+    without = tuple(f for f in args.without.split(",") if f)
 
     with (
         tempfile.TemporaryDirectory() as tmp,
         LocalServer(args.fieldhouse, args=["--replay-dir", tmp]) as server,
     ):
         tmp_dir = pathlib.Path(tmp)
-        trained = train(
-            server.url,
-            server.admin_token,
-            seed=args.seed,
-            generations=args.generations,
-            population=args.population,
-            balls=args.balls,
-            minutes=args.minutes,
-            without=tuple(f for f in args.without.split(",") if f),
-        )
-        print(f"\ntrained {len(trained.history)} generations in {trained.seconds:.0f} s")
+        if args.load:
+            weights = load_weights(pathlib.Path(args.load))
+        else:
+            trained = train(
+                server.url,
+                server.admin_token,
+                seed=args.seed,
+                generations=args.generations,
+                population=args.population,
+                balls=args.balls,
+                minutes=args.minutes,
+                without=without,
+            )
+            weights = trained.weights
+            print(f"\ntrained {len(trained.history)} generations in {trained.seconds:.0f} s")
+            if args.save:
+                save_weights(pathlib.Path(args.save), weights)
         print("weights (rows: acceleration toward / across the line of sight):")
         print("          " + " ".join(f"{f:>20}" for f in FEATURES))
-        for name, row in zip(OUTPUTS, trained.weights, strict=True):
+        for name, row in zip(OUTPUTS, weights, strict=True):
             print(f"{name:>8}  " + " ".join(f"{w:20.2f}" for w in row))
 
         learned = evaluate_learned(
-            server.url, server.admin_token, tmp_dir, trained.weights, seeds, args.eval_balls
+            server.url, server.admin_token, tmp_dir, weights, seeds, args.eval_balls
         )
         rows = {"learned": [r for f in learned for r in measure(server.binary, f)]}
         for strategy in ("chapman", "lot-optical"):

@@ -5,9 +5,11 @@ directory."""
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import pathlib
 import socket
+import sys
 
 import pytest
 
@@ -20,6 +22,18 @@ def default_binary() -> pathlib.Path:
     """Where cargo builds the server in this repository: ``CARGO_TARGET_DIR`` (relative
     to the workspace root, where scripts/python-tests runs cargo) or ``target``."""
     return REPO / (os.environ.get("CARGO_TARGET_DIR") or "target") / "debug" / "fieldhouse"
+
+
+def load_example(name: str):
+    """The module of ``clients/python/examples/{name}.py``, which its tests import (it may
+    import the package, and the examples import nothing of each other)."""
+    path = REPO / "clients" / "python" / "examples" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    # Registered before it runs: dataclasses look their module up by name.
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
 
 
 @pytest.fixture(scope="session")

@@ -9,7 +9,7 @@ import asyncio
 import random
 import time
 
-from .test_env import load_example
+from .conftest import load_example
 
 BALLS = 16
 MARGIN = 1

@@ -3,7 +3,6 @@ checks, and rewards and terminations that mean what the docs say."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import re
 import urllib.request
@@ -28,18 +27,10 @@ from fieldhouse.env import (
     fielder_observation_space,
     fly_ball_scenario,
 )
-from fieldhouse.errors import FieldhouseError, NotFound
+from fieldhouse.errors import BadScenario, FieldhouseError, NotFound
 from fieldhouse.messages import Optics, Rates
 
-from .conftest import REPO
-
-
-def load_example(name: str):
-    path = REPO / "clients" / "python" / "examples" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+from .conftest import load_example
 
 
 def test_fly_ball_env_passes_pettingzoo_parallel_api_test(server):
@@ -417,3 +408,19 @@ def test_an_observation_past_its_bounds_is_clipped_into_its_space_with_a_warning
         obs = env._observe("f0")
     assert env.observation_space("f0").contains(obs)
     env.close()
+
+
+def test_scenario_options_the_server_refuses_are_a_bad_scenario_naming_the_field(server):
+    env = FieldhouseGymEnv(server.url, fly_ball_scenario(), admin_token=server.admin_token)
+    steep = {"time_s": 0.5, "speed_m_s": 30.0, "elevation_deg": 95.0, "azimuth_deg": 45.0}
+    try:
+        with pytest.raises(BadScenario, match=r"launches\[0\]\.elevation_deg"):
+            env.reset(seed=1, options={"scenario_options": {"launches": [steep]}})
+        assert env.parallel.match_id is None
+        # The environment's own scenario is untouched: the next episode plays it. An
+        # option that is not a scenario's is not used, and said so.
+        with pytest.warns(UserWarning, match=r"\['launches'\] are not used"):
+            observation, _ = env.reset(seed=1, options={"launches": [steep]})
+        assert env.observation_space.contains(observation)
+    finally:
+        env.close()

@@ -3,18 +3,16 @@ it, against the real server; and what its fielder is allowed to see."""
 
 from __future__ import annotations
 
-import sys
-
 import numpy as np
+import pytest
 from gymnasium.vector import AutoresetMode
 
 from fieldhouse.env import FIELDER_OBSERVATION
 from fieldhouse.vector import FieldhouseVectorEnv
 
-from .conftest import REPO
+from .conftest import load_example
 
-sys.path.insert(0, str(REPO / "clients" / "python" / "examples"))
-import learn_to_catch  # noqa: E402
+learn_to_catch = load_example("learn_to_catch")
 
 
 def test_a_short_training_does_better_than_its_random_start_on_balls_it_never_saw(server):
@@ -62,3 +60,13 @@ def test_the_policy_sees_no_distance_and_no_position():
     # Before the reaction time, and between balls, it stands.
     obs[:, i["t"]] = 0.2
     assert not learn_to_catch.Policy(2).act(weights, obs).any()
+
+
+def test_weights_saved_load_back_and_a_foreign_file_is_refused(tmp_path):
+    weights = np.random.default_rng(1).normal(size=(2, len(learn_to_catch.FEATURES)))
+    path = tmp_path / "weights.json"
+    learn_to_catch.save_weights(path, weights)
+    assert np.array_equal(learn_to_catch.load_weights(path), weights)
+    path.write_text('{"toward": {"distance_m": 1.0}, "across": {}}')
+    with pytest.raises(ValueError, match="distance_m"):
+        learn_to_catch.load_weights(path)

@@ -86,7 +86,7 @@ def test_without_autoreset_an_ended_episode_waits_for_its_reset_and_options_pick
     stand = np.zeros((2, 2), np.float32)
     try:
         assert vector.metadata["autoreset_mode"] == AutoresetMode.DISABLED
-        vector.reset(seed=3, options={"launches": LAUNCHES[:1]})
+        vector.reset(seed=3, options={"scenario_options": {"launches": LAUNCHES[:1]}})
         ids = [env.match_id for env in vector.envs]
         steps = 0
         while steps < 2000:

@@ -27,9 +27,10 @@ command per agent for the tick it perceived; the server plays on once every bot 
 answered (PROTOCOL.md, "Modes") and the next perceptions are the observations. The match's
 ``end`` (the last scripted ball dead, ``options.possessions`` played, ``duration_s``) ends
 the episode for every agent (*termination*); ``max_steps`` cuts it short (*truncation*).
-``reset(options=...)`` gives one episode other scenario options, merged over the
-scenario's: ``{"launches": [...]}`` new balls, ``{"possessions": 10}`` a longer game
-(a learner draws its balls this way; an option the server refuses is ``BadScenario``).
+``reset(options={"scenario_options": {...}})`` gives one episode other scenario options,
+merged over the scenario's: ``{"launches": [...]}`` new balls, ``{"possessions": 10}`` a
+longer game (a learner draws its balls this way; one the server refuses is
+``BadScenario``). Other keys of ``options`` are not used (a warning names them).
 :meth:`~FieldhouseParallelEnv.close` (and the next ``reset``) deletes the match, and so
 does a ``reset`` that fails once the match is created: an episode leaves nothing behind.
 Its matches are not recorded unless ``record=True`` (then the replay is named ``name``,
@@ -371,10 +372,17 @@ class FieldhouseParallelEnv(ParallelEnv):
         if seed is not None:
             self._seeds = np.random.default_rng(seed)
         scenario = copy.deepcopy(self.scenario)
+        options = dict(options or {})
+        episode = options.pop("scenario_options", None) or {}
         if options:
-            # This episode's scenario options over the environment's: new balls
-            # (``launches``), more possessions, and so on. The server checks them.
-            scenario["options"] = {**(scenario.get("options") or {}), **options}
+            warnings.warn(
+                f"reset options {sorted(options)} are not used: give scenario options as "
+                '{"scenario_options": {...}}',
+                stacklevel=2,
+            )
+        # This episode's scenario options over the environment's: new balls (``launches``),
+        # more possessions, and so on. The server checks them.
+        scenario["options"] = {**(scenario.get("options") or {}), **episode}
         scenario["seed"] = int(seed) if seed is not None else int(self._seeds.integers(1 << 31))
         created = self.client.create_match(scenario, record=self.record)
         self.match_id = created.id

@@ -78,8 +78,8 @@ class FieldhouseVectorEnv(VectorEnv):
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
         """Resets every environment, or those of ``options["reset_mask"]`` (a bool array):
         with ``seed`` an int, environment i gets ``seed + i`` (as Gymnasium's vector
-        environments do); a list gives each its own. The other options are the
-        episode's scenario options (:meth:`FieldhouseParallelEnv.reset`)."""
+        environments do); a list gives each its own. The other options go to each
+        environment's reset (``scenario_options``: :meth:`FieldhouseParallelEnv.reset`)."""
         super().reset(seed=seed)
         options = dict(options or {})
         mask = np.asarray(options.pop("reset_mask", np.ones(self.num_envs, dtype=bool)))
