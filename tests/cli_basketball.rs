@@ -257,7 +257,9 @@ fn a_first_start_shows_each_stage_and_the_next_start_reads_the_cache() {
         }
     }
     let second = stages();
+    // The graphs are cached beside their maps: nothing is built again.
     assert!(!second.contains("searching"), "{second}");
+    assert!(!second.contains("motion graph of"), "{second}");
     for behaviour in ["run", "dribble", "defense"] {
         assert!(
             second.contains(&format!("{behaviour}: cost maps read from the cache")),

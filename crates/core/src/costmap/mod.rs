@@ -28,11 +28,11 @@ use crate::names::{lookup, UnknownName};
 use glam::DVec2;
 use prepared::Prepared;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize, Serializer};
+use serde::{Deserialize, Serialize};
 use std::str::FromStr;
 
 /// How a cost map is built.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// The paper's: random walks on the motion graph, keeping the cheapest arrival in
@@ -54,12 +54,6 @@ impl Method {
             Method::Search => "search",
             Method::Grassfire => "grassfire",
         }
-    }
-}
-
-impl Serialize for Method {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(self.name())
     }
 }
 
@@ -213,7 +207,7 @@ impl CostMap {
     /// Whether a map read from elsewhere (a cache file) fits `graph` as a built one does:
     /// a cost and a path per cell, its start a node, its paths' edges the graph's.
     pub(crate) fn check(&self, graph: &MotionGraph) -> Result<(), String> {
-        let cells = self.grid.n.checked_mul(self.grid.n).unwrap_or(usize::MAX);
+        let cells = self.grid.n.saturating_mul(self.grid.n);
         if self.grid.n == 0 || self.costs.len() != cells || self.paths.len() != cells {
             return Err(format!(
                 "{} costs and {} paths on a grid of {} cells a side",
