@@ -12,6 +12,7 @@ use crate::motion::{
 };
 use glam::DVec2;
 use std::path::Path;
+use std::sync::OnceLock;
 
 /// One behaviour an agent moves with: its motion graph and a cost map per start state.
 #[derive(Debug, Clone)]
@@ -43,8 +44,10 @@ pub struct StateMap {
     /// The map from that state, in the agent's frame.
     pub map: CostMap,
     /// Per map cell: checking a move against the court costs a few hull vertices instead
-    /// of a walk of every frame.
-    footprints: Vec<Footprint>,
+    /// of a walk of every frame. Each is made the first time a move to its cell is
+    /// checked (a pure function of the graph and the map, so when changes nothing): a
+    /// start pays for none of the thousands no decision asks about yet.
+    footprints: Vec<OnceLock<Footprint>>,
 }
 
 /// How a body playing a node gets to a start state: the edges, their frames, and where
@@ -123,20 +126,12 @@ impl Mover {
             leads,
             edge_frames,
         };
-        let origin = Walker::START;
         mover.states = maps
             .into_iter()
-            .map(|(state, map)| {
-                let footprints = (0..map.costs.len())
-                    .map(|cell| {
-                        Footprint::of(mover.path(&map, origin, cell).map(|s| s.at.position))
-                    })
-                    .collect();
-                StateMap {
-                    state,
-                    map,
-                    footprints,
-                }
+            .map(|(state, map)| StateMap {
+                state,
+                footprints: (0..map.costs.len()).map(|_| OnceLock::new()).collect(),
+                map,
             })
             .collect();
         mover
@@ -187,6 +182,18 @@ impl Mover {
             graph,
             states.into_iter().zip(maps).collect(),
         ))
+    }
+
+    /// The ground the stored path to `cell` of start state `state`'s map covers, from
+    /// the origin.
+    fn footprint(&self, state: usize, cell: usize) -> &Footprint {
+        let s = &self.states[state];
+        s.footprints[cell].get_or_init(|| {
+            Footprint::of(
+                self.path(&s.map, Walker::START, cell)
+                    .map(|stride| stride.at.position),
+            )
+        })
     }
 
     /// The map of the most common running state: the one shown to people.
@@ -404,11 +411,9 @@ impl Reach<'_> {
 
     /// Whether the stored path to `cell`, after the lead, keeps the body on `court`.
     fn path_on_court(&self, cell: usize, court: &Court, margin_m: f64) -> bool {
-        self.mover.states[self.state_for(cell)].footprints[cell].within(
-            &self.frame,
-            court,
-            margin_m,
-        )
+        self.mover
+            .footprint(self.state_for(cell), cell)
+            .within(&self.frame, court, margin_m)
     }
 
     /// Of the cells this agent reaches along a move that stays on `court` (within
