@@ -70,9 +70,10 @@ class FieldhouseVectorEnv(VectorEnv):
         self.single_action_space = self.envs[0].action_space(self.agent)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
-        self._autoreset = np.zeros(num_envs, dtype=bool)
-        # DISABLED: each environment's last step, repeated while its episode is over.
-        self._observations = np.zeros((num_envs, *self.single_observation_space.shape))
+        # Each environment's latest observation (repeated, without autoreset, while its
+        # episode is over) and whether its episode ended: terminated, truncated.
+        space = self.single_observation_space
+        self._observations = np.zeros((num_envs, *space.shape), dtype=space.dtype)
         self._ended = np.zeros((2, num_envs), dtype=bool)
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
@@ -96,19 +97,20 @@ class FieldhouseVectorEnv(VectorEnv):
                 raise ValueError(f"{len(seeds)} seeds for {self.num_envs} environments")
         for i in np.flatnonzero(mask):
             self._observations[i] = self._reset_one(self.envs[i], seeds[i], options or None)
-        self._autoreset[mask] = False
         self._ended[:, mask] = False
-        return self._observations.astype(self.single_observation_space.dtype), {}
+        return self._observations.copy(), {}
 
     def step(self, actions):
         n = self.num_envs
         if len(actions) != n:
             raise ValueError(f"{len(actions)} actions for {n} environments")
-        # Every action checked first: a refused step sends nothing.
+        # Every action checked first: a refused step sends nothing. An environment whose
+        # episode ended is reset (next step) or left alone (disabled), not stepped.
+        ended = self._ended.any(axis=0)
         playing = {
             i: env._commands({self.agent: actions[i]})
             for i, env in enumerate(self.envs)
-            if not self._autoreset[i]
+            if not ended[i]
         }
         played = self._loop.run_until_complete(self._play_all(playing))
         results = dict(zip(playing, played, strict=True))
@@ -125,9 +127,7 @@ class FieldhouseVectorEnv(VectorEnv):
             rewards[i] = reward[self.agent]
             self._ended[:, i] = term[self.agent], trunc[self.agent]
         terminations, truncations = self._ended.copy()
-        self._autoreset = terminations | truncations
-        observations = self._observations.astype(self.single_observation_space.dtype)
-        return observations, rewards, terminations, truncations, {}
+        return self._observations.copy(), rewards, terminations, truncations, {}
 
     def close_extras(self, **kwargs: Any) -> None:
         try:
