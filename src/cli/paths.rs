@@ -7,7 +7,7 @@
 //! same [`RunWatch`], a bot's runs and a built-in strategy's on the same balls compare
 //! like for like.
 
-use fieldhouse::fielding::{PathShape, RunWatch, Signatures};
+use fieldhouse::fielding::{RunWatch, SignatureSummary, Signatures};
 use fieldhouse::replay::Replay;
 use fieldhouse::sim::Sport;
 use fieldhouse::words::figure;
@@ -30,19 +30,14 @@ struct BallRun {
     signatures: Signatures,
 }
 
-/// A fielder's runs in sum: medians as `catch-sweep` takes them.
+/// A fielder's runs in sum: catches, and the signatures summed as `catch-sweep` sums them.
 #[derive(Debug, Serialize)]
 struct FielderSummary {
     balls: usize,
     caught: usize,
     catch_rate: f64,
-    share_straight: f64,
-    share_bulging_toward_home: f64,
-    share_bulging_away_from_home: f64,
-    median_bulge: Option<f64>,
-    median_rate_drift: Option<f64>,
-    median_image_bend: Option<f64>,
-    median_bearing_sweep_deg: Option<f64>,
+    #[serde(flatten)]
+    signatures: SignatureSummary,
     mean_run_m: f64,
 }
 
@@ -90,12 +85,13 @@ pub(super) fn paths(replay: &Replay, as_json: bool, out: &mut impl Write) -> any
         "fielder       balls  caught straight   →home   ←home  bulge  ṙ drift img bend α sweep   run m"
     )?;
     let optional = |x: Option<f64>, digits: usize| x.map_or("-".to_owned(), |x| figure(x, digits));
-    for (agent, s) in &summaries {
+    for (agent, summary) in &summaries {
+        let s = &summary.signatures;
         writeln!(
             out,
             "{agent:<12} {:>6} {:>6.1}% {:>7.0}% {:>6.0}% {:>6.0}% {:>6} {:>8} {:>8} {:>6}° {:>7.1}",
-            s.balls,
-            100.0 * s.catch_rate,
+            summary.balls,
+            100.0 * summary.catch_rate,
             100.0 * s.share_straight,
             100.0 * s.share_bulging_toward_home,
             100.0 * s.share_bulging_away_from_home,
@@ -103,7 +99,7 @@ pub(super) fn paths(replay: &Replay, as_json: bool, out: &mut impl Write) -> any
             optional(s.median_rate_drift, 3),
             optional(s.median_image_bend, 3),
             optional(s.median_bearing_sweep_deg, 1),
-            s.mean_run_m
+            summary.mean_run_m
         )?;
     }
     writeln!(
@@ -183,26 +179,13 @@ fn position3(v: &Value) -> Option<DVec3> {
 
 fn summarise(runs: &[&BallRun]) -> FielderSummary {
     let n = runs.len();
-    let share = |shape: PathShape| {
-        runs.iter().filter(|r| r.signatures.shape == shape).count() as f64 / n.max(1) as f64
-    };
-    let median = |f: &dyn Fn(&Signatures) -> Option<f64>| {
-        let mut xs: Vec<f64> = runs.iter().filter_map(|r| f(&r.signatures)).collect();
-        xs.sort_by(f64::total_cmp);
-        xs.get(xs.len() / 2).copied()
-    };
     let caught = runs.iter().filter(|r| r.caught).count();
+    let signatures: Vec<Signatures> = runs.iter().map(|r| r.signatures).collect();
     FielderSummary {
         balls: n,
         caught,
         catch_rate: caught as f64 / n.max(1) as f64,
-        share_straight: share(PathShape::Straight),
-        share_bulging_toward_home: share(PathShape::BulgesTowardHome),
-        share_bulging_away_from_home: share(PathShape::BulgesAwayFromHome),
-        median_bulge: median(&|s| s.bulge),
-        median_rate_drift: median(&|s| s.rate_drift),
-        median_image_bend: median(&|s| s.image_bend),
-        median_bearing_sweep_deg: median(&|s| s.bearing_sweep_deg),
+        signatures: SignatureSummary::of(&signatures),
         mean_run_m: runs.iter().map(|r| r.run_m).sum::<f64>() / n.max(1) as f64,
     }
 }

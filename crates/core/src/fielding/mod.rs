@@ -18,7 +18,7 @@ pub(crate) use fielder::Fielder;
 pub use fielder::{FielderConfig, Step};
 pub use observer::Observer;
 pub(crate) use path_shape::OpticalFit;
-pub use path_shape::{PathShape, RunWatch, Signatures};
+pub use path_shape::{PathShape, RunWatch, SignatureSummary, Signatures};
 pub use strategy::{Brain, Forecast, LotReference, StrategyKind};
 pub use sweep::{
     LaunchDistribution, SpareBin, StrategySummary, Sweep, SweepCase, SweepReport, SPARE_BINS_S,

@@ -74,6 +74,50 @@ impl Signatures {
     }
 }
 
+/// Many runs' signatures in sum, as `catch-sweep` and `fieldhouse replay paths` report
+/// them: the share of each path shape, and the median of each measure over the runs
+/// that have it (the upper median of an even count; `None` when no run has it).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SignatureSummary {
+    /// Share of runs whose path was straight.
+    pub share_straight: f64,
+    /// Share of runs whose path bulged toward home plate.
+    pub share_bulging_toward_home: f64,
+    /// Share of runs whose path bulged away from home plate.
+    pub share_bulging_away_from_home: f64,
+    /// Median bulge.
+    pub median_bulge: Option<f64>,
+    /// Median ṙ drift.
+    pub median_rate_drift: Option<f64>,
+    /// Median image bend.
+    pub median_image_bend: Option<f64>,
+    /// Median bearing sweep, degrees.
+    pub median_bearing_sweep_deg: Option<f64>,
+}
+
+impl SignatureSummary {
+    /// The summary of `runs`.
+    pub fn of(runs: &[Signatures]) -> SignatureSummary {
+        let share = |shape: PathShape| {
+            runs.iter().filter(|s| s.shape == shape).count() as f64 / runs.len().max(1) as f64
+        };
+        let median = |f: fn(&Signatures) -> Option<f64>| {
+            let mut xs: Vec<f64> = runs.iter().filter_map(f).collect();
+            xs.sort_by(f64::total_cmp);
+            xs.get(xs.len() / 2).copied()
+        };
+        SignatureSummary {
+            share_straight: share(PathShape::Straight),
+            share_bulging_toward_home: share(PathShape::BulgesTowardHome),
+            share_bulging_away_from_home: share(PathShape::BulgesAwayFromHome),
+            median_bulge: median(|s| s.bulge),
+            median_rate_drift: median(|s| s.rate_drift),
+            median_image_bend: median(|s| s.image_bend),
+            median_bearing_sweep_deg: median(|s| s.bearing_sweep_deg),
+        }
+    }
+}
+
 /// One fielder's run under one ball, watched from outside a look at a time: where the
 /// fielder was and where the ball was. A sweep knows its strategies' runs from the
 /// inside; this measures a run whose brain the measurer cannot see (a bot's, read from a

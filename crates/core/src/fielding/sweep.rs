@@ -2,7 +2,7 @@
 //! catching theories.
 
 use super::trial::{forecast, Trial, TrialConfig, TrialResult};
-use super::{Observer, PathShape, Signatures, StrategyKind};
+use super::{Observer, SignatureSummary, Signatures, StrategyKind};
 use crate::physics::{AirModel, BallSpec, Flight, Launch};
 use glam::DVec2;
 use rand::{Rng, SeedableRng};
@@ -315,17 +315,13 @@ fn summarise<'a>(
     let caught = count(&|_, t| t.caught);
     let catchable = count(&|c, _| c);
     let caught_catchable = count(&|c, t| c && t.caught);
-    let share =
-        |shape: PathShape| count(&|_, t| t.signatures.shape == shape) as f64 / n.max(1) as f64;
     let mean = |f: &dyn Fn(&Tally) -> f64| {
         tallies.iter().map(|(_, t)| f(t)).sum::<f64>() / n.max(1) as f64
     };
     let max = |f: &dyn Fn(&Tally) -> f64| tallies.iter().map(|(_, t)| f(t)).fold(0.0, f64::max);
-    let median = |f: &dyn Fn(&Tally) -> Option<f64>| {
-        let mut xs: Vec<f64> = tallies.iter().filter_map(|(_, t)| f(t)).collect();
-        xs.sort_by(f64::total_cmp);
-        xs.get(xs.len() / 2).copied().unwrap_or(f64::NAN)
-    };
+    let signatures: Vec<Signatures> = tallies.iter().map(|(_, t)| t.signatures).collect();
+    let shapes = SignatureSummary::of(&signatures);
+    let median = |m: Option<f64>| m.unwrap_or(f64::NAN);
     let rate = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f64 / b as f64 };
     let by_time_to_spare = (0..=SPARE_BINS_S.len())
         .map(|k| SpareBin {
@@ -348,13 +344,13 @@ fn summarise<'a>(
         mean_accel: mean(&|t| t.mean_accel),
         mean_peak_speed: mean(&|t| t.peak_speed),
         max_peak_speed: max(&|t| t.peak_speed),
-        share_straight: share(PathShape::Straight),
-        share_bulging_toward_home: share(PathShape::BulgesTowardHome),
-        share_bulging_away_from_home: share(PathShape::BulgesAwayFromHome),
-        median_bulge: median(&|t| t.signatures.bulge),
+        share_straight: shapes.share_straight,
+        share_bulging_toward_home: shapes.share_bulging_toward_home,
+        share_bulging_away_from_home: shapes.share_bulging_away_from_home,
+        median_bulge: median(shapes.median_bulge),
         by_time_to_spare,
-        median_rate_drift: median(&|t| t.signatures.rate_drift),
-        median_image_bend: median(&|t| t.signatures.image_bend),
-        median_bearing_sweep_deg: median(&|t| t.signatures.bearing_sweep_deg),
+        median_rate_drift: median(shapes.median_rate_drift),
+        median_image_bend: median(shapes.median_image_bend),
+        median_bearing_sweep_deg: median(shapes.median_bearing_sweep_deg),
     }
 }
