@@ -9,18 +9,18 @@ use fieldhouse::basketball::{
     Brain, Capabilities, Court, DecisionParams, Game, GameParams, Keep, Motion, Opponent,
     ShotModel, Situation,
 };
+use fieldhouse::costmap::cache::Reuse;
 use fieldhouse::costmap::AgentPose;
 use fieldhouse::motion::{Mirroring, MotionLibrary, FPS};
 use glam::DVec2;
 use std::hint::black_box;
-use std::path::PathBuf;
 use std::sync::Arc;
 
 fn capabilities() -> Arc<Capabilities> {
     let library = MotionLibrary::embedded(FPS, Mirroring::On);
-    let cache = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/bench-cache");
     Arc::new(
-        Capabilities::build(&library, Some(&cache), &mut |_| {}).expect("the behaviours build"),
+        Capabilities::build(&library, Reuse::Shipped, &mut |_| {})
+            .expect("the behaviours build"),
     )
 }
 
@@ -31,7 +31,7 @@ fn capabilities_uncached(c: &mut Criterion) {
     let mut group = c.benchmark_group("basketball/capabilities");
     group.sample_size(10);
     group.bench_function("all_graphs_and_maps_uncached", |b| {
-        b.iter(|| black_box(Capabilities::build(&library, None, &mut |_| {}).unwrap()))
+        b.iter(|| black_box(Capabilities::build(&library, Reuse::Nothing, &mut |_| {}).unwrap()))
     });
     group.finish();
 }

@@ -233,12 +233,34 @@ fn one_possession_is_counted_in_the_singular() {
 }
 
 #[test]
-fn a_first_start_shows_each_stage_and_the_next_start_reads_the_cache() {
+fn a_first_start_finds_the_shipped_graphs_and_maps_and_builds_nothing() {
+    let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("shipped-start-cache");
+    let _ = std::fs::remove_dir_all(&cache);
+    let (_, log) = success(&format!(
+        "basketball-eval --offense simple --possessions 1 --cache-dir {}",
+        cache.display()
+    ));
+    for behaviour in ["run", "dribble", "defense"] {
+        assert!(
+            log.contains(&format!("{behaviour}: cost maps shipped with fieldhouse")),
+            "{log}"
+        );
+    }
+    assert!(!log.contains("searching"), "{log}");
+    assert!(!log.contains("motion graph of"), "{log}");
+    // Nothing was built, so nothing was cached.
+    assert!(!cache.exists(), "{}", cache.display());
+}
+
+#[test]
+fn a_first_start_of_other_motion_shows_each_stage_and_the_next_start_reads_the_cache() {
+    // The capture unmirrored is other motion than what fieldhouse ships graphs and maps
+    // of (its fingerprint differs), so they are built, then cached.
     let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("first-start-cache");
     let _ = std::fs::remove_dir_all(&cache);
     let stages = || {
         success(&format!(
-            "basketball-eval --offense simple --possessions 1 --cache-dir {}",
+            "basketball-eval --offense simple --possessions 1 --no-mirror --cache-dir {}",
             cache.display()
         ))
         .1

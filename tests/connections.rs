@@ -697,7 +697,15 @@ async fn slow_downloads_hold_their_places_and_the_caps_hold() {
             held.push(stream);
         }
         if k % 10 == 9 {
-            most = most.max(sockets_held(&server, from(attacker)));
+            // A refused socket the client saw closed can outlive its EOF in the server's
+            // descriptor table for a moment (the FIN goes before the descriptor does):
+            // over the cap, look again before counting it as held.
+            let mut held_now = sockets_held(&server, from(attacker));
+            if held_now > 20 {
+                tokio::time::sleep(Duration::from_millis(200)).await;
+                held_now = sockets_held(&server, from(attacker));
+            }
+            most = most.max(held_now);
         }
     }
     assert!(

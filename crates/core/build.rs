@@ -7,6 +7,10 @@
 //! little-endian. Compressing the files as one stream lets zstd share what the files have
 //! in common (the same hierarchy in every file, similar rows of angles): 11.4 MB of BVH
 //! text pack into about 3.4 MB at level 19, against about 4 MB file by file.
+//!
+//! It also tells the crate what the embedded library's source is (clip count and
+//! fingerprint) without parsing it, which files of graphs and maps the repository ships
+//! (`data/capability`), and a digest of the source that builds graphs and maps.
 
 use std::fs;
 use std::io::Write;
@@ -33,25 +37,104 @@ fn main() {
         );
     }
     let mut pack = Vec::new();
-    for path in &files {
-        let rel = path
-            .strip_prefix(&data)
-            .expect("found under data/mocap")
-            .to_str()
-            .expect("motion file names are UTF-8")
-            .replace('\\', "/");
-        let bytes = fs::read(path).unwrap_or_else(|e| panic!("reading {}: {e}", path.display()));
+    for (rel, bytes) in pack_records(&data, &files) {
         pack.extend_from_slice(&(rel.len() as u32).to_le_bytes());
         pack.extend_from_slice(rel.as_bytes());
         pack.extend_from_slice(&(bytes.len() as u64).to_le_bytes());
         pack.extend_from_slice(&bytes);
     }
     source_digest(&root);
+    embedded_source(&pack_records(&data, &files));
+    shipped_capability(&root.join("../../data/capability"));
     let compressed = zstd::bulk::compress(&pack, LEVEL).expect("zstd compresses in memory");
     let out = PathBuf::from(std::env::var_os("OUT_DIR").expect("set by cargo")).join("mocap.zst");
     fs::File::create(&out)
         .and_then(|mut f| f.write_all(&compressed))
         .unwrap_or_else(|e| panic!("writing {}: {e}", out.display()));
+}
+
+/// Each motion file's path under `data` ("behaviour/file.bvh") and bytes, in `files`
+/// (sorted) order.
+fn pack_records(data: &Path, files: &[PathBuf]) -> Vec<(String, Vec<u8>)> {
+    files
+        .iter()
+        .map(|path| {
+            let rel = path
+                .strip_prefix(data)
+                .expect("found under data/mocap")
+                .to_str()
+                .expect("motion file names are UTF-8")
+                .replace('\\', "/");
+            let bytes =
+                fs::read(path).unwrap_or_else(|e| panic!("reading {}: {e}", path.display()));
+            (rel, bytes)
+        })
+        .collect()
+}
+
+/// What the embedded library's `MotionSource` says, known without parsing a clip, so
+/// that a command whose graphs and maps are shipped or cached starts without reading the
+/// motion at all: the clip count (every BVH and AMC file) and the fingerprint with and
+/// without mirroring, computed as the loader computes it (a SHA-256 over each file's
+/// length-prefixed path and bytes, in path order, after a marker when mirrored). The
+/// test `embedded_source_is_known_before_parsing` holds the two to agreeing.
+fn embedded_source(records: &[(String, Vec<u8>)]) {
+    use sha2::{Digest, Sha256};
+    let clips = records
+        .iter()
+        .filter(|(rel, _)| !rel.to_ascii_lowercase().ends_with(".asf"))
+        .count();
+    println!("cargo:rustc-env=FIELDHOUSE_EMBEDDED_CLIPS={clips}");
+    // The loader orders files by their path as a string ("run-127/" before "run/"),
+    // not component by component as the pack does.
+    let mut records: Vec<&(String, Vec<u8>)> = records.iter().collect();
+    records.sort_by(|a, b| a.0.cmp(&b.0));
+    for (mirrored, var) in [(true, "MIRRORED"), (false, "PLAIN")] {
+        let mut hash = Sha256::new();
+        if mirrored {
+            hash.update(b"mirrored");
+        }
+        for (rel, bytes) in &records {
+            hash.update((rel.len() as u64).to_le_bytes());
+            hash.update(rel.as_bytes());
+            hash.update((bytes.len() as u64).to_le_bytes());
+            hash.update(bytes);
+        }
+        let hex: String = hash.finalize()[..8]
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect();
+        println!("cargo:rustc-env=FIELDHOUSE_EMBEDDED_FINGERPRINT_{var}={hex}");
+    }
+}
+
+/// The motion graphs and cost maps the repository ships (`data/capability/*.bin.zst`,
+/// written by `scripts/sync-capability`), listed by file name for
+/// `costmap::cache::shipped` to include: with them the embedded motion's basketball
+/// behaviours are ready the moment the binary starts, with no cache and no build.
+fn shipped_capability(dir: &Path) {
+    println!("cargo:rerun-if-changed=../../data/capability");
+    let mut files: Vec<PathBuf> = fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.to_str().is_some_and(|s| s.ends_with(".bin.zst")))
+        .collect();
+    files.sort();
+    let mut list = String::from("&[\n");
+    for path in &files {
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .expect("UTF-8 name")
+            .trim_end_matches(".zst");
+        let abs = fs::canonicalize(path).expect("listed just now");
+        list.push_str(&format!("    ({name:?}, include_bytes!({abs:?})),\n"));
+    }
+    list.push(']');
+    let out = PathBuf::from(std::env::var_os("OUT_DIR").expect("set by cargo")).join("shipped.rs");
+    fs::write(&out, list).unwrap_or_else(|e| panic!("writing {}: {e}", out.display()));
 }
 
 /// The source that decides a motion graph and its cost maps (`src/motion`,

@@ -66,11 +66,12 @@ impl CapabilityArgs {
                 "{stage}"
             );
         };
-        let mut caps = Capabilities::build(library, cache.as_deref(), &mut progress)
+        let reuse = self.cache.reuse(cache.as_deref());
+        let mut caps = Capabilities::build(library, reuse, &mut progress)
             .context("building the basketball behaviours (run, dribble, defense)")?;
         for name in captures {
             caps = caps
-                .with_capture(library, name, cache.as_deref(), &mut progress)
+                .with_capture(library, name, reuse, &mut progress)
                 .with_context(|| format!("building the behaviour {name}"))?;
         }
         tracing::info!(

@@ -14,7 +14,7 @@ use glam::DVec2;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(Args, Debug)]
@@ -80,7 +80,8 @@ pub(super) struct CacheArgs {
     /// Where built maps are cached (default: $XDG_CACHE_HOME/fieldhouse or ~/.cache/fieldhouse).
     #[arg(long, value_name = "DIR", env = "FIELDHOUSE_CACHE_DIR")]
     cache_dir: Option<PathBuf>,
-    /// Build even if a cached map exists (and do not store the result).
+    /// Build from the motion even if fieldhouse ships the graphs and maps or the cache
+    /// holds them (and store nothing).
     #[arg(long)]
     no_cache: bool,
 }
@@ -91,6 +92,16 @@ impl CacheArgs {
         (!self.no_cache)
             .then(|| self.cache_dir.clone().or_else(cache::default_dir))
             .flatten()
+    }
+
+    /// Where graphs and maps may be found before they are built, with `dir` (this
+    /// [`CacheArgs::dir`]) as the cache directory.
+    pub(super) fn reuse<'a>(&self, dir: Option<&'a Path>) -> cache::Reuse<'a> {
+        match (self.no_cache, dir) {
+            (true, _) => cache::Reuse::Nothing,
+            (false, Some(dir)) => cache::Reuse::ShippedOrDir(dir),
+            (false, None) => cache::Reuse::Shipped,
+        }
     }
 }
 
@@ -179,8 +190,8 @@ pub(super) fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()>
     // The graph is this command's own choice (its window and threshold, or the
     // automatic one), so its digest keys the maps.
     let inputs = (graph.params, graph.digest(), &params, [start]);
-    let (cache::Cached { mut maps, .. }, from_cache) = cache::build_or_load(
-        cache_dir.as_deref(),
+    let (cache::Cached { mut maps, .. }, origin) = cache::build_or_load(
+        args.cache.reuse(cache_dir.as_deref()),
         library.source.fingerprint(),
         &graph.behaviour,
         &inputs,
@@ -201,6 +212,7 @@ pub(super) fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()>
         b.finish_and_clear();
     }
     let map = maps.pop().expect("one map per start");
+    let from_cache = origin != cache::Origin::Built;
     let elapsed_s = started.elapsed().as_secs_f64();
     tracing::info!(
         from_cache,
@@ -262,11 +274,7 @@ pub(super) fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()>
         "  reachable cells: {} of {}; {} in {:.3} s; {:.1} KiB",
         map.reachable_cells(),
         map.grid.cells(),
-        if from_cache {
-            "read from cache"
-        } else {
-            "built"
-        },
+        origin,
         elapsed_s,
         map.memory_bytes() as f64 / 1024.0
     )?;

@@ -53,7 +53,7 @@ impl MotionSourceArgs {
         match library.source.dir() {
             // The operator's own log may name the directory; visitors never see it.
             Some(dir) => {
-                tracing::info!(source = %library.source, dir = %dir.display(), skipped = library.problems.len(), "motion loaded")
+                tracing::info!(source = %library.source, dir = %dir.display(), skipped = library.problems().len(), "motion loaded")
             }
             None => tracing::info!(source = %library.source, "motion loaded"),
         }

@@ -106,7 +106,11 @@ pub fn cmu_capabilities() -> std::sync::Arc<crate::basketball::Capabilities> {
         let cache =
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/test-cache");
         std::sync::Arc::new(
-            crate::basketball::Capabilities::build(cmu_library(), Some(&cache), &mut |_| {})
+            crate::basketball::Capabilities::build(
+                cmu_library(),
+                crate::costmap::cache::Reuse::ShippedOrDir(&cache),
+                &mut |_| {},
+            )
                 .expect("the CMU behaviours build"),
         )
     })

@@ -11,7 +11,6 @@ use crate::motion::{
     GraphError, MotionGraph, MotionLibrary, MotionSource, RootStep, Walker, AUTO_WINDOWS,
 };
 use glam::DVec2;
-use std::path::Path;
 use std::sync::OnceLock;
 
 /// One behaviour an agent moves with: its motion graph and a cost map per start state.
@@ -138,39 +137,23 @@ impl Mover {
     }
 
     /// The mover of `behaviour` in `library`: its graph (the automatic choice) and a
-    /// `search` map per start state, read from the cache under `cache_dir` if it holds
-    /// them, telling `progress` what it is doing.
+    /// `search` map per start state, shipped or read from the cache if `reuse` allows
+    /// and either holds them, telling `progress` what it is doing.
     pub fn build(
         library: &MotionLibrary,
         behaviour: &'static str,
-        cache_dir: Option<&Path>,
+        reuse: cache::Reuse<'_>,
         progress: &mut dyn FnMut(Stage),
     ) -> Result<Mover, GraphError> {
-        let params = BuildParams {
-            depth: HORIZON_FRAMES,
-            ..BuildParams::default()
-        };
-        let (cache::Cached { graph, mut maps }, cached) = cache::build_or_load(
-            cache_dir,
+        let (cache::Cached { graph, mut maps }, origin) = cache::build_or_load(
+            reuse,
             library.source.fingerprint(),
             behaviour,
-            &(AUTO_WINDOWS, &params),
-            || {
-                let owned = library.ground_clips(behaviour);
-                let clips: Vec<_> = owned.iter().collect();
-                progress(Stage::Graph {
-                    behaviour,
-                    frames: clips.iter().map(|c| c.frame_count()).sum(),
-                });
-                let graph = MotionGraph::build_auto(behaviour, &clips, &AUTO_WINDOWS)?;
-                let starts: Vec<u32> = start_states(&graph).iter().map(|s| s.node).collect();
-                progress(Stage::Map { behaviour });
-                let maps = CostMap::build_from(&graph, &params, &starts, &mut |_| {});
-                Ok::<_, GraphError>(cache::Cached { graph, maps })
-            },
+            &Self::inputs(),
+            || Self::build_parts(library, behaviour, progress),
         )?;
         let states = start_states(&graph);
-        progress(Stage::Ready { behaviour, cached });
+        progress(Stage::Ready { behaviour, origin });
         // The stance and its mirror image reach left and right alike (maps[0] is the
         // stance; its twin, if any, comes next).
         if let Some(t) = states.iter().position(|s| s.name == STANDING_MIRRORED) {
@@ -182,6 +165,44 @@ impl Mover {
             graph,
             states.into_iter().zip(maps).collect(),
         ))
+    }
+
+    /// What decides a behaviour's graph and maps besides the motion and the code: the
+    /// windows the automatic graph choice tries and the maps' build parameters. The
+    /// cache and the shipped files are keyed by them.
+    fn inputs() -> (&'static [usize], BuildParams) {
+        let params = BuildParams {
+            depth: HORIZON_FRAMES,
+            ..BuildParams::default()
+        };
+        (&AUTO_WINDOWS, params)
+    }
+
+    /// The name of the file holding the graph and maps of `behaviour` in `library`,
+    /// cached or shipped.
+    pub fn file_name(library: &MotionLibrary, behaviour: &str) -> String {
+        cache::file_name(library.source.fingerprint(), behaviour, &Self::inputs())
+    }
+
+    /// Builds the graph of `behaviour` in `library` and its maps, as they are cached
+    /// (before the stance's maps are made symmetric).
+    pub fn build_parts(
+        library: &MotionLibrary,
+        behaviour: &'static str,
+        progress: &mut dyn FnMut(Stage),
+    ) -> Result<cache::Cached, GraphError> {
+        let (windows, params) = Self::inputs();
+        let owned = library.ground_clips(behaviour);
+        let clips: Vec<_> = owned.iter().collect();
+        progress(Stage::Graph {
+            behaviour,
+            frames: clips.iter().map(|c| c.frame_count()).sum(),
+        });
+        let graph = MotionGraph::build_auto(behaviour, &clips, windows)?;
+        let starts: Vec<u32> = start_states(&graph).iter().map(|s| s.node).collect();
+        progress(Stage::Map { behaviour });
+        let maps = CostMap::build_from(&graph, &params, &starts, &mut |_| {});
+        Ok(cache::Cached { graph, maps })
     }
 
     /// The ground the stored path to `cell` of start state `state`'s map covers, from
@@ -589,12 +610,12 @@ pub enum Stage {
         /// The behaviour (`dribble`, `run`, `defense`).
         behaviour: &'static str,
     },
-    /// A behaviour's cost map is ready: read from the cache, or just built.
+    /// A behaviour's cost map is ready: shipped, read from the cache, or just built.
     Ready {
         /// The behaviour (`dribble`, `run`, `defense`).
         behaviour: &'static str,
-        /// True when the maps came from the cache.
-        cached: bool,
+        /// Where its graph and maps came from.
+        origin: cache::Origin,
     },
 }
 
@@ -608,11 +629,7 @@ impl std::fmt::Display for Stage {
                 f,
                 "{behaviour}: searching its cost maps, one per start state ({HORIZON_FRAMES} frames ahead; cached for next time)"
             ),
-            Stage::Ready { behaviour, cached } => write!(
-                f,
-                "{behaviour}: cost maps {}",
-                if *cached { "read from the cache" } else { "built" }
-            ),
+            Stage::Ready { behaviour, origin } => write!(f, "{behaviour}: cost maps {origin}"),
         }
     }
 }
@@ -636,17 +653,18 @@ pub struct Capabilities {
 }
 
 impl Capabilities {
-    /// Builds (or reads from the cache under `cache_dir`) the graphs and `search` maps of
-    /// `run`, `dribble` and `defense` from `library`, telling `progress` what it is doing.
+    /// Builds (or finds shipped or cached, as `reuse` allows) the graphs and `search`
+    /// maps of `run`, `dribble` and `defense` from `library`, telling `progress` what it
+    /// is doing.
     pub fn build(
         library: &MotionLibrary,
-        cache_dir: Option<&Path>,
+        reuse: cache::Reuse<'_>,
         progress: &mut dyn FnMut(Stage),
     ) -> Result<Capabilities, GraphError> {
         Ok(Capabilities {
-            dribble: Mover::build(library, "dribble", cache_dir, progress)?,
-            run: Mover::build(library, "run", cache_dir, progress)?,
-            defense: Mover::build(library, "defense", cache_dir, progress)?,
+            dribble: Mover::build(library, "dribble", reuse, progress)?,
+            run: Mover::build(library, "run", reuse, progress)?,
+            defense: Mover::build(library, "defense", reuse, progress)?,
             captures: Vec::new(),
             source: library.source.clone(),
         })
@@ -660,13 +678,13 @@ impl Capabilities {
         mut self,
         library: &MotionLibrary,
         name: &str,
-        cache_dir: Option<&Path>,
+        reuse: cache::Reuse<'_>,
         progress: &mut dyn FnMut(Stage),
     ) -> Result<Capabilities, GraphError> {
         if self.by_behaviour(name).is_none() {
             let name = crate::names::intern(name);
             self.captures
-                .push(Mover::build(library, name, cache_dir, progress)?);
+                .push(Mover::build(library, name, reuse, progress)?);
         }
         Ok(self)
     }

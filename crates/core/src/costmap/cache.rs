@@ -10,6 +10,15 @@
 //! its checksum or does not decode is refused with a message saying which, logged, and
 //! rebuilt. It is written to a temporary file, synced, then renamed into place, so an
 //! interrupted build never leaves half a file behind.
+//!
+//! **Shipped files.** The graphs and maps of the embedded motion's basketball behaviours
+//! are a pure function of the capture and the code, so the repository carries them
+//! (`data/capability/<file name>.zst`, written by `scripts/sync-capability`) and the
+//! binary includes them: a first start builds nothing. They are found by the same file
+//! name a cache would use, so a change of anything that decides them (the source digest
+//! among it) simply misses them and builds, and the test
+//! `the_shipped_graphs_and_maps_are_what_the_code_builds` fails until they are written
+//! again.
 
 use super::CostMap;
 use crate::motion::MotionGraph;
@@ -40,12 +49,54 @@ pub struct Cached {
     pub maps: Vec<CostMap>,
 }
 
+/// The graphs and maps the repository ships, by file name (see `build.rs`).
+static SHIPPED: &[(&str, &[u8])] = include!(concat!(env!("OUT_DIR"), "/shipped.rs"));
+
+/// Where [`build_or_load`] may find a behaviour's graph and maps before it builds them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reuse<'a> {
+    /// Nowhere: build, and store nothing (to measure a build, or to check one).
+    Nothing,
+    /// The files shipped in the binary; no cache directory (none was found).
+    Shipped,
+    /// The files shipped in the binary, else the cache under this directory, where
+    /// whatever is built is stored.
+    ShippedOrDir(&'a Path),
+}
+
+/// Where a graph and its maps came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Origin {
+    /// Shipped in the binary.
+    Shipped,
+    /// Read from the cache directory.
+    Cache,
+    /// Built just now.
+    Built,
+}
+
+impl std::fmt::Display for Origin {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Origin::Shipped => "shipped with fieldhouse",
+            Origin::Cache => "read from the cache",
+            Origin::Built => "built",
+        })
+    }
+}
+
 /// Why a cache file was not used.
 #[derive(Debug, Error, PartialEq, Eq)]
 pub enum CacheError {
     /// It does not start with the magic.
     #[error("not a fieldhouse cache file")]
     Foreign,
+    /// It ends inside its header.
+    #[error("cut short inside its header ({actual} of {HEADER_BYTES} bytes)")]
+    Header {
+        /// Bytes the file has.
+        actual: usize,
+    },
     /// Another format version wrote it.
     #[error("cache format {found}; this build reads format {CACHE_FORMAT}")]
     Format {
@@ -88,6 +139,12 @@ pub fn path_for(
     behaviour: &str,
     inputs: &impl Serialize,
 ) -> PathBuf {
+    dir.join(file_name(motion_fingerprint, behaviour, inputs))
+}
+
+/// The name of the file that holds the graph and maps of `behaviour` for the motion data
+/// `motion_fingerprint` and `inputs`: `capability-<behaviour>-<16 hex digits of the key>.bin`.
+pub fn file_name(motion_fingerprint: &str, behaviour: &str, inputs: &impl Serialize) -> String {
     let key = Key {
         format: CACHE_FORMAT,
         version: env!("CARGO_PKG_VERSION"),
@@ -102,7 +159,7 @@ pub fn path_for(
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
         .collect();
-    dir.join(format!("capability-{safe}-{hex}.bin"))
+    format!("capability-{safe}-{hex}.bin")
 }
 
 /// The default cache directory: `$XDG_CACHE_HOME/fieldhouse`, else `~/.cache/fieldhouse`.
@@ -113,22 +170,31 @@ pub fn default_dir() -> Option<PathBuf> {
         .map(|d| d.join("fieldhouse"))
 }
 
-/// The graph and maps of `behaviour`: read from the cache under `dir` if it holds them,
-/// else made by `build` and stored there. A cache that cannot be read or written is
-/// logged and otherwise ignored: what `build` makes is still good. Returns them and
-/// whether they came from the cache.
+/// The graph and maps of `behaviour`: shipped in the binary or read from the cache, as
+/// `reuse` allows, if either holds them; else made by `build` and stored in the cache
+/// directory. A cache that cannot be read or written is logged and otherwise ignored:
+/// what `build` makes is still good. Returns them and where they came from.
 pub fn build_or_load<E>(
-    dir: Option<&Path>,
+    reuse: Reuse<'_>,
     motion_fingerprint: &str,
     behaviour: &str,
     inputs: &impl Serialize,
     build: impl FnOnce() -> Result<Cached, E>,
-) -> Result<(Cached, bool), E> {
-    let file = dir.map(|d| path_for(d, motion_fingerprint, behaviour, inputs));
+) -> Result<(Cached, Origin), E> {
+    let name = file_name(motion_fingerprint, behaviour, inputs);
+    if reuse != Reuse::Nothing {
+        if let Some(cached) = shipped(&name) {
+            return Ok((cached, Origin::Shipped));
+        }
+    }
+    let file = match reuse {
+        Reuse::ShippedOrDir(dir) => Some(dir.join(&name)),
+        Reuse::Nothing | Reuse::Shipped => None,
+    };
     if let Some(file) = &file {
         match std::fs::read(file) {
             Ok(bytes) => match decode(&bytes) {
-                Ok(cached) => return Ok((cached, true)),
+                Ok(cached) => return Ok((cached, Origin::Cache)),
                 Err(e) => tracing::warn!(
                     file = %file.display(),
                     error = %e,
@@ -145,7 +211,29 @@ pub fn build_or_load<E>(
             tracing::warn!(file = %file.display(), error = %e, "could not cache the cost maps");
         }
     }
-    Ok((cached, false))
+    Ok((cached, Origin::Built))
+}
+
+/// The shipped graph and maps of file `name`, if the binary carries it.
+pub fn shipped(name: &str) -> Option<Cached> {
+    let (_, compressed) = SHIPPED.iter().find(|(shipped, _)| *shipped == name)?;
+    // The repository's own files, checked by the test suite: a failure here is a build
+    // defect, and building instead is still correct.
+    match zstd::decode_all(*compressed)
+        .map_err(|e| CacheError::Decode(format!("zstd: {e}")))
+        .and_then(|bytes| decode(&bytes))
+    {
+        Ok(cached) => Some(cached),
+        Err(e) => {
+            tracing::error!(file = name, error = %e, "a shipped motion graph and its cost maps do not read; building them");
+            None
+        }
+    }
+}
+
+/// The file names the binary ships.
+pub fn shipped_names() -> impl Iterator<Item = &'static str> {
+    SHIPPED.iter().map(|(name, _)| *name)
 }
 
 /// A cache file's bytes.
@@ -168,9 +256,8 @@ pub fn decode(bytes: &[u8]) -> Result<Cached, CacheError> {
         return Err(CacheError::Foreign);
     }
     if bytes.len() < HEADER_BYTES {
-        return Err(CacheError::Length {
-            declared: 0,
-            actual: 0,
+        return Err(CacheError::Header {
+            actual: bytes.len(),
         });
     }
     let found = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
@@ -281,10 +368,10 @@ mod tests {
         );
         let cut = &good[..good.len() - 1];
         assert!(matches!(decode(cut), Err(CacheError::Length { .. })));
-        assert!(matches!(
-            decode(&good[..10]),
-            Err(CacheError::Length { .. })
-        ));
+        assert_eq!(
+            decode(&good[..10]).unwrap_err().to_string(),
+            "cut short inside its header (10 of 52 bytes)"
+        );
         let mut flipped = good.clone();
         let last = flipped.len() - 1;
         flipped[last] ^= 1;
@@ -318,12 +405,11 @@ mod tests {
                 maps: cached.maps.clone(),
             })
         };
-        let (_, from_cache) =
-            build_or_load(Some(dir.path()), "abc", "run", &params, &mut build).unwrap();
-        assert!(!from_cache);
-        let (_, from_cache) =
-            build_or_load(Some(dir.path()), "abc", "run", &params, &mut build).unwrap();
-        assert!(from_cache);
+        let reuse = Reuse::ShippedOrDir(dir.path());
+        let (_, origin) = build_or_load(reuse, "abc", "run", &params, &mut build).unwrap();
+        assert_eq!(origin, Origin::Built);
+        let (_, origin) = build_or_load(reuse, "abc", "run", &params, &mut build).unwrap();
+        assert_eq!(origin, Origin::Cache);
         assert_eq!(builds, 1);
     }
 }

@@ -4,22 +4,40 @@
 //! and `--mocap data/mocap` give the same clips and the same fingerprint.
 
 use super::loader::{self, MotionFile};
-use super::{Mirroring, MotionLibrary, MotionSource};
+use super::library::Loaded;
+use super::{Mirroring, MotionSource};
 use std::path::Path;
 
 /// The pack: records of `u32 path length, path, u64 data length, data` (little-endian)
 /// in sorted path order, zstd-compressed as one stream (see `build.rs`).
 static PACK: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/mocap.zst"));
 
-/// The embedded library at `fps`, with `mirroring`.
+/// The embedded library's source with `mirroring`, as the build computed it from the
+/// files it packed (see `build.rs`): the same the loader gives once the clips are
+/// parsed (`embedded_source_is_known_before_parsing`).
+pub(super) fn source(mirroring: Mirroring) -> MotionSource {
+    let fingerprint = match mirroring {
+        Mirroring::On => env!("FIELDHOUSE_EMBEDDED_FINGERPRINT_MIRRORED"),
+        Mirroring::Off => env!("FIELDHOUSE_EMBEDDED_FINGERPRINT_PLAIN"),
+    };
+    MotionSource::Embedded {
+        clips: env!("FIELDHOUSE_EMBEDDED_CLIPS")
+            .parse()
+            .expect("build.rs writes a count"),
+        mirroring,
+        fingerprint: fingerprint.to_string(),
+    }
+}
+
+/// The embedded clips at `fps`, with `mirroring`, parsed.
 ///
 /// # Panics
 /// If the pack does not unpack or none of its clips parses. Both are build defects that
 /// the test suite catches (`embedded_library_is_the_repository_copy`), not conditions a
 /// user can meet, so they are not part of the signature.
-pub(super) fn library(fps: f64, mirroring: Mirroring) -> MotionLibrary {
+pub(super) fn parse(fps: f64, mirroring: Mirroring) -> Loaded {
     let files = unpack(PACK).expect("the embedded motion capture unpacks");
-    loader::from_files(
+    let (source, loaded) = loader::from_files(
         files,
         Vec::new(),
         fps,
@@ -32,6 +50,9 @@ pub(super) fn library(fps: f64, mirroring: Mirroring) -> MotionLibrary {
         },
     )
     .expect("the embedded motion capture loads")
+    .into_parts();
+    debug_assert_eq!(source, self::source(mirroring), "build.rs and the loader agree");
+    loaded
 }
 
 /// The files of a pack, or what is wrong with it.
@@ -76,26 +97,53 @@ fn take_u64(rest: &mut &[u8]) -> Result<u64, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::FPS;
+    use crate::motion::{MotionLibrary, FPS};
 
     #[test]
     fn embedded_library_is_the_repository_copy() {
         let from_dir =
             MotionLibrary::load(&crate::fixtures::mocap_dir(), FPS, Mirroring::On).unwrap();
         let embedded = MotionLibrary::embedded(FPS, Mirroring::On);
-        assert!(embedded.problems.is_empty(), "{:?}", embedded.problems);
+        assert!(embedded.problems().is_empty(), "{:?}", embedded.problems());
         assert_eq!(embedded.source.fingerprint(), from_dir.source.fingerprint());
-        assert_eq!(embedded.clips.len(), from_dir.clips.len());
+        assert_eq!(embedded.clips().len(), from_dir.clips().len());
         let MotionSource::Embedded { clips, .. } = embedded.source else {
             panic!("{}", embedded.source)
         };
         // Each captured clip and its mirror image.
-        assert_eq!(2 * clips, embedded.clips.len());
-        for (a, b) in embedded.clips.iter().zip(&from_dir.clips) {
+        assert_eq!(2 * clips, embedded.clips().len());
+        for (a, b) in embedded.clips().iter().zip(from_dir.clips()) {
             assert_eq!((&a.behaviour, &a.name), (&b.behaviour, &b.name));
             assert_eq!(a.frame_count(), b.frame_count());
             assert_eq!(a.frame(a.frame_count() - 1), b.frame(b.frame_count() - 1));
         }
+    }
+
+    #[test]
+    fn embedded_source_is_known_before_parsing() {
+        // What the build says of the pack (count and fingerprints) is what the loader
+        // computes from the parsed files, with and without mirroring.
+        for mirroring in [Mirroring::On, Mirroring::Off] {
+            let files = unpack(PACK).unwrap();
+            let parsed = loader::from_files(
+                files,
+                Vec::new(),
+                FPS,
+                mirroring,
+                Path::new("embedded"),
+                |clips, fingerprint| MotionSource::Embedded {
+                    clips,
+                    mirroring,
+                    fingerprint,
+                },
+            )
+            .unwrap();
+            assert_eq!(parsed.source, source(mirroring));
+        }
+        assert_ne!(
+            source(Mirroring::On).fingerprint(),
+            source(Mirroring::Off).fingerprint()
+        );
     }
 
     #[test]

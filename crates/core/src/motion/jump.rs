@@ -111,17 +111,17 @@ mod tests {
     fn only_the_two_shooting_clips_jump() {
         let library = cmu_library();
         let jumping: Vec<&str> = library
-            .clips
+            .clips()
             .iter()
             .filter(|c| Jump::find(c).is_some())
             .map(|c| c.name.as_str())
             .collect();
         assert_eq!(jumping, ["06_14", "06_14-mirror", "06_15", "06_15-mirror"]);
         // The defender's rise is as fast and as high as a jump: only the arms tell.
-        let zigzag = library.clips.iter().find(|c| c.name == "102_26").unwrap();
+        let zigzag = library.clips().iter().find(|c| c.name == "102_26").unwrap();
         assert!(Jump::find_where(zigzag, false).is_some());
         for clip in library
-            .clips
+            .clips()
             .iter()
             .filter(|c| jumping.contains(&c.name.as_str()))
         {

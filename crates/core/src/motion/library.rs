@@ -4,6 +4,7 @@
 use super::{embedded, loader, Clip, Jump};
 use std::fmt;
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 use thiserror::Error;
 
 /// Whether a library also plays every clip mirrored, left and right exchanged (see
@@ -138,19 +139,38 @@ pub enum LibraryError {
 }
 
 /// Every clip of a motion source, labelled by behaviour.
+///
+/// The embedded library is parsed when its clips are first asked for, not when it is
+/// made: its [`MotionSource`] is known from the build (clip count and fingerprint), and
+/// a command whose graphs and maps are shipped or cached never needs a clip, so it starts
+/// without the ~0.3 s that parsing the capture takes.
 #[derive(Debug, Clone)]
 pub struct MotionLibrary {
     /// Where the clips came from.
     pub source: MotionSource,
-    /// Clips sorted by behaviour, then name, so everything built from them is
-    /// deterministic whatever order the file system lists them in; with
-    /// [`Mirroring::On`], each clip's mirror image follows it (named `…-mirror`).
-    pub clips: Vec<Clip>,
-    /// Clips that failed to load, with file and line.
-    pub problems: Vec<LoadProblem>,
+    loaded: OnceLock<Loaded>,
+    /// The embedded library's frame rate and mirroring, to parse it with on first use;
+    /// `None` for a directory's, parsed as it is read.
+    embedded: Option<(f64, Mirroring)>,
+}
+
+/// A library's parsed clips and the files that failed.
+#[derive(Debug, Clone)]
+pub(super) struct Loaded {
+    pub(super) clips: Vec<Clip>,
+    pub(super) problems: Vec<LoadProblem>,
 }
 
 impl MotionLibrary {
+    /// A library whose clips are parsed already.
+    pub(super) fn parsed(source: MotionSource, loaded: Loaded) -> MotionLibrary {
+        MotionLibrary {
+            source,
+            loaded: OnceLock::from(loaded),
+            embedded: None,
+        }
+    }
+
     /// Loads every `DIR/<behaviour>/*.bvh`, and every `DIR/<behaviour>/*.amc` with its
     /// skeleton (the folder's `<subject>.asf` for `<subject>_<trial>.amc`, or its only
     /// `.asf`), resampled to `fps`, with `mirroring`. A clip that fails to parse is
@@ -162,13 +182,46 @@ impl MotionLibrary {
 
     /// The CMU motion capture compiled into the binary, resampled to `fps`, with
     /// `mirroring`: the motion every command uses unless told to read a directory.
+    /// Parsed on first use of its clips.
     pub fn embedded(fps: f64, mirroring: Mirroring) -> MotionLibrary {
-        embedded::library(fps, mirroring)
+        MotionLibrary {
+            source: embedded::source(mirroring),
+            loaded: OnceLock::new(),
+            embedded: Some((fps, mirroring)),
+        }
+    }
+
+    /// The source and the parsed clips.
+    pub(super) fn into_parts(self) -> (MotionSource, Loaded) {
+        self.loaded();
+        let loaded = self.loaded.into_inner().expect("parsed just now");
+        (self.source, loaded)
+    }
+
+    fn loaded(&self) -> &Loaded {
+        self.loaded.get_or_init(|| {
+            let (fps, mirroring) = self
+                .embedded
+                .expect("a directory's library is parsed as it is read");
+            embedded::parse(fps, mirroring)
+        })
+    }
+
+    /// Clips sorted by behaviour, then name, so everything built from them is
+    /// deterministic whatever order the file system lists them in; with
+    /// [`Mirroring::On`], each clip's mirror image follows it (named `…-mirror`).
+    pub fn clips(&self) -> &[Clip] {
+        &self.loaded().clips
+    }
+
+    /// Clips that failed to load, with file and line.
+    pub fn problems(&self) -> &[LoadProblem] {
+        &self.loaded().problems
     }
 
     /// The behaviours present, sorted.
     pub fn behaviours(&self) -> Vec<&str> {
-        let mut names: Vec<&str> = self.clips.iter().map(|c| c.behaviour.as_str()).collect();
+        let mut names: Vec<&str> = self.clips().iter().map(|c| c.behaviour.as_str()).collect();
         names.dedup();
         names
     }
@@ -188,6 +241,6 @@ impl MotionLibrary {
 
     /// The clips of `behaviour`, whole (jumps included).
     pub fn clips_of<'a>(&'a self, behaviour: &'a str) -> impl Iterator<Item = &'a Clip> + 'a {
-        self.clips.iter().filter(move |c| c.behaviour == behaviour)
+        self.clips().iter().filter(move |c| c.behaviour == behaviour)
     }
 }

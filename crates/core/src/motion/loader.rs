@@ -9,6 +9,7 @@ use super::asf::{self, Skeleton};
 use super::bvh::{self, ParseError};
 use super::skeleton::global_positions;
 use super::{resample::resample, Clip, ClipError, LibraryError, LoadProblem};
+use super::library::Loaded;
 use super::{Mirroring, MotionLibrary, MotionSource};
 use sha2::{Digest, Sha256};
 use std::collections::{BTreeMap, BTreeSet};
@@ -251,11 +252,10 @@ pub(super) fn from_files(
             .collect();
     }
     loaded.extend(skeletons.take(&used));
-    Ok(MotionLibrary {
-        source: source(captured, fingerprint(&mut loaded, mirroring)),
-        clips,
-        problems,
-    })
+    Ok(MotionLibrary::parsed(
+        source(captured, fingerprint(&mut loaded, mirroring)),
+        Loaded { clips, problems },
+    ))
 }
 
 /// The ASF files of a library, each read once, when a clip first needs it, on the

@@ -147,7 +147,7 @@ mod tests {
     fn a_mirrored_clip_is_the_reflection_of_the_original() {
         let library = cmu_library();
         let original = library
-            .clips
+            .clips()
             .iter()
             .find(|c| c.name == "102_27")
             .expect("the shuffle is in the data");

@@ -89,11 +89,11 @@ fn file_stem(path: &Path) -> String {
 #[test]
 fn every_file_of_the_cmu_data_loads_as_a_clip_of_its_behaviour() {
     let lib = MotionLibrary::embedded(FPS, Mirroring::Off);
-    assert!(lib.problems.is_empty(), "{:?}", lib.problems);
+    assert!(lib.problems().is_empty(), "{:?}", lib.problems());
     assert_eq!(lib.behaviours(), ["defense", "dribble", "run", "run-127"]);
     let files = clips_on_disk();
-    assert_eq!(lib.clips.len(), files.len());
-    for (clip, (behaviour, name, frames)) in lib.clips.iter().zip(files) {
+    assert_eq!(lib.clips().len(), files.len());
+    for (clip, (behaviour, name, frames)) in lib.clips().iter().zip(files) {
         assert_eq!((&clip.behaviour, &clip.name), (&behaviour, &name));
         assert_eq!(clip.joint_count(), 31);
         assert_eq!(clip.joint_names[0], "Hips");
@@ -137,7 +137,7 @@ fn the_unit_gives_adult_hip_heights_and_thighs() {
     }
     // Thighs measure 0.371/0.376 m (102), 0.401/0.413 m (6), 0.397/0.402 m (16) and up
     // to 0.426 m (127, a taller runner); adult thighs run 0.35–0.48 m.
-    for clip in &lib.clips {
+    for clip in lib.clips() {
         for (hip, knee) in [("LeftUpLeg", "LeftLeg"), ("RightUpLeg", "RightLeg")] {
             let (hip, knee) = (joint(clip, hip), joint(clip, knee));
             for f in 0..clip.frame_count() {
@@ -192,7 +192,7 @@ fn the_heading_is_the_way_the_runner_travels() {
     // 16_36 jogs straight; over a third of a second (one stride) the hips' sway
     // cancels and the root moves the way the body faces. Measured: 4° on average.
     let lib = library();
-    let clip = lib.clips.iter().find(|c| c.name == "16_36").unwrap();
+    let clip = lib.clips().iter().find(|c| c.name == "16_36").unwrap();
     let stride = (clip.fps / 3.0) as usize;
     let errors: Vec<f64> = (0..clip.frame_count() - stride)
         .map(|f| {
@@ -211,7 +211,7 @@ fn the_heading_is_the_way_the_toes_point() {
     // mistaken sign or axis would be 90° or 180° off; in a sharp running turn the toes
     // lead the hips, by 36° on average over 127_15 (Run Turn Left).
     let lib = library();
-    for clip in &lib.clips {
+    for clip in lib.clips() {
         let (lf, lt) = (joint(clip, "LeftFoot"), joint(clip, "LeftToeBase"));
         let (rf, rt) = (joint(clip, "RightFoot"), joint(clip, "RightToeBase"));
         let frames = clip.frame_count();
@@ -254,10 +254,10 @@ fn a_corrupt_file_costs_one_clip_and_names_its_line() {
     fs::write(tmp.0.join("README.md"), "motion").unwrap();
 
     let lib = load_library(&tmp.0, FPS, Mirroring::Off).unwrap();
-    assert_eq!(lib.clips.len(), 1);
-    assert_eq!(lib.clips[0].name, "16_36");
-    assert_eq!(lib.problems.len(), 1);
-    let problem = &lib.problems[0];
+    assert_eq!(lib.clips().len(), 1);
+    assert_eq!(lib.clips()[0].name, "16_36");
+    assert_eq!(lib.problems().len(), 1);
+    let problem = &lib.problems()[0];
     assert_eq!(problem.file, run.join("broken.bvh"));
     assert_eq!(problem.line, Some(200));
     assert!(
@@ -408,10 +408,10 @@ fn amc_library(test: &str, extra: &[(&str, Vec<u8>)]) -> TempDir {
 }
 
 fn problem_at<'a>(lib: &'a MotionLibrary, file: &Path) -> &'a LoadProblem {
-    lib.problems
+    lib.problems()
         .iter()
         .find(|p| p.file == file)
-        .unwrap_or_else(|| panic!("no problem at {}: {:?}", file.display(), lib.problems))
+        .unwrap_or_else(|| panic!("no problem at {}: {:?}", file.display(), lib.problems()))
 }
 
 #[test]
@@ -438,9 +438,9 @@ fn a_broken_amc_costs_its_clip_and_names_its_line() {
         ],
     );
     let lib = load_library(&tmp.0, FPS, Mirroring::Off).unwrap();
-    assert_eq!(lib.clips.len(), 1, "{:?}", lib.problems);
-    assert_eq!(lib.clips[0].name, "102_12");
-    assert_eq!(lib.problems.len(), 4);
+    assert_eq!(lib.clips().len(), 1, "{:?}", lib.problems());
+    assert_eq!(lib.clips()[0].name, "102_12");
+    assert_eq!(lib.problems().len(), 4);
     let defense = tmp.0.join("defense");
     for (file, line, message) in [
         ("102_90.amc", 184, "frame 7 has no line for `lfemur`"),
@@ -467,7 +467,7 @@ fn a_broken_amc_costs_its_clip_and_names_its_line() {
     skeleton.extend_from_slice(b"# a comment changes the file, not the clip\n");
     fs::write(alone.0.join("defense/102.asf"), skeleton).unwrap();
     let commented = load_library(&alone.0, FPS, Mirroring::Off).unwrap();
-    assert_eq!(commented.clips[0].frame(5), clean.clips[0].frame(5));
+    assert_eq!(commented.clips()[0].frame(5), clean.clips()[0].frame(5));
     assert_ne!(commented.source.fingerprint(), clean.source.fingerprint());
 }
 
@@ -498,12 +498,12 @@ fn a_missing_or_bad_skeleton_costs_the_clips_that_need_it() {
     );
     let lib = load_library(&tmp.0, FPS, Mirroring::Off).unwrap();
     let loaded: Vec<(&str, &str)> = lib
-        .clips
+        .clips()
         .iter()
         .map(|c| (c.behaviour.as_str(), c.name.as_str()))
         .collect();
     assert_eq!(loaded, [("defense", "102_12"), ("renamed", "102_12")]);
-    assert_eq!(lib.problems.len(), 4, "{:?}", lib.problems);
+    assert_eq!(lib.problems().len(), 4, "{:?}", lib.problems());
     let solo = problem_at(&lib, &tmp.0.join("solo/102_12.amc"));
     assert_eq!(solo.line, None);
     assert_eq!(
@@ -514,7 +514,7 @@ fn a_missing_or_bad_skeleton_costs_the_clips_that_need_it() {
         .message
         .contains("two/102.asf"));
     let bad: Vec<&LoadProblem> = lib
-        .problems
+        .problems()
         .iter()
         .filter(|p| p.file == tmp.0.join("bad/102.asf"))
         .collect();
