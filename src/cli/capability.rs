@@ -6,7 +6,6 @@ use clap::Args;
 use fieldhouse::basketball::human::{self, probe, Check, Stance, SYMMETRY_FRAMES, TARGETS};
 use fieldhouse::basketball::{Mover, StateMap};
 use fieldhouse::costmap::{root_speed, BuildParams, CostMap, Method};
-use fieldhouse::motion::{Jump, MotionLibrary};
 use serde_json::{json, Map, Value};
 use std::io::Write;
 
@@ -73,7 +72,7 @@ fn state_json(mover: &Mover, s: &StateMap, grassfire: &CostMap) -> Value {
     })
 }
 
-fn behaviour_json(mover: &Mover, library: &MotionLibrary) -> Value {
+fn behaviour_json(mover: &Mover) -> Value {
     let g = &mover.graph;
     let grassfire = CostMap::build(
         g,
@@ -85,10 +84,6 @@ fn behaviour_json(mover: &Mover, library: &MotionLibrary) -> Value {
         },
         &mut |_| {},
     );
-    let jumps: Vec<Value> = library
-        .clips_of(mover.behaviour)
-        .filter_map(|c| Jump::find(c).map(|j| json!({"clip": c.name, "jump": j})))
-        .collect();
     json!({
         "behaviour": mover.behaviour,
         "window": g.params.window,
@@ -101,7 +96,7 @@ fn behaviour_json(mover: &Mover, library: &MotionLibrary) -> Value {
         "capture_root_accel_p95_m_s2": g.stats.capture_root_accel_p95_m_s2,
         "nodes": g.node_count(),
         "clips": g.coverage,
-        "jumps_cut": jumps,
+        "jumps_cut": mover.jumps,
         "horizon_frames": mover.map().depth,
         "states": mover.states.iter().map(|s| state_json(mover, s, &grassfire)).collect::<Vec<_>>(),
     })
@@ -134,7 +129,7 @@ pub(super) fn run(args: CapabilityCmdArgs, out: &mut impl Write) -> anyhow::Resu
             })
         })
         .collect();
-    let behaviours: Vec<Value> = movers.iter().map(|m| behaviour_json(m, &library)).collect();
+    let behaviours: Vec<Value> = movers.iter().map(|m| behaviour_json(m)).collect();
     let fps = caps.run.map().fps;
     let stances: Vec<Stance> = movers.iter().map(|m| Stance::of(m)).collect();
     let checks = human::check(&stances, fps);

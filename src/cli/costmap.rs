@@ -204,6 +204,8 @@ pub(super) fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()>
             Ok::<_, std::convert::Infallible>(cache::Cached {
                 graph: graph.clone(),
                 maps,
+                turn: None,
+                jumps: Vec::new(),
             })
         },
     )

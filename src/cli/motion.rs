@@ -268,12 +268,14 @@ fn sweep(args: &GraphArgs, json: bool, out: &mut impl Write) -> anyhow::Result<(
         if let [stance, twin] = &mut maps[..] {
             symmetrise(&graph, stance, twin);
         }
+        let turn = human::stance_turn(&graph, &maps);
         let stance = Stance {
             behaviour: &args.behaviour,
             graph: &graph,
             state: &standing.name,
             map: &maps[0],
             twin: maps.get(1),
+            turn: turn.as_ref(),
         };
         let s = &graph.stats;
         rows.push(json!({

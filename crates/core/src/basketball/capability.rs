@@ -8,7 +8,8 @@ use crate::costmap::{
     Start, StartState, STANDING_MIRRORED,
 };
 use crate::motion::{
-    GraphError, MotionGraph, MotionLibrary, MotionSource, RootStep, Walker, AUTO_WINDOWS,
+    GraphError, Jump, MotionGraph, MotionLibrary, MotionSource, RootStep, TurnAround, Walker,
+    AUTO_WINDOWS,
 };
 use glam::DVec2;
 use std::sync::OnceLock;
@@ -33,6 +34,11 @@ pub struct Mover {
     /// data frame, and how many frames. Worked out once, since paths are walked for
     /// every move an agent considers.
     edge_frames: Vec<(RootStep, DVec2, usize)>,
+    /// The quickest turn around from the stance ([`Mover::turn`]): cached with the maps,
+    /// or measured when first asked for.
+    turn: OnceLock<Option<TurnAround>>,
+    /// The jump shots cut from the behaviour's clips (empty if not cached).
+    pub jumps: Vec<cache::ClipJump>,
 }
 
 /// A start state's map, with the ground each cell's stored path covers.
@@ -124,6 +130,8 @@ impl Mover {
             stance_twin,
             leads,
             edge_frames,
+            turn: OnceLock::new(),
+            jumps: Vec::new(),
         };
         mover.states = maps
             .into_iter()
@@ -145,7 +153,15 @@ impl Mover {
         reuse: cache::Reuse<'_>,
         progress: &mut dyn FnMut(Stage),
     ) -> Result<Mover, GraphError> {
-        let (cache::Cached { graph, mut maps }, origin) = cache::build_or_load(
+        let (
+            cache::Cached {
+                graph,
+                mut maps,
+                turn,
+                jumps,
+            },
+            origin,
+        ) = cache::build_or_load(
             reuse,
             library.source.fingerprint(),
             behaviour,
@@ -160,11 +176,22 @@ impl Mover {
             let (stance, rest) = maps.split_at_mut(1);
             symmetrise(&graph, &mut stance[0], &mut rest[t - 1]);
         }
-        Ok(Mover::new(
-            behaviour,
-            graph,
-            states.into_iter().zip(maps).collect(),
-        ))
+        let mut mover = Mover::new(behaviour, graph, states.into_iter().zip(maps).collect());
+        mover.turn = OnceLock::from(turn);
+        mover.jumps = jumps;
+        Ok(mover)
+    }
+
+    /// The quickest turn around from the stance or its mirror image
+    /// ([`human::stance_turn`](super::human::stance_turn)).
+    pub fn turn(&self) -> Option<&TurnAround> {
+        self.turn
+            .get_or_init(|| {
+                let maps = std::iter::once(&self.states[0].map)
+                    .chain(self.stance_twin.map(|t| &self.states[t].map));
+                super::human::stance_turn(&self.graph, maps)
+            })
+            .as_ref()
     }
 
     /// What decides a behaviour's graph and maps besides the motion and the code: the
@@ -199,10 +226,33 @@ impl Mover {
             frames: clips.iter().map(|c| c.frame_count()).sum(),
         });
         let graph = MotionGraph::build_auto(behaviour, &clips, windows)?;
-        let starts: Vec<u32> = start_states(&graph).iter().map(|s| s.node).collect();
+        let states = start_states(&graph);
+        let starts: Vec<u32> = states.iter().map(|s| s.node).collect();
         progress(Stage::Map { behaviour });
         let maps = CostMap::build_from(&graph, &params, &starts, &mut |_| {});
-        Ok(cache::Cached { graph, maps })
+        // The stance and its mirror image, as `Mover::turn` measures them.
+        let stance_maps = states
+            .iter()
+            .zip(&maps)
+            .enumerate()
+            .filter(|(i, (s, _))| *i == 0 || s.name == STANDING_MIRRORED)
+            .map(|(_, (_, m))| m);
+        let turn = super::human::stance_turn(&graph, stance_maps);
+        let jumps = library
+            .clips_of(behaviour)
+            .filter_map(|c| {
+                Jump::find(c).map(|jump| cache::ClipJump {
+                    clip: c.name.clone(),
+                    jump,
+                })
+            })
+            .collect();
+        Ok(cache::Cached {
+            graph,
+            maps,
+            turn,
+            jumps,
+        })
     }
 
     /// The ground the stored path to `cell` of start state `state`'s map covers, from

@@ -9,7 +9,7 @@
 
 use super::capability::Mover;
 use crate::costmap::{root_speed, CostMap};
-use crate::motion::{turn_around, MotionGraph, TurnParams};
+use crate::motion::{turn_around, MotionGraph, TurnAround, TurnParams};
 use glam::DVec2;
 use serde::Serialize;
 
@@ -148,6 +148,8 @@ pub struct Stance<'a> {
     pub map: &'a CostMap,
     /// The map from the stance's mirror image, if there is one.
     pub twin: Option<&'a CostMap>,
+    /// The quickest turn around from either ([`stance_turn`]).
+    pub turn: Option<&'a TurnAround>,
 }
 
 impl<'a> Stance<'a> {
@@ -164,6 +166,7 @@ impl<'a> Stance<'a> {
                 .iter()
                 .find(|s| s.state.name == crate::costmap::STANDING_MIRRORED)
                 .map(|s| &s.map),
+            turn: mover.turn(),
         }
     }
 
@@ -234,11 +237,20 @@ fn measure(stance: &Stance, measure: Measure) -> (Option<u32>, Vec<u32>) {
             None => (None, Vec::new()),
         },
         Measure::TurnAround => stance
-            .maps()
-            .filter_map(|m| turn_around(stance.graph, m.start_node, &TurnParams::default()))
-            .min_by_key(|turn| turn.frames)
-            .map_or((None, Vec::new()), |turn| (Some(turn.frames), turn.nodes)),
+            .turn
+            .map_or((None, Vec::new()), |turn| (Some(turn.frames), turn.nodes.clone())),
     }
+}
+
+/// The quickest turn around from the start node of any of `maps` (a stance and its
+/// mirror image): the search is seconds on the CMU graphs, so movers cache it.
+pub fn stance_turn<'a>(
+    graph: &MotionGraph,
+    maps: impl IntoIterator<Item = &'a CostMap>,
+) -> Option<TurnAround> {
+    maps.into_iter()
+        .filter_map(|m| turn_around(graph, m.start_node, &TurnParams::default()))
+        .min_by_key(|turn| turn.frames)
 }
 
 /// The cell a point `d` metres out counts as: the one just beyond it, in the row or

@@ -21,7 +21,7 @@
 //! again.
 
 use super::CostMap;
-use crate::motion::MotionGraph;
+use crate::motion::{Jump, MotionGraph, TurnAround};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::io::Write;
@@ -29,8 +29,9 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 /// Bump when the file's layout or the meaning of what it holds changes in a way the
-/// source digest cannot see (6: binary, the graph beside its maps).
-pub const CACHE_FORMAT: u32 = 6;
+/// source digest cannot see (6: binary, the graph beside its maps; 7: the turn around
+/// and the jumps beside them).
+pub const CACHE_FORMAT: u32 = 7;
 
 /// What every cache file starts with.
 const MAGIC: &[u8; 8] = b"fhcache\n";
@@ -40,13 +41,29 @@ const HEADER_BYTES: usize = 8 + 4 + 8 + 32;
 /// The source files that build graphs and maps, digested by `build.rs`.
 const SOURCE_DIGEST: &str = env!("FIELDHOUSE_CAPABILITY_SOURCE_DIGEST");
 
-/// What a cache file holds: a behaviour's graph and its maps, one per start state.
+/// What a cache file holds: a behaviour's graph and its maps, one per start state, and
+/// what else is slow to measure on them and fixed once they are (for the capability
+/// report: the quickest turn around, the jump shots cut from the clips).
 #[derive(Debug, Serialize, Deserialize)]
 pub struct Cached {
     /// The motion graph.
     pub graph: MotionGraph,
     /// Its cost maps.
     pub maps: Vec<CostMap>,
+    /// The quickest turn around from the stance (`None`: none found, or not measured,
+    /// as for a map of a chosen start alone).
+    pub turn: Option<TurnAround>,
+    /// The jump shots found in the behaviour's clips, by clip (cut from the graph).
+    pub jumps: Vec<ClipJump>,
+}
+
+/// A jump shot and the clip it is in.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ClipJump {
+    /// The clip's name.
+    pub clip: String,
+    /// Where in it the jump is.
+    pub jump: Jump,
 }
 
 /// The graphs and maps the repository ships, by file name (see `build.rs`).
@@ -284,6 +301,13 @@ pub fn decode_payload(payload: &[u8]) -> Result<Cached, CacheError> {
     let cached: Cached =
         postcard::from_bytes(payload).map_err(|e| CacheError::Decode(e.to_string()))?;
     cached.graph.check().map_err(CacheError::Decode)?;
+    if let Some(turn) = &cached.turn {
+        if turn.nodes.iter().any(|&n| n as usize >= cached.graph.node_count()) {
+            return Err(CacheError::Decode(
+                "the turn around plays a node the graph does not have".into(),
+            ));
+        }
+    }
     for (i, map) in cached.maps.iter().enumerate() {
         map.check(&cached.graph)
             .map_err(|e| CacheError::Decode(format!("map {i}: {e}")))?;
@@ -328,6 +352,8 @@ mod tests {
             Cached {
                 graph,
                 maps: vec![map],
+                turn: None,
+                jumps: Vec::new(),
             },
             params,
         )
@@ -403,6 +429,8 @@ mod tests {
             Ok::<_, ()>(Cached {
                 graph: cached.graph.clone(),
                 maps: cached.maps.clone(),
+                turn: None,
+                jumps: Vec::new(),
             })
         };
         let reuse = Reuse::ShippedOrDir(dir.path());

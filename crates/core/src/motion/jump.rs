@@ -8,7 +8,7 @@
 //! arms: a shooter's hands go above the head on the way up, a defender's stay below it.
 
 use super::Clip;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// What makes a rise of the hips a jump, all three at once. Measured on the CMU capture:
 /// the two jump shots take off at 1.0 and 1.7 m/s (over 0.1 s), rise 0.20 and 0.37 m
@@ -29,7 +29,7 @@ const ABOVE_UPRIGHT_M: f64 = 0.05;
 const HANDS_ABOVE_HEAD_M: f64 = 0.0;
 
 /// A jump shot found in a clip, in frames of the clip.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Jump {
     /// The lowest root before take-off: where the jump (the shot) begins.
     pub crouch: usize,

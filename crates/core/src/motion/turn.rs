@@ -6,7 +6,7 @@
 use super::{MotionGraph, Walker};
 use glam::DVec2;
 use rustc_hash::FxHashSet;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// What counts as a turn around: facing within `tolerance_deg` of the reverse of the way
 /// the body faced, with the root within `within_m` of where it stood.
@@ -36,7 +36,7 @@ impl Default for TurnParams {
 }
 
 /// The quickest turn around found: a real walk on the graph.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TurnAround {
     /// Frames it takes.
     pub frames: u32,
