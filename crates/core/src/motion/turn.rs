@@ -87,7 +87,7 @@ pub fn turn_around(graph: &MotionGraph, start: u32, params: &TurnParams) -> Opti
     let mut trail: Vec<(u32, Option<usize>)> = Vec::new();
     // This frame's states: node, walker, and the parent's index in `trail`.
     let mut layer: Vec<(u32, Walker, Option<usize>)> = vec![(start, Walker::START, None)];
-    let mut seen = FxHashSet::default();
+    let mut seen = Seen::new(graph.node_count(), params.stray_m + step_m);
     for frame in 0..=params.max_frames {
         let mut next = Vec::new();
         for &(node, at, parent) in &layer {
@@ -128,7 +128,7 @@ pub fn turn_around(graph: &MotionGraph, start: u32, params: &TurnParams) -> Opti
                     continue;
                 }
                 let to = at.after(&e.step, turns[i]);
-                if seen.insert(state_key(e.to, &to)) {
+                if seen.insert(e.to, &to) {
                     next.push((e.to, to, here));
                 }
             }
@@ -140,6 +140,58 @@ pub fn turn_around(graph: &MotionGraph, start: u32, params: &TurnParams) -> Opti
         layer = next;
     }
     None
+}
+
+/// The states a search has reached: a bit per (node, position bin, heading bin) within
+/// reach of the start, the search's whole cost as a hash set (58 % of a profile), and a
+/// hash set of [`state_key`]s for any state beyond (none, given the bound the search
+/// prunes by, but a bound is only as good as its arithmetic).
+struct Seen {
+    bits: Vec<u64>,
+    /// Position bins either side of the start the bits cover.
+    reach: i64,
+    beyond: FxHashSet<u64>,
+}
+
+/// Heading bins: round(heading / 15°) over (−180°, 180°] is −12 to 12.
+const HEADING_BINS: i64 = 25;
+
+impl Seen {
+    /// For `nodes` nodes and positions within `radius_m` of the start.
+    fn new(nodes: usize, radius_m: f64) -> Seen {
+        let reach = (radius_m / POSITION_BIN_M).ceil() as i64 + 1;
+        let side = (2 * reach + 1) as usize;
+        let states = nodes * side * side * HEADING_BINS as usize;
+        Seen {
+            // Zeroed pages cost nothing until a walk touches them.
+            bits: vec![0; states.div_ceil(64)],
+            reach,
+            beyond: FxHashSet::default(),
+        }
+    }
+
+    /// Marks the state of `node` at `at`; true if it was not marked before. The same
+    /// bins as [`state_key`], so the search follows exactly the walks it followed with
+    /// a hash set of keys.
+    fn insert(&mut self, node: u32, at: &Walker) -> bool {
+        let bin = |v: f64, size: f64| (v / size).round() as i64;
+        let (x, z) = (
+            bin(at.position.x, POSITION_BIN_M),
+            bin(at.position.y, POSITION_BIN_M),
+        );
+        let h = bin(at.heading().to_degrees(), HEADING_BIN_DEG) + HEADING_BINS / 2;
+        let side = 2 * self.reach + 1;
+        if x.abs() > self.reach || z.abs() > self.reach || !(0..HEADING_BINS).contains(&h) {
+            return self.beyond.insert(state_key(node, at));
+        }
+        let i = (((i64::from(node) * side + x + self.reach) * side + z + self.reach)
+            * HEADING_BINS
+            + h) as usize;
+        let (word, bit) = (i / 64, 1u64 << (i % 64));
+        let fresh = self.bits[word] & bit == 0;
+        self.bits[word] |= bit;
+        fresh
+    }
 }
 
 /// A walk's node, position bin and heading bin packed in one integer: node in the high
