@@ -19,8 +19,7 @@ use std::sync::Arc;
 fn capabilities() -> Arc<Capabilities> {
     let library = MotionLibrary::embedded(FPS, Mirroring::On);
     Arc::new(
-        Capabilities::build(&library, Reuse::Shipped, &mut |_| {})
-            .expect("the behaviours build"),
+        Capabilities::build(&library, Reuse::Shipped, &mut |_| {}).expect("the behaviours build"),
     )
 }
 

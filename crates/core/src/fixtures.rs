@@ -111,7 +111,7 @@ pub fn cmu_capabilities() -> std::sync::Arc<crate::basketball::Capabilities> {
                 crate::costmap::cache::Reuse::ShippedOrDir(&cache),
                 &mut |_| {},
             )
-                .expect("the CMU behaviours build"),
+            .expect("the CMU behaviours build"),
         )
     })
     .clone()

@@ -427,10 +427,21 @@ impl Reach<'_> {
     /// the map (farther than its horizon or its extent).
     #[inline]
     pub fn seconds(&self, world: DVec2) -> Option<f64> {
+        self.seconds_local(self.frame.to_local(world))
+    }
+
+    /// [`Reach::seconds`] of a point already in the map's frame ([`Reach::frame`]).
+    #[inline]
+    pub fn seconds_local(&self, local: DVec2) -> Option<f64> {
         let map = self.map();
-        let cell = map.grid.cell_of(self.frame.to_local(world))?;
+        let cell = map.grid.cell_of(local)?;
         self.frames_to(cell)
             .map(|frames| f64::from(frames + self.lead_frames()) / map.fps)
+    }
+
+    /// The frame the map is looked up in: where the lead leaves the agent.
+    pub fn frame(&self) -> LocalFrame {
+        self.frame
     }
 
     /// The map's horizon, s: what "beyond the map" is at least.

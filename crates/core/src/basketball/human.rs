@@ -236,9 +236,9 @@ fn measure(stance: &Stance, measure: Measure) -> (Option<u32>, Vec<u32>) {
             }
             None => (None, Vec::new()),
         },
-        Measure::TurnAround => stance
-            .turn
-            .map_or((None, Vec::new()), |turn| (Some(turn.frames), turn.nodes.clone())),
+        Measure::TurnAround => stance.turn.map_or((None, Vec::new()), |turn| {
+            (Some(turn.frames), turn.nodes.clone())
+        }),
     }
 }
 

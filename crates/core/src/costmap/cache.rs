@@ -302,7 +302,11 @@ pub fn decode_payload(payload: &[u8]) -> Result<Cached, CacheError> {
         postcard::from_bytes(payload).map_err(|e| CacheError::Decode(e.to_string()))?;
     cached.graph.check().map_err(CacheError::Decode)?;
     if let Some(turn) = &cached.turn {
-        if turn.nodes.iter().any(|&n| n as usize >= cached.graph.node_count()) {
+        if turn
+            .nodes
+            .iter()
+            .any(|&n| n as usize >= cached.graph.node_count())
+        {
             return Err(CacheError::Decode(
                 "the turn around plays a node the graph does not have".into(),
             ));

@@ -18,7 +18,7 @@ mod search;
 mod start;
 
 pub use crate::motion::Walker;
-pub use grid::{AgentPose, Grid, LocalFrame, Obstacle};
+pub use grid::{AgentPose, Grid, LocalFrame, LocalLattice, Obstacle};
 pub use mirror::symmetrise;
 pub use search::SearchParams;
 pub use start::{root_speed, start_states, Start, StartState, STANDING_MIRRORED};

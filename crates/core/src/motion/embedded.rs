@@ -3,8 +3,8 @@
 //! hands the files to the same loader a directory goes through. So the embedded library
 //! and `--mocap data/mocap` give the same clips and the same fingerprint.
 
-use super::loader::{self, MotionFile};
 use super::library::Loaded;
+use super::loader::{self, MotionFile};
 use super::{Mirroring, MotionSource};
 use std::path::Path;
 
@@ -51,7 +51,11 @@ pub(super) fn parse(fps: f64, mirroring: Mirroring) -> Loaded {
     )
     .expect("the embedded motion capture loads")
     .into_parts();
-    debug_assert_eq!(source, self::source(mirroring), "build.rs and the loader agree");
+    debug_assert_eq!(
+        source,
+        self::source(mirroring),
+        "build.rs and the loader agree"
+    );
     loaded
 }
 

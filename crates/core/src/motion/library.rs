@@ -241,6 +241,8 @@ impl MotionLibrary {
 
     /// The clips of `behaviour`, whole (jumps included).
     pub fn clips_of<'a>(&'a self, behaviour: &'a str) -> impl Iterator<Item = &'a Clip> + 'a {
-        self.clips().iter().filter(move |c| c.behaviour == behaviour)
+        self.clips()
+            .iter()
+            .filter(move |c| c.behaviour == behaviour)
     }
 }

@@ -184,8 +184,7 @@ impl Seen {
         if x.abs() > self.reach || z.abs() > self.reach || !(0..HEADING_BINS).contains(&h) {
             return self.beyond.insert(state_key(node, at));
         }
-        let i = (((i64::from(node) * side + x + self.reach) * side + z + self.reach)
-            * HEADING_BINS
+        let i = (((i64::from(node) * side + x + self.reach) * side + z + self.reach) * HEADING_BINS
             + h) as usize;
         let (word, bit) = (i / 64, 1u64 << (i % 64));
         let fresh = self.bits[word] & bit == 0;
