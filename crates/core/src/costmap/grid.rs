@@ -165,7 +165,7 @@ impl LocalFrame {
     /// The points of a lattice (each x of `xs` with each z of `zs`) ready to be taken
     /// into this frame: the products of the rotation are worked out once per column and
     /// per row instead of once per point. [`LocalLattice::at`] is bit for bit what
-    /// [`LocalFrame::to_local`] gives, since each product has the same operands and the
+    /// `LocalFrame::to_local` gives, since each product has the same operands and the
     /// sums the same terms.
     pub fn lattice(self, xs: &[f64], zs: &[f64]) -> LocalLattice {
         let (c, s) = (self.unrotate.x, self.unrotate.y);

@@ -36,8 +36,19 @@ pub(super) fn source(mirroring: Mirroring) -> MotionSource {
 /// the test suite catches (`embedded_library_is_the_repository_copy`), not conditions a
 /// user can meet, so they are not part of the signature.
 pub(super) fn parse(fps: f64, mirroring: Mirroring) -> Loaded {
+    let (source, loaded) = parse_with_source(fps, mirroring);
+    debug_assert_eq!(
+        source,
+        self::source(mirroring),
+        "build.rs and the loader agree"
+    );
+    loaded
+}
+
+/// The embedded clips parsed, with the source the loader computes from them.
+fn parse_with_source(fps: f64, mirroring: Mirroring) -> (MotionSource, Loaded) {
     let files = unpack(PACK).expect("the embedded motion capture unpacks");
-    let (source, loaded) = loader::from_files(
+    loader::from_files(
         files,
         Vec::new(),
         fps,
@@ -50,13 +61,7 @@ pub(super) fn parse(fps: f64, mirroring: Mirroring) -> Loaded {
         },
     )
     .expect("the embedded motion capture loads")
-    .into_parts();
-    debug_assert_eq!(
-        source,
-        self::source(mirroring),
-        "build.rs and the loader agree"
-    );
-    loaded
+    .into_parts()
 }
 
 /// The files of a pack, or what is wrong with it.
@@ -128,21 +133,7 @@ mod tests {
         // What the build says of the pack (count and fingerprints) is what the loader
         // computes from the parsed files, with and without mirroring.
         for mirroring in [Mirroring::On, Mirroring::Off] {
-            let files = unpack(PACK).unwrap();
-            let parsed = loader::from_files(
-                files,
-                Vec::new(),
-                FPS,
-                mirroring,
-                Path::new("embedded"),
-                |clips, fingerprint| MotionSource::Embedded {
-                    clips,
-                    mirroring,
-                    fingerprint,
-                },
-            )
-            .unwrap();
-            assert_eq!(parsed.source, source(mirroring));
+            assert_eq!(parse_with_source(FPS, mirroring).0, source(mirroring));
         }
         assert_ne!(
             source(Mirroring::On).fingerprint(),
