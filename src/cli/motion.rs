@@ -8,7 +8,9 @@ use fieldhouse::basketball::human::{self, Stance};
 use fieldhouse::costmap::{
     root_speed, start_states, symmetrise, BuildParams, CostMap, STANDING_MIRRORED,
 };
-use fieldhouse::motion::{GraphParams, Mirroring, MotionGraph, MotionLibrary, AUTO_WINDOWS, FPS};
+use fieldhouse::motion::{
+    quickest_turn_around, GraphParams, Mirroring, MotionGraph, MotionLibrary, AUTO_WINDOWS, FPS,
+};
 use fieldhouse::words::{figure, plural};
 use serde_json::json;
 use std::io::Write;
@@ -268,7 +270,7 @@ fn sweep(args: &GraphArgs, json: bool, out: &mut impl Write) -> anyhow::Result<(
         if let [stance, twin] = &mut maps[..] {
             symmetrise(&graph, stance, twin);
         }
-        let turn = human::stance_turn(&graph, &maps);
+        let turn = quickest_turn_around(&graph, maps.iter().map(|m| m.start_node));
         let stance = Stance {
             behaviour: &args.behaviour,
             graph: &graph,

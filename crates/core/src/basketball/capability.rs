@@ -8,8 +8,8 @@ use crate::costmap::{
     Start, StartState, STANDING_MIRRORED,
 };
 use crate::motion::{
-    GraphError, Jump, MotionGraph, MotionLibrary, MotionSource, RootStep, TurnAround, Walker,
-    AUTO_WINDOWS,
+    quickest_turn_around, GraphError, Jump, MotionGraph, MotionLibrary, MotionSource, RootStep,
+    TurnAround, Walker, AUTO_WINDOWS,
 };
 use glam::DVec2;
 use std::sync::OnceLock;
@@ -183,13 +183,14 @@ impl Mover {
     }
 
     /// The quickest turn around from the stance or its mirror image
-    /// ([`human::stance_turn`](super::human::stance_turn)).
+    /// ([`quickest_turn_around`]).
     pub fn turn(&self) -> Option<&TurnAround> {
         self.turn
             .get_or_init(|| {
-                let maps = std::iter::once(&self.states[0].map)
-                    .chain(self.stance_twin.map(|t| &self.states[t].map));
-                super::human::stance_turn(&self.graph, maps)
+                let stances = std::iter::once(&self.states[0].map)
+                    .chain(self.stance_twin.map(|t| &self.states[t].map))
+                    .map(|m| m.start_node);
+                quickest_turn_around(&self.graph, stances)
             })
             .as_ref()
     }
@@ -231,13 +232,13 @@ impl Mover {
         progress(Stage::Map { behaviour });
         let maps = CostMap::build_from(&graph, &params, &starts, &mut |_| {});
         // The stance and its mirror image, as `Mover::turn` measures them.
-        let stance_maps = states
+        let stances = states
             .iter()
             .zip(&maps)
             .enumerate()
             .filter(|(i, (s, _))| *i == 0 || s.name == STANDING_MIRRORED)
-            .map(|(_, (_, m))| m);
-        let turn = super::human::stance_turn(&graph, stance_maps);
+            .map(|(_, (_, m))| m.start_node);
+        let turn = quickest_turn_around(&graph, stances);
         let jumps = library
             .clips_of(behaviour)
             .filter_map(|c| {

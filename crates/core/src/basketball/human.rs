@@ -9,7 +9,7 @@
 
 use super::capability::Mover;
 use crate::costmap::{root_speed, CostMap};
-use crate::motion::{turn_around, MotionGraph, TurnAround, TurnParams};
+use crate::motion::{MotionGraph, TurnAround};
 use glam::DVec2;
 use serde::Serialize;
 
@@ -19,7 +19,7 @@ pub enum Measure {
     /// Frames to the map cell just beyond this point of the agent's frame (+x ahead, +z
     /// right), m.
     Point(f64, f64),
-    /// Frames to face the other way within 1 m of where it stood ([`turn_around`]).
+    /// Frames to face the other way within 1 m of where it stood ([`turn_around`](crate::motion::turn_around)).
     TurnAround,
 }
 
@@ -148,7 +148,8 @@ pub struct Stance<'a> {
     pub map: &'a CostMap,
     /// The map from the stance's mirror image, if there is one.
     pub twin: Option<&'a CostMap>,
-    /// The quickest turn around from either ([`stance_turn`]).
+    /// The quickest turn around from either
+    /// ([`quickest_turn_around`](crate::motion::quickest_turn_around)).
     pub turn: Option<&'a TurnAround>,
 }
 
@@ -240,17 +241,6 @@ fn measure(stance: &Stance, measure: Measure) -> (Option<u32>, Vec<u32>) {
             (Some(turn.frames), turn.nodes.clone())
         }),
     }
-}
-
-/// The quickest turn around from the start node of any of `maps` (a stance and its
-/// mirror image): the search is seconds on the CMU graphs, so movers cache it.
-pub fn stance_turn<'a>(
-    graph: &MotionGraph,
-    maps: impl IntoIterator<Item = &'a CostMap>,
-) -> Option<TurnAround> {
-    maps.into_iter()
-        .filter_map(|m| turn_around(graph, m.start_node, &TurnParams::default()))
-        .min_by_key(|turn| turn.frames)
 }
 
 /// The cell a point `d` metres out counts as: the one just beyond it, in the row or

@@ -3,8 +3,7 @@
 //! hands the files to the same loader a directory goes through. So the embedded library
 //! and `--mocap data/mocap` give the same clips and the same fingerprint.
 
-use super::library::Loaded;
-use super::loader::{self, MotionFile};
+use super::loader::{self, Loaded, MotionFile};
 use super::{Mirroring, MotionSource};
 use std::path::Path;
 

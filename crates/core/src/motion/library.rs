@@ -1,7 +1,8 @@
 //! A behaviour-labelled collection of clips: the CMU motion capture embedded in the
 //! binary, or a user's own capture read from a directory (one folder per behaviour).
 
-use super::{embedded, loader, Clip, Jump};
+use super::loader::{self, Loaded};
+use super::{embedded, Clip, Jump};
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -152,13 +153,6 @@ pub struct MotionLibrary {
     /// The embedded library's frame rate and mirroring, to parse it with on first use;
     /// `None` for a directory's, parsed as it is read.
     embedded: Option<(f64, Mirroring)>,
-}
-
-/// A library's parsed clips and the files that failed.
-#[derive(Debug, Clone)]
-pub(super) struct Loaded {
-    pub(super) clips: Vec<Clip>,
-    pub(super) problems: Vec<LoadProblem>,
 }
 
 impl MotionLibrary {

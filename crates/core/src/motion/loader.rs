@@ -7,7 +7,6 @@ use super::acclaim;
 use super::amc;
 use super::asf::{self, Skeleton};
 use super::bvh::{self, ParseError};
-use super::library::Loaded;
 use super::skeleton::global_positions;
 use super::{resample::resample, Clip, ClipError, LibraryError, LoadProblem};
 use super::{Mirroring, MotionLibrary, MotionSource};
@@ -184,6 +183,13 @@ pub(super) fn load_library(
             fingerprint,
         },
     )
+}
+
+/// A library's parsed clips and the files that failed.
+#[derive(Debug, Clone)]
+pub(super) struct Loaded {
+    pub(super) clips: Vec<Clip>,
+    pub(super) problems: Vec<LoadProblem>,
 }
 
 /// Parses `files` into a library whose source `source(clips, fingerprint)` names, each

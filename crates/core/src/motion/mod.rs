@@ -53,7 +53,7 @@ pub use loader::{parse_acclaim_clip, parse_clip};
 pub use playback::{Blend, PlaybackFrame};
 pub use poses::{PoseLibrary, StrideCycle, MAX_FOOT_SLIDE_M};
 pub use step::{wrap_angle, Node, RootStep};
-pub use turn::{turn_around, TurnAround, TurnParams};
+pub use turn::{quickest_turn_around, turn_around, TurnAround, TurnParams};
 pub use walker::Walker;
 
 /// The frame rate everything downstream works at: the paper plays motion at 30 fps.

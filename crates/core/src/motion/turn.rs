@@ -193,6 +193,19 @@ impl Seen {
     }
 }
 
+/// The quickest turn around from any of `starts` (a stance and its mirror image, say),
+/// with the default [`TurnParams`]: the search takes about a second on the CMU graphs, so
+/// movers keep what it finds beside their maps.
+pub fn quickest_turn_around(
+    graph: &MotionGraph,
+    starts: impl IntoIterator<Item = u32>,
+) -> Option<TurnAround> {
+    starts
+        .into_iter()
+        .filter_map(|start| turn_around(graph, start, &TurnParams::default()))
+        .min_by_key(|turn| turn.frames)
+}
+
 /// A walk's node, position bin and heading bin packed in one integer: node in the high
 /// 32 bits, then 12 bits for each position bin and 8 for the heading's (positions are
 /// within `stray_m` of the start, a few metres, so 12 bits of 0.1 m hold ±200 m).
