@@ -102,12 +102,15 @@ pub(super) fn run(args: ServeArgs) -> anyhow::Result<()> {
     let listener = listen(config.addr)?;
     let caps = args.capability.load()?;
     tracing::info!(motion = %caps.source, "motion source");
-    let admin_token = chosen_token.unwrap_or_else(|| {
-        let t = auth::new_token();
-        // Printed once, on the terminal only: never into the logs.
-        eprintln!("admin token (set FIELDHOUSE_ADMIN_TOKEN to choose one): {t}");
-        t
-    });
+    let admin_token = match chosen_token {
+        Some(t) => auth::AdminToken::chosen(t),
+        None => {
+            let t = auth::new_token();
+            // Printed once, on the terminal only: never into the logs.
+            eprintln!("admin token (set FIELDHOUSE_ADMIN_TOKEN to choose one): {t}");
+            auth::AdminToken::generated(t)
+        }
+    };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()

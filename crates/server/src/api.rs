@@ -40,10 +40,10 @@ fn admin(app: &AppState, headers: &HeaderMap) -> Result<(), ApiError> {
         .and_then(|v| v.to_str().ok())
         .and_then(auth::bearer)
         .ok_or_else(|| ApiError::unauthorized("this needs Authorization: Bearer <admin token>"))?;
-    if auth::same(given, &app.admin_token) {
+    if app.admin_token.is(given) {
         Ok(())
     } else {
-        Err(ApiError::forbidden("wrong admin token"))
+        Err(ApiError::forbidden(app.admin_token.refusal()))
     }
 }
 

@@ -90,7 +90,7 @@ const REPLAYS_FINISH_WITHIN: Duration = Duration::from_secs(10);
 pub async fn serve(
     listener: TcpListener,
     config: ServerConfig,
-    admin_token: String,
+    admin_token: auth::AdminToken,
     caps: Arc<Capabilities>,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {

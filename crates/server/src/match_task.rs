@@ -454,7 +454,7 @@ mod tests {
         let app = AppState {
             ticking: tokio::runtime::Handle::current(),
             config: ServerConfig::default(),
-            admin_token: "admin".into(),
+            admin_token: crate::auth::AdminToken::chosen("admin".into()),
             caps: fieldhouse_core::fixtures::cmu_capabilities(),
             metrics: Arc::default(),
             matches: Default::default(),

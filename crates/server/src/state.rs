@@ -93,7 +93,7 @@ pub struct AppState {
     /// Where match tasks run: a runtime apart from the sockets' (see `serve`).
     pub ticking: tokio::runtime::Handle,
     pub config: ServerConfig,
-    pub admin_token: String,
+    pub admin_token: crate::auth::AdminToken,
     pub caps: Arc<Capabilities>,
     pub metrics: Arc<Metrics>,
     pub matches: RwLock<BTreeMap<String, Arc<MatchEntry>>>,
