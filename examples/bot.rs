@@ -16,8 +16,17 @@ async fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err("usage: bot ws://HOST:PORT/ws/matches/ID/play TOKEN".into());
     };
     // The token goes in the query (or an `Authorization: Bearer` header). A wrong token
-    // or match id is refused (403, 404) before the WebSocket opens.
-    let (mut socket, _) = connect_async(format!("{url}?token={token}")).await?;
+    // or match id is refused (403, 404) before the WebSocket opens, with the reason as
+    // JSON in the response's body.
+    let (mut socket, _) = match connect_async(format!("{url}?token={token}")).await {
+        Ok(connected) => connected,
+        Err(tokio_tungstenite::tungstenite::Error::Http(response)) => {
+            let body = response.body().as_deref().unwrap_or_default();
+            let reason = String::from_utf8_lossy(body);
+            return Err(format!("refused with {}: {reason}", response.status()).into());
+        }
+        Err(e) => return Err(e.into()),
+    };
     // Every message is one JSON object in a text frame, tagged by its "type".
     while let Some(message) = socket.next().await {
         let Message::Text(text) = message? else {

@@ -400,11 +400,16 @@ async fn rest_errors_are_json_with_the_right_status() {
         (code, body["error"]["code"].as_str()),
         (401, Some("unauthorized"))
     );
-    let (code, _) = error(post(
+    let (code, body) = error(post(
         Some("Bearer not-the-token"),
         r#"{"sport":"baseball"}"#,
     ));
     assert_eq!(code, 403);
+    // The refusal says where this server's token comes from.
+    assert_eq!(
+        body["error"]["message"],
+        "wrong admin token: this server's is the FIELDHOUSE_ADMIN_TOKEN it was started with"
+    );
     let admin = format!("Bearer {ADMIN}");
     let (code, body) = error(post(
         Some(&admin),
@@ -654,6 +659,21 @@ async fn the_reference_bot_refuses_a_spectator_socket_and_shows_its_progress() {
         "{err}"
     );
     assert!(!err.contains(token), "the token was echoed: {err}");
+    // A wrong token is refused before the upgrade, and the bot prints the server's own
+    // reason, not the body's bytes.
+    let wrong = bot(
+        server.ws(&format!("/ws/matches/{id}/play")),
+        Some("0123456789abcdef0123456789abcdef"),
+    )
+    .await
+    .unwrap();
+    let err = String::from_utf8_lossy(&wrong.stderr);
+    assert!(!wrong.status.success(), "{err}");
+    assert!(
+        err.contains("403") && err.contains("this token controls no agent of this match"),
+        "{err}"
+    );
+    assert!(!err.contains("[123,"), "{err}");
     // The play URL with the token in it (no --token): it plays to the end, and says how
     // it goes on stderr every few seconds (the tick and the score) while stdout keeps
     // the one JSON result.

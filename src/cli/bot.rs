@@ -150,6 +150,26 @@ fn hoops(p: &Value) -> Value {
     json!({"kind": "move_to", "target": spot.to_array()})
 }
 
+/// A refused upgrade in the server's own words (the message of its JSON error body, or
+/// the body as text), with the status; any other error as it is.
+fn refusal(e: tokio_tungstenite::tungstenite::Error) -> anyhow::Error {
+    match e {
+        tokio_tungstenite::tungstenite::Error::Http(response) => {
+            let body = response
+                .body()
+                .as_deref()
+                .map(String::from_utf8_lossy)
+                .unwrap_or_default();
+            let said = serde_json::from_str::<Value>(&body)
+                .ok()
+                .and_then(|v| v["error"]["message"].as_str().map(str::to_string))
+                .unwrap_or_else(|| body.into_owned());
+            anyhow!("refused with {}: {said}", response.status())
+        }
+        other => other.into(),
+    }
+}
+
 pub(super) fn run(args: BotArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let kind: StrategyKind = args.strategy.parse()?;
     if kind == StrategyKind::Predictive {
@@ -162,6 +182,7 @@ pub(super) fn run(args: BotArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let result = runtime.block_on(async move {
         let (mut socket, _) = tokio_tungstenite::connect_async(url.as_str())
             .await
+            .map_err(refusal)
             .with_context(|| format!("connecting to {shown} (a wrong token or match id is refused before the WebSocket opens)"))?;
         let hello = tokio::time::timeout(HELLO_WITHIN, first_text(&mut socket))
             .await
