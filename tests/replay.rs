@@ -703,3 +703,60 @@ fn paths_count_the_catches_the_score_counts() {
     ));
     assert!(err.contains("absent.jsonl"), "{err}");
 }
+
+/// Every shipped scenario can be run headless. Those written for the server, which plays
+/// until a match is deleted, are refused without an end with a message naming the flags
+/// that give one, and run with them; `--possessions` ends a basketball game and a flag's
+/// value is held to the scenario field's own rules.
+#[test]
+fn every_shipped_scenario_runs_headless_given_an_end() {
+    let dir = scratch("shipped-scenarios");
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let mut without_end = 0;
+    for entry in std::fs::read_dir(&shipped).unwrap() {
+        let path = entry.unwrap().path();
+        let stem = path.file_stem().unwrap().to_string_lossy().into_owned();
+        let run = |flags: &str, out: &str| {
+            format!(
+                "run {} --out {} --bots builtin --json {flags}",
+                path.display(),
+                dir.join(out).display()
+            )
+        };
+        if fieldhouse(&run("", &format!("{stem}.jsonl.zst")))
+            .status
+            .success()
+        {
+            continue;
+        }
+        without_end += 1;
+        let (_, stderr) = exits(&run("", &format!("{stem}-again.jsonl.zst")), 2);
+        assert!(
+            stderr.contains("needs an end: pass --duration-s"),
+            "{stem}: {stderr}"
+        );
+        let doc = json(&run("--duration-s 5", &format!("{stem}-5s.jsonl.zst")));
+        assert_eq!(doc["simulated_s"], 5.0, "{stem}: {doc}");
+    }
+    assert!(without_end >= 3, "the server's own scenarios have no end");
+    let basketball = shipped.join("basketball.toml");
+    let doc = json(&format!(
+        "run {} --out {} --json --possessions 3",
+        basketball.display(),
+        dir.join("three.jsonl.zst").display()
+    ));
+    assert_eq!(doc["result"]["possession"], 3, "{doc}");
+    let (_, stderr) = exits(
+        &format!(
+            "run {} --out {} --duration-s 0",
+            basketball.display(),
+            dir.join("never.jsonl.zst").display()
+        ),
+        2,
+    );
+    assert!(
+        stderr.contains("(with --duration-s or --possessions)"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("duration_s"), "{stderr}");
+}

@@ -19,6 +19,7 @@ use std::time::Instant;
 #[derive(Args, Debug)]
 #[command(
     after_help = "Example: fieldhouse run scenarios/baseball-papers.toml --out papers.jsonl.zst\n\
+    A scenario written for the server (no end): fieldhouse run scenarios/basketball.toml --possessions 100\n\
     Then: fieldhouse replay info papers.jsonl.zst; fieldhouse replay verify papers.jsonl.zst"
 )]
 pub(super) struct RunArgs {
@@ -33,6 +34,15 @@ pub(super) struct RunArgs {
     /// `builtin`: play bot-controlled agents with their built-in brains.
     #[arg(long, value_name = "builtin")]
     bots: Option<String>,
+    /// Play this many simulated seconds (the scenario's `duration_s`, which this
+    /// replaces): how a scenario written for the server, which plays until deleted,
+    /// gets an end.
+    #[arg(long, value_name = "S")]
+    duration_s: Option<f64>,
+    /// Basketball: play this many possessions (the scenario's `options.possessions`,
+    /// which this replaces).
+    #[arg(long, value_name = "N")]
+    possessions: Option<u64>,
     /// Print one JSON document.
     #[arg(long)]
     json: bool,
@@ -40,18 +50,40 @@ pub(super) struct RunArgs {
     capability: CapabilityArgs,
 }
 
-/// Reads a scenario file, naming the file and the field at fault.
-pub(super) fn load_scenario(path: &Path) -> anyhow::Result<Scenario> {
+/// A scenario file as the JSON the scenario is read from.
+fn scenario_value(path: &Path) -> anyhow::Result<Value> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let value: toml::Value =
         toml::from_str(&text).with_context(|| format!("{} is not TOML", path.display()))?;
-    let json = serde_json::to_value(value)?;
-    Scenario::from_value(json).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+    Ok(serde_json::to_value(value)?)
+}
+
+/// The scenario of `args`, with the end its flags give in place of the file's: checked
+/// as a whole, so a flag's value is held to the field's own rules.
+fn scenario_of(args: &RunArgs) -> anyhow::Result<Scenario> {
+    let mut value = scenario_value(&args.scenario)?;
+    if let Value::Object(doc) = &mut value {
+        if let Some(d) = args.duration_s {
+            doc.insert("duration_s".into(), json!(d));
+        }
+        if let Some(p) = args.possessions {
+            let options = doc.entry("options").or_insert_with(|| json!({}));
+            if let Value::Object(options) = options {
+                options.insert("possessions".into(), json!(p));
+            }
+        }
+    }
+    let given = match (args.duration_s, args.possessions) {
+        (None, None) => "",
+        _ => " (with --duration-s or --possessions)",
+    };
+    Scenario::from_value(value)
+        .map_err(|e| anyhow::anyhow!("{}{given}: {e}", args.scenario.display()))
 }
 
 pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
-    let mut scenario = load_scenario(&args.scenario).map_err(super::bad_input)?;
+    let mut scenario = scenario_of(&args).map_err(super::bad_input)?;
     match args.bots.as_deref() {
         None => {
             if let Some(i) = scenario.agents.iter().position(|a| a.bot) {
@@ -76,7 +108,8 @@ pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let o = &scenario.options;
     if scenario.duration_s.is_none() && o.possessions.is_none() && o.launches.is_none() {
         return Err(super::bad_input(anyhow::anyhow!(
-            "{}: a headless run needs an end: duration_s, options.possessions (basketball) or options.launches (fly balls)",
+            "{}: a headless run needs an end: pass --duration-s S (or --possessions N for basketball), \
+             or give the scenario duration_s, options.possessions (basketball) or options.launches (fly balls)",
             args.scenario.display()
         )));
     }
