@@ -20,6 +20,7 @@ pub(super) struct ReplayArgs {
 enum ReplayCommand {
     /// The header, result, frames and duration, and whether the file is complete.
     Info {
+        /// The replay file: JSON lines (format 1) or zstd chunks of them (format 2).
         file: PathBuf,
         /// Print one JSON document.
         #[arg(long)]
@@ -35,6 +36,7 @@ enum ReplayCommand {
         3  the file is cut at its end (a crash, or a match still recording): its readable part \
         re-simulates identically")]
     Verify {
+        /// The replay file: JSON lines (format 1) or zstd chunks of them (format 2).
         file: PathBuf,
         #[command(flatten)]
         capability: CapabilityArgs,
@@ -49,6 +51,7 @@ enum ReplayCommand {
         one a line, with every field: for jq and other JSON tools.\n\
         Example: fieldhouse replay export papers.jsonl.zst > papers.csv")]
     Export {
+        /// The replay file: JSON lines (format 1) or zstd chunks of them (format 2).
         file: PathBuf,
         /// What to write: csv or jsonl (see below).
         #[arg(long, value_enum, default_value_t = ExportFormat::Csv)]
@@ -66,6 +69,7 @@ enum ReplayCommand {
         Example: fieldhouse run balls.toml --out balls.jsonl && fieldhouse replay paths balls.jsonl"
     )]
     Paths {
+        /// The replay file: JSON lines (format 1) or zstd chunks of them (format 2).
         file: PathBuf,
         /// Print one JSON document: a summary per fielder and every run.
         #[arg(long)]
