@@ -14,12 +14,13 @@ export class Player {
    * frames before the target a seek asks for too, so the view can rebuild what led there
    * (the flight so far, the latest decision) instead of showing a bare moment.
    */
-  constructor(replay, ticksPerFrame, { send, onSeek, leadInS }) {
+  constructor(replay, ticksPerFrame, { send, onSeek, leadInS, tickHz }) {
     this.replay = replay;
     this.ticksPerFrame = ticksPerFrame;
     this.send = send;
     this.onSeek = onSeek;
     this.leadInS = leadInS;
+    this.tickHz = tickHz;
     /** The tick the last seek went to: frames before it are its lead-in. */
     this.target = 0;
     this.playing = true;
@@ -93,9 +94,12 @@ export class Player {
     this.send({ type: "control", action: "seek", tick, lead_in_s: this.leadInS });
   }
 
-  /** Whether a frame is part of a seek's lead-in (shown at once, its events not logged). */
-  leadIn(tick) {
-    return tick < this.target;
+  /**
+   * Whether a frame is from before the last seek's lead-in: one the server sent before
+   * it read the seek, still arriving. Its events belong to another part of the match.
+   */
+  stale(tick) {
+    return tick < this.target - Math.round(this.leadInS * this.tickHz);
   }
 
   setSpeed(speed) {

@@ -85,8 +85,9 @@ export function showView(kind, id) {
       const ticksPerFrame = Math.max(1, Math.round(msg.match.tick_hz / msg.match.frame_hz));
       player = new Player(msg.replay, ticksPerFrame, {
         send: (control) => stream.send(control),
-        onSeek: () => { timeline.clear(); sport.reset(); },
+        onSeek: () => { timeline.clear(); sport.reset(); clearLog(); },
         leadInS: sport.leadInS,
+        tickHz: msg.match.tick_hz,
       });
     }
   };
@@ -98,7 +99,7 @@ export function showView(kind, id) {
       else if (msg.type === "frame" && hello) {
         // A frame from before the newest starts the story again (a seek's lead-in after
         // frames that were on their way): the view forgets what it gathered too.
-        if (timeline.newest && msg.tick <= timeline.newest.tick) sport.reset();
+        if (timeline.newest && msg.tick <= timeline.newest.tick) { sport.reset(); clearLog(); }
         timeline.push(msg);
         player?.frame(msg.tick);
       }
@@ -142,7 +143,8 @@ export function showView(kind, id) {
       const due = timeline.advance(dt, playing ? (player?.speed ?? 1) : 0, playing ? undefined : 0);
       for (const frame of due) {
         sport.apply(frame);
-        if (player?.leadIn(frame.tick)) continue;
+        // After a seek the log tells what the lead-in delivers, and nothing older.
+        if (player?.stale(frame.tick)) continue;
         for (const e of frame.events) {
           const text = sport.describe(e);
           if (text) log(text, e.kind);
@@ -201,6 +203,10 @@ export function showView(kind, id) {
     if (ended) parts.push(`<span>${escapeHtml(ended.reason)}</span>`);
     const html = parts.join("");
     if (html !== shownHud) $("hud").innerHTML = shownHud = html;
+  }
+
+  function clearLog() {
+    $("log").replaceChildren();
   }
 
   function log(text, kind) {

@@ -328,6 +328,12 @@ async function main() {
   await page.keyboard.press(" ");
   await page.keyboard.press("Home");
   await page.waitForFunction((t) => Number(document.getElementById("hud-tick")?.textContent) < t - 300, inFlight, { timeout: 5_000 });
+  // The log starts again at a seek: at the replay's start it tells at most of the first
+  // ball, nothing of the balls played before the seek.
+  const balls = async () => [...(await page.locator("#log").textContent()).matchAll(/ball (\d+):/g)].map((m) => Number(m[1]));
+  await page.waitForTimeout(500);
+  const atStart = await balls();
+  check(atStart.every((b) => b <= 1), `replay: after a seek to the start the log tells only of ball 1 (it has balls ${atStart.join(", ") || "none"})`);
   await page.locator("#seek").evaluate((el, t) => { el.value = t; el.dispatchEvent(new Event("change")); }, inFlight);
   await page.waitForFunction((t) => Math.abs(Number(document.getElementById("hud-tick")?.textContent) - t) <= 2, inFlight, { timeout: 5_000 });
   const afterSeek = await until(async () => {
@@ -336,6 +342,13 @@ async function main() {
     return /tan ψ rises/.test(text) && side > 1000 && { text, side };
   }, 3_000, `replay: after a seek to tick ${inFlight}, mid-flight, the fielder's eye and the side view show the flight`);
   passed(`replay: after a seek into a flight the panels show it: ${afterSeek.text}`);
+  // And the log holds what the lead-in brought, each event once: the page played this
+  // flight before it went back to the start, and none of that is left (10 s of lead-in
+  // spans at most three balls).
+  const inLog = await balls();
+  const lines = await page.locator("#log > div").allTextContents();
+  check(inLog.length > 0 && Math.max(...inLog) - Math.min(...inLog) <= 2 && new Set(lines).size === lines.length,
+    `replay: after a seek into a flight the log tells of its lead-in only, once (${lines.join(" | ")})`);
   await shot("replay-seek-in-flight");
   const download = await page.locator("#download").getAttribute("href");
   const file = await page.request.get(`${base}${download}`);
