@@ -760,3 +760,26 @@ fn every_shipped_scenario_runs_headless_given_an_end() {
     );
     assert!(stderr.contains("duration_s"), "{stderr}");
 }
+
+/// A replay names its motion as live matches do, in words: basketball's source, and for
+/// fly balls that they use none; the header's `motion` keeps the fingerprint that
+/// verification checks.
+#[test]
+fn a_replay_names_its_motion_in_the_words_live_matches_use() {
+    let dir = scratch("motion-words");
+    for (sport, words) in [
+        ("basketball", "CMU motion capture, embedded: "),
+        ("baseball", fieldhouse::sim::NO_MOTION),
+    ] {
+        let scenario = format!("sport = \"{sport}\"\nseed = 1\nduration_s = 2.0\n");
+        let (replay, _) = run(&dir, &scenario, &format!("{sport}.jsonl"));
+        let header: Value = serde_json::from_str(&lines(&replay)[0]).unwrap();
+        let source = header["match"]["motion_source"].as_str().unwrap();
+        assert!(source.starts_with(words), "{sport}: {source}");
+        let fingerprint = header["motion"].as_str().unwrap();
+        match sport {
+            "basketball" => assert_eq!(fingerprint.len(), 16, "{header}"),
+            _ => assert_eq!(fingerprint, "none"),
+        }
+    }
+}

@@ -44,12 +44,18 @@ async fn demo_matches_are_listed_and_stream_schema_valid_frames() {
             (Some("fieldhouse"), Some(3))
         );
         assert_eq!(hello["role"], "spectator");
-        // The embedded capture by default, named without any path of the server's.
+        // Basketball moves with the embedded capture by default, named in words without
+        // any path of the server's; fly balls say they use no motion capture.
         let source = hello["match"]["motion_source"].as_str().unwrap();
-        assert!(
-            source.starts_with("CMU motion capture, embedded: ") && !source.contains('/'),
-            "{source}"
-        );
+        if m["sport"] == "basketball" {
+            assert!(
+                source.starts_with("CMU motion capture, embedded: ") && !source.contains('/'),
+                "{source}"
+            );
+        } else {
+            assert_eq!(source, fieldhouse::sim::NO_MOTION);
+        }
+        assert_eq!(m["motion_source"].as_str(), Some(source), "{m}");
         assert_valid(&hello);
         if m["sport"] != "basketball" {
             assert_eq!(hello["match"]["field"]["eye_height_m"], 1.7);

@@ -24,7 +24,9 @@ export function showLobby() {
       $("replays").innerHTML = recorded.replays.length
         ? recorded.replays.map((r) => replayRow(r, r.recording || recording.has(r.id))).join("") + moreRow(recorded)
         : `<tr><td colspan="5" class="muted">no replays (start the server with --replay-dir DIR to record matches)</td></tr>`;
-      if (live.matches[0]) $("source").textContent = `motion: ${live.matches[0].motion_source}`;
+      // Only basketball moves with motion capture; the lobby names it when one is on.
+      const moving = live.matches.find((m) => m.sport === "basketball");
+      $("source").textContent = moving ? `motion: ${moving.motion_source}` : "";
       $("lobby-state").textContent = `updated ${new Date().toLocaleTimeString()}`;
     } catch (e) {
       if (!stopped) $("lobby-state").textContent = `server unreachable (${e.message}); retrying…`;

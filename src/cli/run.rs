@@ -120,6 +120,11 @@ pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
     let motion = caps
         .as_ref()
         .map_or("none".to_string(), |c| c.source.fingerprint().to_string());
+    // Spectators read where the motion came from in words; the header keeps the
+    // fingerprint a verification needs.
+    let source = caps
+        .as_ref()
+        .map_or(String::new(), |c| c.source.to_string());
     // What the world refuses is the scenario's (an unknown strategy, a bad launch).
     let world = World::new(&scenario, caps)
         .map_err(|e| super::bad_input(anyhow::anyhow!("{}: {e}", args.scenario.display())))?;
@@ -129,7 +134,7 @@ pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
         .map_or("match".to_string(), |s| s.to_string_lossy().into_owned());
     // The match is named after its file; the scenario's name stays in the header.
     let id = stem.clone();
-    let info = world.match_info(id.clone(), &scenario, Mode::Fast, motion.clone());
+    let info = world.match_info(id.clone(), &scenario, Mode::Fast, source);
     let path = args
         .out
         .clone()

@@ -9,7 +9,7 @@
 //! scripts/sync-capability
 //! ```
 //!
-//! which runs this test with `FIELDHOUSE_WRITE_SHIPPED=1`: it then writes the files
+//! which runs this test with `FIELDHOUSE_BLESS=1`: it then writes the files
 //! (zstd level 19) and removes the ones they replace.
 
 use fieldhouse_core::basketball::Mover;
@@ -26,7 +26,7 @@ fn shipped_dir() -> PathBuf {
 #[test]
 fn the_shipped_graphs_and_maps_are_what_the_code_builds() {
     let library = MotionLibrary::embedded(FPS, Mirroring::On);
-    let write = std::env::var_os("FIELDHOUSE_WRITE_SHIPPED").is_some_and(|v| v == "1");
+    let write = std::env::var_os("FIELDHOUSE_BLESS").is_some_and(|v| v == "1");
     let mut stale = Vec::new();
     for behaviour in BEHAVIOURS {
         let name = Mover::file_name(&library, behaviour);

@@ -106,8 +106,9 @@ pub struct MatchInfo {
     pub field: Field,
     /// Each agent's static description, in the order of every frame's `agents`.
     pub agents: Vec<AgentInfo>,
-    /// Where the motion data came from, named without any path of the server's
-    /// ([`crate::motion::MotionSource`]'s `Display`).
+    /// Where the motion data came from, in words and without any path of the server's
+    /// ([`crate::motion::MotionSource`]'s `Display`); for baseball and cricket, whose
+    /// fielders use none, [`crate::sim::NO_MOTION`].
     pub motion_source: String,
 }
 

@@ -44,6 +44,10 @@ use glam::DVec2;
 use hoops::HoopsWorld;
 use std::sync::Arc;
 
+/// What a fly-ball match says of its motion: its fielders move by their strategies, with
+/// no motion capture.
+pub const NO_MOTION: &str = "none (fly-ball fielders use no motion capture)";
+
 enum Inner {
     Fly(Box<FlyWorld>),
     Hoops(Box<HoopsWorld>),
@@ -123,7 +127,9 @@ impl World {
 
     /// Everything static about the match, as `hello` shows it: `scenario`'s (which
     /// built this world) with the match's id, how it is paced, and where its motion came
-    /// from.
+    /// from: `motion_source` (the [`MotionSource`](crate::motion::MotionSource) in words)
+    /// for basketball, [`NO_MOTION`] for fly balls, whose fielders move by their
+    /// strategies alone.
     pub fn match_info(
         &self,
         id: String,
@@ -142,7 +148,10 @@ impl World {
             perception_every_ticks: self.perception_every_ticks(),
             field: self.field(),
             agents: self.agents_info(),
-            motion_source,
+            motion_source: match &self.inner {
+                Inner::Fly(_) => NO_MOTION.to_string(),
+                Inner::Hoops(_) => motion_source,
+            },
         }
     }
 
