@@ -275,7 +275,7 @@ async function main() {
   const lobbyOverflow = await page.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
   check(lobbyOverflow <= 0, `phone: the lobby has no sideways scrolling (${lobbyOverflow} px too wide)`);
   await shot("lobby-phone");
-  await page.setViewportSize({ width: 1280, height: 900 });
+  await page.setViewportSize({ width: 1280, height: 800 });
 
   // A replay: opens, plays, seeks, pauses, steps one tick.
   await page.goto(`${base}/#/`);
@@ -288,6 +288,16 @@ async function main() {
   // the file (a demo's replay grows the whole time the server runs).
   await page.locator("#player").waitFor({ state: "visible", timeout: 10_000 });
   passed("replay: the player controls show");
+  // On a laptop's screen (1280×800) the controls and the keyboard hint are in view
+  // when the replay opens, without scrolling.
+  const fold = await page.evaluate(() => ({
+    height: window.innerHeight,
+    controls: document.getElementById("player").getBoundingClientRect().bottom,
+    keys: document.getElementById("keys").getBoundingClientRect().bottom,
+    scrolled: window.scrollY,
+  }));
+  check(fold.scrolled === 0 && fold.controls <= fold.height && fold.keys <= fold.height,
+    `replay: the controls are above the fold at 1280×${fold.height} (their bottom at ${fold.controls} px, the hint's at ${fold.keys} px)`);
   const last = Number(await page.locator("#seek").getAttribute("max"));
   check(last > 300, `replay: the seek bar spans the recording (last tick ${last})`);
   const target = Math.floor(last / 2);
