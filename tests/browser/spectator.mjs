@@ -276,6 +276,23 @@ async function main() {
   check(lobbyOverflow <= 0, `phone: the lobby has no sideways scrolling (${lobbyOverflow} px too wide)`);
   await shot("lobby-phone");
   await page.setViewportSize({ width: 1280, height: 800 });
+  // A replay on a phone (a touch screen, no hover): the controls are in view when it
+  // opens, and no keyboard hint is shown to a device without a keyboard.
+  const phone = await browser.newContext({ viewport: { width: 390, height: 844 }, hasTouch: true, isMobile: true });
+  const phonePage = await phone.newPage();
+  await phonePage.goto(`${base}/#/`);
+  const phoneLink = phonePage.locator(`#replays a[href^="#/replays/demo-baseball-"]`).first();
+  await phoneLink.waitFor({ timeout: 10_000 });
+  await phoneLink.click();
+  await phonePage.locator("#player").waitFor({ state: "visible", timeout: 10_000 });
+  const onPhone = await phonePage.evaluate(() => ({
+    height: window.innerHeight,
+    controls: document.getElementById("player").getBoundingClientRect().bottom,
+    hint: getComputedStyle(document.getElementById("keys")).display,
+  }));
+  check(onPhone.controls <= onPhone.height && onPhone.hint === "none",
+    `phone: a replay's controls are in view (bottom at ${onPhone.controls} of ${onPhone.height} px) and the keyboard hint is hidden (${onPhone.hint})`);
+  await phone.close();
 
   // A replay: opens, plays, seeks, pauses, steps one tick.
   await page.goto(`${base}/#/`);
