@@ -38,6 +38,8 @@ export class FlyView {
         this.flight = [];
         this.landing = e.landing;
         this.outcome = null;
+        // The last ball's catch or miss is its story; the new flight starts a clean field.
+        this.marks = [];
       } else if (e.kind === "caught") {
         this.marks.push({ at: e.at, caught: true, label: `caught by ${e.by}`, t: frame.time_s });
         this.outcome = `Caught by ${e.by} after ${e.flight_time_s.toFixed(1)} s`;

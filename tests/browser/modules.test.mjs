@@ -1,6 +1,7 @@
 // The page's pure modules against analytic oracles, in Node (no browser needed):
 // the fielder's-eye optics (eye.js), line fits (draw.js) and frame interpolation
-// (timeline.js), and the decoding of a decision's safe squares (court.js). Run by
+// (timeline.js), the decoding of a decision's safe squares (court.js) and how long the
+// field keeps a catch or a miss marked (fly.js). Run by
 // tests/browser.rs with `node --test`.
 import assert from "node:assert/strict";
 import { test } from "node:test";
@@ -146,6 +147,22 @@ test("a decision reads the defender's horizon as a bound, and its own time as a 
   const timed = explain(decision({ c_o: 4.25 }), rule, 1.5, false);
   assert.match(timed, /C<sub>o<\/sub> 4\.3 s &gt;/);
   assert.doesNotMatch(timed, /beyond/);
+});
+
+test("a catch or a miss stays marked until the next ball is hit, and no longer", async () => {
+  const { FlyView } = await import("../../web/fly.js");
+  const hello = { match: { field: { kind: "baseball", fence_m: 110 }, agents: [{ id: "cf" }] } };
+  const view = new FlyView(hello);
+  const frame = (time_s, events) => ({ time_s, events, ball: { state: "ground", position: [0, 0, 0] }, agents: [] });
+  view.apply(frame(1, [{ kind: "landed", ball: 1, at: [50, 50], miss_m: 11.7, nearest: "cf" }]));
+  assert.equal(view.marks.length, 1);
+  view.apply(frame(2, [{ kind: "launch", ball: 2, launch: {}, landing: [60, 40] }]));
+  assert.equal(view.marks.length, 0, "the previous ball's mark is gone when the next is hit");
+  view.apply(frame(3, [{ kind: "caught", ball: 2, at: [60, 40], by: "cf", flight_time_s: 4 }]));
+  view.apply(frame(3 + 7.9, []));
+  assert.equal(view.marks.length, 1);
+  view.apply(frame(3 + 8, []));
+  assert.equal(view.marks.length, 0, "and a mark goes after 8 s with no new ball");
 });
 
 test("a runner's pose is phase-matched to the distance run: one loop later, the same pose", async () => {
