@@ -27,6 +27,7 @@ export function showView(kind, id) {
   $("log").replaceChildren();
   $("player").hidden = true;
   $("mismatch").hidden = true;
+  $("picture").hidden = true;
   document.title = `${id} · fieldhouse`;
 
   const replay = kind === "replays";
@@ -58,6 +59,7 @@ export function showView(kind, id) {
       return;
     }
     hello = msg;
+    $("picture").hidden = false;
     timeline.clear();
     shown = null;
     ended = null;
@@ -113,8 +115,10 @@ export function showView(kind, id) {
       connection = s;
       // A live match the server no longer has will not come back: say so and stop.
       if (s.state === "retrying" && !replay) {
-        fetch(`/api/matches/${encodeURIComponent(id)}`).then((r) => {
-          if (r.status === 404) {
+        // Asked of the list, which answers 200 either way: a 404 would be an error in
+        // the console of a page that did nothing wrong.
+        fetch("/api/matches").then((r) => (r.ok ? r.json() : null)).then((list) => {
+          if (list && !list.matches.some((m) => m.id === id)) {
             stream.close();
             connection = { state: "gone", detail: `the server has no match "${id}"` };
           }

@@ -102,6 +102,17 @@ async function main() {
   // The motion source is named for visitors without any path of the server's.
   const source = await page.locator("#source").textContent();
   check(/^motion: CMU motion capture, embedded: \d+ clips and their mirror images$/.test(source), `lobby: names the motion source without a path: ${source}`);
+  // A match the server does not have: the page says so, and shows no empty field, 3-D
+  // button or agent picker around the message.
+  await page.goto(`${base}/#/matches/no-such-match`);
+  await page.locator("#hud", { hasText: 'the server has no match "no-such-match"' }).waitFor({ timeout: 15_000 });
+  const bare = await page.evaluate(() => ["field", "toggle3d", "agent", "log"].filter((id) => {
+    const box = document.getElementById(id).getBoundingClientRect();
+    return box.width > 0 && box.height > 0;
+  }));
+  check(bare.length === 0, `unknown match: only the message shows (visible besides it: ${bare.join(", ") || "nothing"})`);
+  await page.goto(`${base}/#/`);
+  await page.locator(`#matches a[href="#/matches/demo-basketball"]`).waitFor({ timeout: 10_000 });
   // Ended matches without a name (a learner's episodes) are counted, not listed; an
   // ended match with a name still is. (A fast match of a second of play ends at once.)
   const admin = { Authorization: "Bearer browser-test-admin-token" };
