@@ -285,6 +285,12 @@ async function main() {
   await page.locator(`#replays a[href^="#/replays/demo-baseball-"]`).first().waitFor({ timeout: 10_000 });
   const lobbyOverflow = await page.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
   check(lobbyOverflow <= 0, `phone: the lobby has no sideways scrolling (${lobbyOverflow} px too wide)`);
+  // Its cards keep status and score apart, as the table's columns do.
+  const card = await page.evaluate(() => {
+    const score = document.querySelector('#matches a[href="#/matches/demo-baseball"]').closest("tr").children[3];
+    return getComputedStyle(score, "::before").content;
+  });
+  check(card.includes("·"), `phone: a lobby card sets the score apart from the status (${card})`);
   await shot("lobby-phone");
   await page.setViewportSize({ width: 1280, height: 800 });
   // A replay on a phone (a touch screen, no hover): the controls are in view when it
