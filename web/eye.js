@@ -78,7 +78,7 @@ export function drawEye(g, width, height, { samples, strategy, fielder, outcome 
   const uPad = Math.max(0, vTop - (uHigh - uLow)) / 2 + 0.02;
   const at = plotFrame(g, width, half, {
     x: [uLow - uPad, uHigh + uPad], y: [0, vTop],
-    xLabel: "image u (lateral / depth)", yLabel: "image v",
+    xLabel: "where the fielder sees the ball: across", yLabel: "up",
   });
   path(g, image.map(([u, v]) => at(u, v)), "#1849a9");
   const lineR2 = straightness(image);
