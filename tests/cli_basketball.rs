@@ -69,13 +69,14 @@ fn a_defender_on_the_chosen_square_sends_the_shooter_elsewhere_or_to_the_plan() 
 fn decide_shows_the_defenders_own_times_beside_the_models() {
     let doc = |model: &str| {
         json(&format!(
-            "basketball-decide --shooter 10,3,200 --defender 5,-1,20 --defender-model {model} --defense defense --json {}",
+            "basketball-decide --shooter 10,3,200 --defender 5,-1,20 --shot-model {model} --defense defense --json {}",
             source()
         ))
     };
     // Modelled with its own map, the model is the truth: the same times, no square in
     // dispute.
-    let same = doc("defense");
+    let same = doc("own");
+    assert_eq!(same["shot_model"], "own");
     let candidates = same["candidates"].as_array().unwrap();
     let own = same["c_o_own_s"].as_array().unwrap();
     assert_eq!(own.len(), candidates.len());
@@ -86,7 +87,8 @@ fn decide_shows_the_defenders_own_times_beside_the_models() {
     assert_eq!(same["model_unsafe_but_safe"], 0);
     // Modelled with the shooter's run map (the paper), they differ somewhere, and the
     // counts are what the two lists of times say.
-    let paper = doc("run");
+    let paper = doc("paper");
+    assert_eq!(paper["shot_model"], "paper");
     let rule = |c: &Value, c_o: f64| c_o > num(&c["c_d"]) + 0.4 + 0.2;
     let (mut safe_but_reached, mut unsafe_but_safe) = (0, 0);
     for (c, o) in paper["candidates"]
@@ -215,6 +217,19 @@ fn the_defender_model_is_named_and_bad_ones_are_refused() {
         err.contains("psychic") && err.contains("isotropic"),
         "{err}"
     );
+    // basketball-decide names its models as basketball-eval does, with the same default
+    // (the defender's own maps, as live matches play), and refuses the fitted ones
+    // naming the command that has them.
+    let decided = json(&format!(
+        "basketball-decide --shooter 10,3,200 --defender 5,-1,20 --json {}",
+        source()
+    ));
+    assert_eq!(decided["shot_model"], "own");
+    let err = common::failure(&format!(
+        "basketball-decide --shooter 10,3,200 --defender 5,-1,20 --shot-model isotropic {}",
+        source()
+    ));
+    assert!(err.contains("basketball-eval"), "{err}");
 }
 
 #[test]

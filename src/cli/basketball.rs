@@ -4,6 +4,7 @@
 use super::args::{ground_pose, non_negative, parse_str};
 use super::canvas::{hot, text_width, Canvas, Rgb, INK, LINE_PX};
 use super::costmap::CacheArgs;
+use super::eval::ModelSpec;
 use super::heatmap::UNREACHABLE;
 use super::motion::MotionSourceArgs;
 use anyhow::Context;
@@ -18,6 +19,7 @@ use glam::DVec2;
 use serde_json::json;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::str::FromStr;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -104,10 +106,13 @@ pub(super) struct DecideArgs {
     /// T_s, the time a shot takes, s.
     #[arg(long, value_name = "S", default_value_t = DecisionParams::default().shot_time_s, value_parser = non_negative)]
     shot_time: f64,
-    /// The map the shooter models the defender with: run (its own non-dribbling map, the
-    /// paper's choice without prior knowledge) or defense (the defender's footwork).
-    #[arg(long, default_value = "run", value_parser = parse_str::<DefenderMotion>)]
-    defender_model: DefenderMotion,
+    /// How the shooter models the defender, named as basketball-eval names it: own (the
+    /// defender's own maps, those of --defense: what live matches and basketball-eval use
+    /// by default), paper (the shooter's own run maps, the paper's choice without prior
+    /// knowledge) or maps:BEHAVIOUR (another behaviour's maps, e.g. maps:run-127). The
+    /// fitted models (kinematic, isotropic) are basketball-eval's.
+    #[arg(long, default_value = "own", value_parser = ModelSpec::from_str)]
+    shot_model: ModelSpec,
     /// How the defender really moves (its own map): defense (footwork) or run. Its C_o
     /// is printed beside the model's, so the gap between the model and the truth shows.
     #[arg(long, default_value = "defense", value_parser = parse_str::<DefenderMotion>)]
@@ -151,13 +156,40 @@ pub(super) fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<(
     for d in &args.defender {
         on_court(&court, "defender", d)?;
     }
-    let caps = args.capability.load()?;
+    // A model of another behaviour's maps needs that behaviour built too.
+    let captures: Vec<String> = match &args.shot_model {
+        ModelSpec::Maps(b) if !["dribble", "run", "defense"].contains(&b.as_str()) => {
+            vec![b.clone()]
+        }
+        _ => Vec::new(),
+    };
+    let library = args.capability.library()?;
+    for b in &captures {
+        if !library.behaviours().contains(&b.as_str()) {
+            return Err(super::bad_input(anyhow::anyhow!(
+                "--shot-model maps:{b}: {} has no behaviour \"{b}\"; it has: {}",
+                library.source,
+                library.behaviours().join(", ")
+            )));
+        }
+    }
+    let caps = args.capability.build_with(&library, &captures)?;
     let params = DecisionParams {
         shot_time_s: args.shot_time,
         epsilon_s: args.epsilon,
         ..DecisionParams::default()
     };
-    let model = caps.defender(args.defender_model);
+    let model = match &args.shot_model {
+        ModelSpec::Own => caps.defender(args.defense),
+        ModelSpec::Maps(b) => caps.by_behaviour(b).expect("built above"),
+        other => {
+            return Err(super::bad_input(anyhow::anyhow!(
+                "--shot-model {}: basketball-decide models the defender with maps (own, paper or \
+                 maps:BEHAVIOUR); basketball-eval fits and plays kinematic and isotropic models",
+                other.name()
+            )))
+        }
+    };
     let defenders = standing(model, &args.defender);
     let shot = ShotModel::default();
     let decision = Situation {
@@ -207,7 +239,7 @@ pub(super) fn decide(args: DecideArgs, out: &mut impl Write) -> anyhow::Result<(
             "candidates": decision.candidates,
             "qualifying": decision.candidates.iter().filter(|c| c.qualifies(&params)).count(),
             "horizon_s": model.horizon_s(),
-            "defender_model": args.defender_model.name(),
+            "shot_model": args.shot_model.name(),
             "defense": args.defense.name(),
             "c_o_own_s": c_o_own,
             "model_safe_but_reached": falsely_safe,

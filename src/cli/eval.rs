@@ -16,14 +16,29 @@ use std::str::FromStr;
 use std::sync::Arc;
 use std::time::Instant;
 
-/// A model of the defender as a user names it, before any fitting.
+/// A model of the defender as a user names it, before any fitting: what
+/// `basketball-eval --shot-model` and `basketball-decide --shot-model` take.
 #[derive(Debug, Clone, PartialEq)]
-enum ModelSpec {
+pub(super) enum ModelSpec {
     Own,
     Maps(String),
     Kinematic,
     Isotropic,
     None,
+}
+
+impl ModelSpec {
+    /// The name a user writes for it.
+    pub(super) fn name(&self) -> String {
+        match self {
+            ModelSpec::Own => "own".into(),
+            ModelSpec::Maps(b) if b == "run" => "paper".into(),
+            ModelSpec::Maps(b) => format!("maps:{b}"),
+            ModelSpec::Kinematic => "kinematic".into(),
+            ModelSpec::Isotropic => "isotropic".into(),
+            ModelSpec::None => "none".into(),
+        }
+    }
 }
 
 impl FromStr for ModelSpec {
