@@ -4,8 +4,8 @@
 use super::args::{ground_pose, non_negative, parse_str};
 use super::canvas::{hot, text_width, Canvas, Rgb, INK, LINE_PX};
 use super::costmap::CacheArgs;
-use super::eval::ModelSpec;
 use super::heatmap::UNREACHABLE;
+use super::model_spec::ModelSpec;
 use super::motion::MotionSourceArgs;
 use anyhow::Context;
 use clap::Args;

@@ -13,6 +13,7 @@ mod eval;
 mod glyphs;
 mod heatmap;
 mod loadgen;
+mod model_spec;
 mod motion;
 mod paths;
 mod plots;
