@@ -266,11 +266,13 @@ export class View3d {
     const at = (u, v) => [px + IMAGE_PLANE_M * (fx - u * fz), this.eyeHeight + IMAGE_PLANE_M * v, pz + IMAGE_PLANE_M * (fz + u * fx)];
     setLine(this.imagePath, samples.filter((s) => s.u !== undefined).map((s) => at(s.u, s.v)));
     setLine(this.imageFrame, [at(-0.5, 0), at(0.5, 0), at(0.5, 1), at(-0.5, 1), at(-0.5, 0)]);
-    if (samples.length < 2) return `${selected}'s eye: waiting for the ball to rise above the eye`;
+    // What is drawn is named whatever the moment: the frame alone is a bare quadrilateral.
+    const legend = `white frame: the image plane, ${IMAGE_PLANE_M} m ahead, facing home`;
+    if (samples.length < 2) return `${selected}'s eye: waiting for the ball to rise above the eye · ${legend}`;
     const last = samples[samples.length - 1];
     const fit = fitLine(samples.map((s) => [s.t, s.tanPsi]));
     return `${selected}'s eye · tan ψ ${last.tanPsi.toFixed(3)}, rising ${fit ? fit.b.toFixed(3) : "–"}/s ` +
-      `(R² ${fit ? fit.r2.toFixed(4) : "–"}) · blue: the image path on the plane facing home`;
+      `(R² ${fit ? fit.r2.toFixed(4) : "–"}) · ${legend}; blue: the ball's image path on it`;
   }
 
   aim(sample, selected) {

@@ -116,6 +116,8 @@ async function main() {
   const aim = toBall.reduce((d, x, k) => d + (x / norm) * eye.looking[k], 0);
   check(Math.abs(eye.eye[0] - lf.position[0]) < 1e-6 && Math.abs(eye.eye[2] - lf.position[1]) < 1e-6 && Math.abs(eye.eye[1] - 1.7) < 1e-6 && aim > 0.9999,
     `baseball 3-D: the eye camera stands at lf's eye, 1.7 m up, looking at the ball (cos ${aim})`);
+  check(/tan ψ \d\.\d+, rising -?\d\.\d+\/s/.test(eye.text) && /white frame: the image plane/.test(eye.text) && /blue: the ball's image path/.test(eye.text),
+    `baseball 3-D: the eye names what it draws and reads tan ψ with its rate: "${eye.text}"`);
   check(eye.agents.length === 3 && eye.agents.every((a) => a.joints.length === libs.run.joints.length),
     `baseball 3-D: three fielders posed from the run capture; the eye says "${eye.text}"`);
   await page.locator("#view3d").screenshot({ path: join(ARTIFACTS, "view3d-fielders-eye.png") });
