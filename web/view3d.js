@@ -65,9 +65,7 @@ export class View3d {
     sun.position.set(-20, 40, 10);
     this.scene.add(sun);
     this.camera = new THREE.PerspectiveCamera(50, 4 / 3, 0.05, 2000);
-    this.orbit = this.basketball
-      ? { target: new THREE.Vector3(4.5, 0.8, 0), azimuth: Math.PI * 0.22, elevation: 0.4, radius: 12.5 }
-      : { target: new THREE.Vector3(45, 0, 45), azimuth: Math.PI * 1.25, elevation: 0.35, radius: 110 };
+    this.orbit = this.framing(hello);
     this.boneMaterial = {};
     this.bone = new THREE.CylinderGeometry(1, 1, 1, 6);
     this.head = new THREE.SphereGeometry(1, 12, 8);
@@ -88,6 +86,55 @@ export class View3d {
     this.state = { sport: hello.match.sport, tick: null, camera: this.mode, agents: [], renders: 0 };
     window.fieldhouse3d = this.state;
     this.setCamera("orbit");
+  }
+
+  /**
+   * The default orbit: a broadcast's view of where the play happens, as close as it can
+   * be with all of it on the canvas. Basketball: the half court from above the half-court
+   * line, looking at the basket. Baseball: from behind and above the outfielders, looking
+   * back at home plate, so the fielders are in front and the ball comes toward them.
+   * Cricket: the ring from high above its centre. The radius is the least (in steps of
+   * 5 %) at which every point that must be seen (the court's corners, the fielders'
+   * places, home, a fly ball's height) projects inside 90 % of the canvas.
+   */
+  framing(hello) {
+    const field = hello.match.field;
+    let target, azimuth, elevation, must;
+    if (this.basketball) {
+      const c = field.court, half = c.width_m / 2;
+      target = new THREE.Vector3(c.length_m / 2, 0, 0);
+      [azimuth, elevation] = [0, 0.6];
+      must = [[0, 0, -half], [0, 0, half], [c.length_m, 0, -half], [c.length_m, 0, half], [c.basket[0], 3.05, c.basket[1]]];
+    } else {
+      const homes = hello.match.agents.map((a) => a.home).filter(Boolean);
+      const [cx, cz] = homes.reduce(([x, z], h) => [x + h[0] / homes.length, z + h[1] / homes.length], [0, 0]);
+      if (field.kind === "baseball" && Math.hypot(cx, cz) > 1) {
+        target = new THREE.Vector3(0.6 * cx, 0, 0.6 * cz);
+        [azimuth, elevation] = [Math.atan2(cz, cx), 0.45];
+        must = [[0, 0, 0], [cx, 30, cz], ...homes.map((h) => [h[0], 1, h[1]])];
+      } else {
+        const r = field.boundary_m ?? field.fence_m ?? 100;
+        target = new THREE.Vector3(0, 0, 0);
+        [azimuth, elevation] = [Math.PI * 1.25, 1.0];
+        must = [[r, 0, 0], [-r, 0, 0], [0, 0, r], [0, 0, -r], ...homes.map((h) => [h[0], 1, h[1]])];
+      }
+    }
+    const orbit = { target, azimuth, elevation, radius: 3 };
+    const cam = this.camera;
+    for (; orbit.radius < 400; orbit.radius *= 1.05) {
+      cam.position.set(
+        target.x + orbit.radius * Math.cos(elevation) * Math.cos(azimuth),
+        target.y + orbit.radius * Math.sin(elevation),
+        target.z + orbit.radius * Math.cos(elevation) * Math.sin(azimuth));
+      cam.lookAt(target);
+      cam.updateMatrixWorld();
+      const inside = must.every(([x, y, z]) => {
+        const p = new THREE.Vector3(x, y, z).project(cam);
+        return Math.abs(p.x) <= 0.9 && Math.abs(p.y) <= 0.9 && p.z < 1;
+      });
+      if (inside) break;
+    }
+    return orbit;
   }
 
   /** Orbiting by pointer drag and wheel (or pinch: the browser's wheel with ctrl). */
@@ -242,7 +289,16 @@ export class View3d {
     this.renderer.render(this.scene, this.camera);
     this.renders += 1;
     const c = this.camera.position;
-    Object.assign(this.state, { tick: sample.tick, time_s: sample.time_s, agents: shown, renders: this.renders, camera: this.mode,
+    // Who the camera leaves out: each agent (at its chest) and the ball, projected
+    // through the camera as the renderer does; off the canvas, or behind the camera.
+    const outOfFrame = [...sample.agents.map((a) => [a.id, a.position[0], 1, a.position[1]]),
+      ["ball", ...sample.ball.position]]
+      .filter(([, x, y, z]) => {
+        const p = new THREE.Vector3(x, y, z).project(this.camera);
+        return !(Math.abs(p.x) <= 1 && Math.abs(p.y) <= 1 && p.z < 1);
+      })
+      .map(([id]) => id);
+    Object.assign(this.state, { tick: sample.tick, time_s: sample.time_s, agents: shown, renders: this.renders, camera: this.mode, outOfFrame,
       eye: [c.x, c.y, c.z], looking: this.camera.getWorldDirection(new THREE.Vector3()).toArray(), ball: sample.ball.position });
     const text = this.failed ? `poses unavailable: ${this.failed}` : eyeText ?? "";
     if (text !== this.overlayText) this.overlay.textContent = this.overlayText = text;

@@ -121,6 +121,25 @@ async function main() {
   check(eye.agents.length === 3 && eye.agents.every((a) => a.joints.length === libs.run.joints.length),
     `baseball 3-D: three fielders posed from the run capture; the eye says "${eye.text}"`);
   await page.locator("#view3d").screenshot({ path: join(ARTIFACTS, "view3d-fielders-eye.png") });
+
+  // The default camera frames the play: every agent and the ball on the canvas (each
+  // projected through the camera as the renderer does), at moments across six seconds of
+  // each demo.
+  for (const demo of ["demo-basketball", "demo-baseball", "demo-cricket"]) {
+    await page.goto(`${base}/#/matches/${demo}`);
+    await page.reload();
+    await page.locator("#toggle3d").click();
+    await until(`${demo}: the 3-D view draws`, 20_000, () => page.evaluate(() => window.fieldhouse3d?.renders > 5));
+    const missed = new Set();
+    for (let k = 0; k < 12; k++) {
+      const out = await page.evaluate(() => window.fieldhouse3d.outOfFrame ?? ["(no framing)"]);
+      out.forEach((id) => missed.add(id));
+      await page.waitForTimeout(500);
+    }
+    check(missed.size === 0,
+      `${demo}: the default 3-D camera keeps every agent and the ball in frame (out at some moment: ${[...missed].join(", ") || "none"})`);
+    await page.locator("#view3d").screenshot({ path: join(ARTIFACTS, `view3d-${demo}-default.png`) });
+  }
   check(errors.length === 0, `no page errors: ${errors.join("; ")}`);
 }
 
