@@ -306,6 +306,7 @@ export class View3d {
       })
       .map(([id]) => id);
     Object.assign(this.state, { tick: sample.tick, time_s: sample.time_s, agents: shown, renders: this.renders, camera: this.mode, outOfFrame,
+      holder: sample.ball.holder ?? null,
       eye: [c.x, c.y, c.z], looking: this.camera.getWorldDirection(new THREE.Vector3()).toArray(), ball: sample.ball.position });
     const text = this.failed ? `poses unavailable: ${this.failed}` : eyeText ?? "";
     if (text !== this.overlayText) this.overlay.textContent = this.overlayText = text;

@@ -146,15 +146,16 @@ async function main() {
         const r = s.getBoundingClientRect();
         return { text: s.textContent, box: [r.left, r.top, r.right, r.bottom] };
       });
-      return { shown, agents: window.fieldhouse3d.agents.map((a) => a.id) };
+      return { shown, agents: window.fieldhouse3d.agents.map((a) => a.id), holder: window.fieldhouse3d.holder };
     });
     const boxes = names.shown.map((n) => n.box), texts = names.shown.map((n) => n.text);
     const apart = boxes.every((a, i) => boxes.every((b, j) => i === j || a[2] <= b[0] || b[2] <= a[0] || a[3] <= b[1] || b[3] <= a[1]));
     check(names.agents.every((id) => texts.some((t) => t === id || t.startsWith(`${id} ·`))) && apart,
       `${demo}: every agent named in 3-D, no two names overlapping (${texts.join(", ")})`);
-    if (demo === "demo-basketball") {
-      check(texts.filter((t) => t.endsWith("· ball")).length === 1, `${demo}: the ball handler is named as such (${texts.join(", ")})`);
-    }
+    // The ball handler, when someone has the ball (not while a pass or a shot is up).
+    const marked = texts.filter((t) => t.endsWith("· ball"));
+    check(names.holder ? marked.length === 1 && marked[0] === `${names.holder} · ball` : marked.length === 0,
+      `${demo}: the ball handler (${names.holder ?? "nobody"}) is named as such (${texts.join(", ")})`);
     await page.locator("#view3d").screenshot({ path: join(ARTIFACTS, `view3d-${demo}-default.png`) });
   }
   check(errors.length === 0, `no page errors: ${errors.join("; ")}`);
