@@ -10,7 +10,6 @@
 // the browser test can check the skeletons against the served poses.
 import * as THREE from "./three-0.170.0.module.min.js";
 import { fitLine } from "./draw.js";
-import { Labels } from "./labels.js";
 import { opticalSamples } from "./eye.js";
 import { bones, library, posePlayer, poseRunner } from "./pose.js";
 
@@ -57,13 +56,7 @@ export class View3d {
       b.addEventListener("click", () => this.setCamera(mode));
       this.toolbar.append(b);
     }
-    // Names over the picture, laid out as the 2-D view lays them out (labels.js: never
-    // over each other, a player or the ball) on a canvas that is never shown, and set as
-    // text: a 2-D canvas laid over the WebGL one hid it from software compositing.
-    this.nameLayer = document.createElement("div");
-    this.nameLayer.className = "names3d";
-    this.layout = document.createElement("canvas").getContext("2d");
-    container.replaceChildren(this.canvas, this.nameLayer, this.overlay, this.toolbar);
+    container.replaceChildren(this.canvas, this.overlay, this.toolbar);
 
     this.scene = new THREE.Scene();
     this.scene.background = new THREE.Color(this.basketball ? 0x20262b : 0x9cc7e8);
@@ -306,41 +299,9 @@ export class View3d {
       })
       .map(([id]) => id);
     Object.assign(this.state, { tick: sample.tick, time_s: sample.time_s, agents: shown, renders: this.renders, camera: this.mode, outOfFrame,
-      holder: sample.ball.holder ?? null,
       eye: [c.x, c.y, c.z], looking: this.camera.getWorldDirection(new THREE.Vector3()).toArray(), ball: sample.ball.position });
     const text = this.failed ? `poses unavailable: ${this.failed}` : eyeText ?? "";
     if (text !== this.overlayText) this.overlay.textContent = this.overlayText = text;
-    this.nameAgents(sample, width, height);
-  }
-
-  /** Each agent's name by its head, the ball handler's saying so. */
-  nameAgents(sample, width, height) {
-    const onCanvas = ([x, y, z]) => {
-      const p = new THREE.Vector3(x, y, z).project(this.camera);
-      return Math.abs(p.x) <= 1 && Math.abs(p.y) <= 1 && p.z < 1 ? [(p.x + 1) / 2 * width, (1 - p.y) / 2 * height] : null;
-    };
-    const labels = new Labels(this.layout, width, height);
-    const ball = onCanvas(sample.ball.position);
-    if (ball) labels.avoid(ball[0], ball[1], 4);
-    const heads = sample.agents.map((a) => [a, onCanvas([a.position[0], 1.9, a.position[1]])]).filter(([, at]) => at);
-    for (const [, at] of heads) labels.avoid(at[0], at[1], 4);
-    for (const [a, at] of heads) {
-      const holds = sample.ball.holder === a.id;
-      labels.add(holds ? `${a.id} · ball` : a.id, at[0], at[1],
-        { font: `${holds ? "bold " : ""}12px system-ui, sans-serif`, halo: null, rank: holds ? 0 : 1 });
-    }
-    const placed = labels.draw(this.layout.canvas);
-    while (this.nameLayer.childElementCount < placed.length) this.nameLayer.append(document.createElement("span"));
-    [...this.nameLayer.children].forEach((span, k) => {
-      const box = placed[k];
-      span.hidden = !box;
-      if (!box) return;
-      if (span.textContent !== box.text) span.textContent = box.text;
-      span.classList.toggle("ball", box.text.endsWith("· ball"));
-      span.style.left = `${box.x0}px`;
-      span.style.top = `${box.y0}px`;
-    });
-    this.nameLayer.placedLabels = placed;
   }
 
   /** The flight's trail and, from the fielder's eye, the image path and tan ψ. */
