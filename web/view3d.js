@@ -84,6 +84,18 @@ export class View3d {
 
     this.listen();
     this.state = { sport: hello.match.sport, tick: null, camera: this.mode, agents: [], renders: 0 };
+    // Who the camera leaves out of the last picture: each agent (at its chest) and the
+    // ball, projected as the renderer does. Worked out when asked, not every frame.
+    Object.defineProperty(this.state, "outOfFrame", {
+      enumerable: true,
+      get: () => {
+        const s = this.shownSample;
+        if (!s) return [];
+        return [...s.agents.map((a) => [a.id, [a.position[0], 1, a.position[1]]]), ["ball", s.ball.position]]
+          .filter(([, point]) => !inView(this.camera, point, 1))
+          .map(([id]) => id);
+      },
+    });
     window.fieldhouse3d = this.state;
     this.setCamera("orbit");
   }
@@ -122,17 +134,9 @@ export class View3d {
     const orbit = { target, azimuth, elevation, radius: 3 };
     const cam = this.camera;
     for (; orbit.radius < 400; orbit.radius *= 1.05) {
-      cam.position.set(
-        target.x + orbit.radius * Math.cos(elevation) * Math.cos(azimuth),
-        target.y + orbit.radius * Math.sin(elevation),
-        target.z + orbit.radius * Math.cos(elevation) * Math.sin(azimuth));
-      cam.lookAt(target);
+      placeOrbit(cam, orbit);
       cam.updateMatrixWorld();
-      const inside = must.every(([x, y, z]) => {
-        const p = new THREE.Vector3(x, y, z).project(cam);
-        return Math.abs(p.x) <= 0.9 && Math.abs(p.y) <= 0.9 && p.z < 1;
-      });
-      if (inside) break;
+      if (must.every((point) => inView(cam, point, 0.9))) break;
     }
     return orbit;
   }
@@ -289,16 +293,8 @@ export class View3d {
     this.renderer.render(this.scene, this.camera);
     this.renders += 1;
     const c = this.camera.position;
-    // Who the camera leaves out: each agent (at its chest) and the ball, projected
-    // through the camera as the renderer does; off the canvas, or behind the camera.
-    const outOfFrame = [...sample.agents.map((a) => [a.id, a.position[0], 1, a.position[1]]),
-      ["ball", ...sample.ball.position]]
-      .filter(([, x, y, z]) => {
-        const p = new THREE.Vector3(x, y, z).project(this.camera);
-        return !(Math.abs(p.x) <= 1 && Math.abs(p.y) <= 1 && p.z < 1);
-      })
-      .map(([id]) => id);
-    Object.assign(this.state, { tick: sample.tick, time_s: sample.time_s, agents: shown, renders: this.renders, camera: this.mode, outOfFrame,
+    this.shownSample = sample;
+    Object.assign(this.state, { tick: sample.tick, time_s: sample.time_s, agents: shown, renders: this.renders, camera: this.mode,
       eye: [c.x, c.y, c.z], looking: this.camera.getWorldDirection(new THREE.Vector3()).toArray(), ball: sample.ball.position });
     const text = this.failed ? `poses unavailable: ${this.failed}` : eyeText ?? "";
     if (text !== this.overlayText) this.overlay.textContent = this.overlayText = text;
@@ -347,12 +343,7 @@ export class View3d {
       cam.lookAt(x, 1, z);
     } else {
       cam.fov = 50;
-      const o = this.orbit;
-      cam.position.set(
-        o.target.x + o.radius * Math.cos(o.elevation) * Math.cos(o.azimuth),
-        o.target.y + o.radius * Math.sin(o.elevation),
-        o.target.z + o.radius * Math.cos(o.elevation) * Math.sin(o.azimuth));
-      cam.lookAt(o.target);
+      placeOrbit(cam, this.orbit);
     }
     cam.updateProjectionMatrix();
   }
@@ -389,4 +380,19 @@ function line(points, colour) {
 function setLine(l, points) {
   l.geometry.setAttribute("position", new THREE.Float32BufferAttribute(points.flat(), 3));
   l.geometry.computeBoundingSphere();
+}
+
+/** Puts `cam` on its orbit: `radius` from `target`, at `azimuth` and `elevation`. */
+function placeOrbit(cam, { target, azimuth, elevation, radius }) {
+  cam.position.set(
+    target.x + radius * Math.cos(elevation) * Math.cos(azimuth),
+    target.y + radius * Math.sin(elevation),
+    target.z + radius * Math.cos(elevation) * Math.sin(azimuth));
+  cam.lookAt(target);
+}
+
+/** Whether `point` projects in front of `cam` and within `margin` of the canvas (1: all of it). */
+function inView(cam, [x, y, z], margin) {
+  const p = new THREE.Vector3(x, y, z).project(cam);
+  return Math.abs(p.x) <= margin && Math.abs(p.y) <= margin && p.z < 1;
 }
