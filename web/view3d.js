@@ -123,7 +123,10 @@ export class View3d {
       if (field.kind === "baseball" && Math.hypot(cx, cz) > 1) {
         target = new THREE.Vector3(0.6 * cx, 0, 0.6 * cz);
         [azimuth, elevation] = [Math.atan2(cz, cx), 0.45];
-        must = [[0, 0, 0], [cx, 30, cz], ...homes.map((h) => [h[0], 1, h[1]])];
+        // Fielders run from their places to where balls come down: keep 25 m around
+        // each place in view, not the place alone.
+        const around = (h) => [[25, 0], [-25, 0], [0, 25], [0, -25]].map(([dx, dz]) => [h[0] + dx, 1, h[1] + dz]);
+        must = [[0, 0, 0], [cx, 30, cz], ...homes.flatMap(around)];
       } else {
         const r = field.boundary_m ?? field.fence_m ?? 100;
         target = new THREE.Vector3(0, 0, 0);
