@@ -2,7 +2,8 @@
 // players are skeletons posed from the motion-capture frame each plays, blended across
 // cuts as the server blends (pose.js); fielders run the run capture's stride loops at
 // their speed, phase-matched by distance; the ball flies with its shadow. Cameras:
-// orbit (drag, wheel), follow (behind the selected agent) and, for fly balls, the
+// orbit (drag, wheel; until wheeled it pulls back to keep every runner and the ball in the
+// picture), follow (behind the selected agent) and, for fly balls, the
 // selected fielder's eye, looking at the ball, with the optics it uses drawn in the
 // view (the image path on the plane facing home, tan ψ and its rate) from eye.js.
 //
@@ -21,6 +22,8 @@ const FLY_BALL_DRAWN_M = 0.25;
 const BASKETBALL_M = 0.12;
 /** How far in front of the fielder's eye the image plane is drawn, m. */
 const IMAGE_PLANE_M = 4;
+/** The farthest the orbit camera goes from its target, by wheel or to keep the play in view. */
+const MAX_RADIUS_M = 400;
 
 export class View3d {
   /** A view of the match `hello` describes, drawn into `container`. */
@@ -134,13 +137,8 @@ export class View3d {
         must = [[r, 0, 0], [-r, 0, 0], [0, 0, r], [0, 0, -r], ...homes.map((h) => [h[0], 1, h[1]])];
       }
     }
-    const orbit = { target, azimuth, elevation, radius: 3 };
-    const cam = this.camera;
-    for (; orbit.radius < 400; orbit.radius *= 1.05) {
-      placeOrbit(cam, orbit);
-      cam.updateMatrixWorld();
-      if (must.every((point) => inView(cam, point, 0.9))) break;
-    }
+    const orbit = { target, azimuth, elevation, radius: 3, followsPlay: true };
+    orbit.radius = fitRadius(this.camera, orbit, must);
     return orbit;
   }
 
@@ -160,7 +158,10 @@ export class View3d {
     this.canvas.addEventListener("pointerup", () => { drag = null; });
     this.canvas.addEventListener("wheel", (e) => {
       e.preventDefault();
-      this.orbit.radius = Math.min(400, Math.max(3, this.orbit.radius * Math.exp(e.deltaY * 0.001)));
+      this.orbit.radius = Math.min(MAX_RADIUS_M, Math.max(3, (this.pulledBack ?? this.orbit.radius) * Math.exp(e.deltaY * 0.001)));
+      // A chosen zoom is kept as chosen: the camera no longer pulls back for the play.
+      this.orbit.followsPlay = false;
+      this.pulledBack = null;
     }, { passive: false });
   }
 
@@ -346,7 +347,18 @@ export class View3d {
       cam.lookAt(x, 1, z);
     } else {
       cam.fov = 50;
+      cam.updateProjectionMatrix();
       placeOrbit(cam, this.orbit);
+      if (this.orbit.followsPlay) {
+        // Like a broadcast camera, pull back at once when a runner or the ball would
+        // leave the picture (a fielder chasing a ball past the boundary), and ease back
+        // in to the framing afterwards.
+        const play = [...sample.agents.map((a) => [a.position[0], 1, a.position[1]]), sample.ball.position];
+        const needed = fitRadius(cam, this.orbit, play);
+        const eased = this.pulledBack == null ? needed : this.pulledBack + 0.03 * (needed - this.pulledBack);
+        this.pulledBack = Math.max(needed, eased);
+        placeOrbit(cam, { ...this.orbit, radius: this.pulledBack });
+      }
     }
     cam.updateProjectionMatrix();
   }
@@ -392,6 +404,19 @@ function placeOrbit(cam, { target, azimuth, elevation, radius }) {
     target.y + radius * Math.sin(elevation),
     target.z + radius * Math.cos(elevation) * Math.sin(azimuth));
   cam.lookAt(target);
+}
+
+/**
+ * The least radius, from `orbit.radius` up in steps of 5 %, at which every point in
+ * `points` projects inside 90 % of the canvas; leaves `cam` placed there.
+ */
+function fitRadius(cam, orbit, points) {
+  const o = { ...orbit };
+  for (; ; o.radius *= 1.05) {
+    placeOrbit(cam, o);
+    cam.updateMatrixWorld();
+    if (o.radius >= MAX_RADIUS_M || points.every((point) => inView(cam, point, 0.9))) return Math.min(o.radius, MAX_RADIUS_M);
+  }
 }
 
 /** Whether `point` projects in front of `cam` and within `margin` of the canvas (1: all of it). */
