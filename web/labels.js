@@ -6,8 +6,10 @@
 // telling the layout what must stay visible (`avoid`), queues its labels most important
 // first (`add`), and `draw` places each in the first free spot of a ring of candidates
 // around its anchor, widening the ring until one fits, with a leader line when it had
-// to move away. A label with no free spot within reach is left out rather than drawn
-// over another: the agent picker still names everyone.
+// to move away. A label with no free spot within reach (crowded, or at the canvas's
+// edge) goes to the nearest free spot anywhere on the canvas, still with its leader, so
+// every name is shown; only a canvas with no room left at all leaves one out rather than
+// draw it over another.
 //
 // What was placed stays on the canvas element (`placedLabels`, `labelObstacles`, in
 // CSS pixels) so a test can check the picture without reading pixels.
@@ -18,6 +20,8 @@ const RINGS = [10, 20, 32, 46, 62, 80];
 const DIRECTIONS = [
   [1, -1], [-1, -1], [1, 1], [-1, 1], [0, -1], [0, 1], [1, 0], [-1, 0],
 ];
+/** The grid a label that fits nowhere near its anchor is sought on, px. */
+const SCAN_STEP = 4;
 /** Room kept around a label, px. */
 const PAD = 2;
 
@@ -54,15 +58,16 @@ export class Labels {
       const h = parseFloat(label.font.match(/(\d+(?:\.\d+)?)px/)?.[1] ?? "12") + 2;
       const box = this.spot(label.x, label.y, w, h);
       if (!box) continue;
-      this.placed.push({ ...box, text: label.text });
       const moved = Math.hypot((box.x0 + box.x1) / 2 - label.x, (box.y0 + box.y1) / 2 - label.y) > RINGS[1] + w / 2;
-      if (moved) {
-        // A leader from the anchor to the label's nearest edge says whose it is.
+      // A leader from the anchor to the label's nearest edge says whose it is.
+      const leader = moved ? [label.x, label.y, clamp(label.x, box.x0, box.x1), clamp(label.y, box.y0, box.y1)] : null;
+      this.placed.push({ ...box, text: label.text, leader });
+      if (leader) {
         g.strokeStyle = "rgba(255,255,255,.7)";
         g.lineWidth = 1;
         g.beginPath();
-        g.moveTo(label.x, label.y);
-        g.lineTo(clamp(label.x, box.x0, box.x1), clamp(label.y, box.y0, box.y1));
+        g.moveTo(leader[0], leader[1]);
+        g.lineTo(leader[2], leader[3]);
         g.stroke();
       }
       g.textBaseline = "middle";
@@ -81,7 +86,11 @@ export class Labels {
     return this.placed;
   }
 
-  /** The first free box of size w × h around (x, y), padding included; null if none. */
+  /**
+   * The first free box of size w × h around (x, y), padding included: on the rings,
+   * else the nearest free one anywhere on the canvas, else the nearest clear of the
+   * other labels (over a marker); null only when no box is clear of the labels.
+   */
   spot(x, y, w, h) {
     const bw = w + 2 * PAD, bh = h;
     for (const r of RINGS) {
@@ -90,12 +99,32 @@ export class Labels {
         const x0 = dx > 0 ? x + r : dx < 0 ? x - r - bw : x - bw / 2;
         const y0 = dy > 0 ? y + r : dy < 0 ? y - r - bh : y - bh / 2;
         const box = { x0, y0, x1: x0 + bw, y1: y0 + bh };
-        if (box.x0 < 0 || box.y0 < 0 || box.x1 > this.width || box.y1 > this.height) continue;
-        if (this.placed.some((b) => overlaps(b, box)) || this.obstacles.some((b) => overlaps(b, box))) continue;
-        return box;
+        if (this.inside(box) && this.free(box, this.obstacles)) return box;
       }
     }
-    return null;
+    return this.nearest(x, y, bw, bh, this.obstacles) ?? this.nearest(x, y, bw, bh, []);
+  }
+
+  /** The free box of size bw × bh on a grid over the canvas whose nearest point is closest to (x, y). */
+  nearest(x, y, bw, bh, obstacles) {
+    let best = null, bestDistance = Infinity;
+    for (let y0 = 0; y0 + bh <= this.height; y0 += SCAN_STEP) {
+      for (let x0 = 0; x0 + bw <= this.width; x0 += SCAN_STEP) {
+        const box = { x0, y0, x1: x0 + bw, y1: y0 + bh };
+        const distance = Math.hypot(x - clamp(x, box.x0, box.x1), y - clamp(y, box.y0, box.y1));
+        if (distance < bestDistance && this.free(box, obstacles)) [best, bestDistance] = [box, distance];
+      }
+    }
+    return best;
+  }
+
+  inside(box) {
+    return box.x0 >= 0 && box.y0 >= 0 && box.x1 <= this.width && box.y1 <= this.height;
+  }
+
+  /** Whether `box` is clear of every label placed and every one of `obstacles`. */
+  free(box, obstacles) {
+    return !this.placed.some((b) => overlaps(b, box)) && !obstacles.some((b) => overlaps(b, box));
   }
 }
 

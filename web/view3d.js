@@ -11,6 +11,7 @@
 // the browser test can check the skeletons against the served poses.
 import * as THREE from "./three-0.170.0.module.min.js";
 import { fitLine } from "./draw.js";
+import { Labels } from "./labels.js";
 import { opticalSamples } from "./eye.js";
 import { bones, library, posePlayer, poseRunner } from "./pose.js";
 
@@ -24,6 +25,7 @@ const BASKETBALL_M = 0.12;
 const IMAGE_PLANE_M = 4;
 /** The farthest the orbit camera goes from its target, by wheel or to keep the play in view. */
 const MAX_RADIUS_M = 400;
+const SVG = "http://www.w3.org/2000/svg";
 
 export class View3d {
   /** A view of the match `hello` describes, drawn into `container`. */
@@ -59,7 +61,16 @@ export class View3d {
       b.addEventListener("click", () => this.setCamera(mode));
       this.toolbar.append(b);
     }
-    container.replaceChildren(this.canvas, this.overlay, this.toolbar);
+    // Names over the picture, laid out as the 2-D view lays them out (labels.js: never
+    // over each other, a player or the ball) on a canvas that is never shown, and set as
+    // text: a 2-D canvas laid over the WebGL one hid it from software compositing.
+    this.nameLayer = document.createElement("div");
+    this.nameLayer.className = "names3d";
+    this.leaders = document.createElementNS(SVG, "svg");
+    this.nameLayer.append(this.leaders);
+    this.names = [];
+    this.layout = document.createElement("canvas").getContext("2d");
+    container.replaceChildren(this.canvas, this.nameLayer, this.overlay, this.toolbar);
 
     this.scene = new THREE.Scene();
     this.scene.background = new THREE.Color(this.basketball ? 0x20262b : 0x9cc7e8);
@@ -95,7 +106,7 @@ export class View3d {
         const s = this.shownSample;
         if (!s) return [];
         return [...s.agents.map((a) => [a.id, [a.position[0], 1, a.position[1]]]), ["ball", s.ball.position]]
-          .filter(([, point]) => !inView(this.camera, point, 1))
+          .filter(([, point]) => !onCanvas(this.camera, point))
           .map(([id]) => id);
       },
     });
@@ -299,9 +310,49 @@ export class View3d {
     const c = this.camera.position;
     this.shownSample = sample;
     Object.assign(this.state, { tick: sample.tick, time_s: sample.time_s, agents: shown, renders: this.renders, camera: this.mode,
+      holder: sample.ball.holder ?? null,
       eye: [c.x, c.y, c.z], looking: this.camera.getWorldDirection(new THREE.Vector3()).toArray(), ball: sample.ball.position });
     const text = this.failed ? `poses unavailable: ${this.failed}` : eyeText ?? "";
     if (text !== this.overlayText) this.overlay.textContent = this.overlayText = text;
+    this.nameAgents(sample, width, height);
+  }
+
+  /**
+   * Each agent's name by its head, the ball handler's saying so; a name the layout had
+   * to move away from a crowd gets a line back to its head.
+   */
+  nameAgents(sample, width, height) {
+    const pixel = (point) => {
+      const p = onCanvas(this.camera, point);
+      return p && [(p.x + 1) / 2 * width, (1 - p.y) / 2 * height];
+    };
+    const labels = new Labels(this.layout, width, height);
+    const ball = pixel(sample.ball.position);
+    if (ball) labels.avoid(ball[0], ball[1], 4);
+    const heads = sample.agents.map((a) => [a, pixel([a.position[0], 1.9, a.position[1]])]).filter(([, at]) => at);
+    for (const [, at] of heads) labels.avoid(at[0], at[1], 4);
+    for (const [a, at] of heads) {
+      const holds = sample.ball.holder === a.id;
+      labels.add(holds ? `${a.id} · ball` : a.id, at[0], at[1],
+        { font: `${holds ? "bold " : ""}12px system-ui, sans-serif`, halo: null, rank: holds ? 0 : 1 });
+    }
+    const placed = labels.draw(this.layout.canvas);
+    while (this.names.length < placed.length) this.names.push(this.nameLayer.appendChild(document.createElement("span")));
+    this.names.forEach((span, k) => {
+      const box = placed[k];
+      span.hidden = !box;
+      if (!box) return;
+      if (span.textContent !== box.text) span.textContent = box.text;
+      span.classList.toggle("ball", box.text.endsWith("· ball"));
+      span.style.left = `${box.x0}px`;
+      span.style.top = `${box.y0}px`;
+    });
+    this.leaders.replaceChildren(...placed.filter((p) => p.leader).map(({ leader: [x1, y1, x2, y2] }) => {
+      const l = document.createElementNS(SVG, "line");
+      Object.entries({ x1, y1, x2, y2 }).forEach(([k, v]) => l.setAttribute(k, v.toFixed(1)));
+      return l;
+    }));
+    this.nameLayer.placedLabels = placed;
   }
 
   /** The flight's trail and, from the fielder's eye, the image path and tan ψ. */
@@ -415,12 +466,15 @@ function fitRadius(cam, orbit, points) {
   for (; ; o.radius *= 1.05) {
     placeOrbit(cam, o);
     cam.updateMatrixWorld();
-    if (o.radius >= MAX_RADIUS_M || points.every((point) => inView(cam, point, 0.9))) return Math.min(o.radius, MAX_RADIUS_M);
+    if (o.radius >= MAX_RADIUS_M || points.every((point) => onCanvas(cam, point, 0.9))) return Math.min(o.radius, MAX_RADIUS_M);
   }
 }
 
-/** Whether `point` projects in front of `cam` and within `margin` of the canvas (1: all of it). */
-function inView(cam, [x, y, z], margin) {
+/**
+ * Where `point` projects through `cam` (normalised: −1..1 across and up the canvas) if
+ * in front of it and within `margin` of the canvas (1: all of it); else null.
+ */
+function onCanvas(cam, [x, y, z], margin = 1) {
   const p = new THREE.Vector3(x, y, z).project(cam);
-  return Math.abs(p.x) <= margin && Math.abs(p.y) <= margin && p.z < 1;
+  return Math.abs(p.x) <= margin && Math.abs(p.y) <= margin && p.z < 1 ? p : null;
 }

@@ -1,13 +1,14 @@
 // The page's pure modules against analytic oracles, in Node (no browser needed):
 // the fielder's-eye optics (eye.js), line fits (draw.js) and frame interpolation
 // (timeline.js), the decoding of a decision's safe squares (court.js) and how long the
-// field keeps a catch or a miss marked (fly.js). Run by
+// field keeps a catch or a miss marked (fly.js), and the label layout (labels.js). Run by
 // tests/browser.rs with `node --test`.
 import assert from "node:assert/strict";
 import { test } from "node:test";
 import { explain, safeSquares } from "../../web/court.js";
 import { fitLine } from "../../web/draw.js";
 import { opticalSamples, straightness } from "../../web/eye.js";
+import { Labels } from "../../web/labels.js";
 import { Timeline } from "../../web/timeline.js";
 
 const EYE = 1.7;
@@ -181,4 +182,38 @@ test("a runner's pose is phase-matched to the distance run: one loop later, the 
   // 0.75 m is 1.5 frames in: halfway from frame 1 (foot 0.5 m ahead) to frame 2 (0),
   // turned to face +z.
   assert.ok(Math.abs(a[1][2] - 5.25) < 1e-12 && Math.abs(a[1][0] - 10) < 1e-12, JSON.stringify(a));
+});
+
+/** A 2-D context that measures every character 7 px wide and draws nothing. */
+const measuring = new Proxy({ measureText: (text) => ({ width: 7 * text.length }) }, {
+  get: (g, name) => g[name] ?? (() => {}),
+  set: () => true,
+});
+
+test("every label is placed inside the canvas and clear of the others, even crowded into a corner", () => {
+  // Twelve names on one point in the corner of a small canvas: the rings around it hold
+  // few, so most must go farther, and each that does gets a leader back to its anchor.
+  const [width, height] = [200, 150];
+  const labels = new Labels(measuring, width, height);
+  labels.avoid(3, 3, 4);
+  for (let k = 0; k < 12; k++) labels.add(`agent-${k}`, 3, 3);
+  const placed = labels.draw({});
+  assert.equal(placed.length, 12);
+  for (const [i, a] of placed.entries()) {
+    assert.ok(a.x0 >= 0 && a.y0 >= 0 && a.x1 <= width && a.y1 <= height, `${a.text} inside: ${JSON.stringify(a)}`);
+    assert.ok(!(a.x0 < 7 && a.y0 < 7), `${a.text} clear of the marker`);
+    for (const b of placed.slice(i + 1)) {
+      assert.ok(a.x1 <= b.x0 || b.x1 <= a.x0 || a.y1 <= b.y0 || b.y1 <= a.y0, `${a.text} apart from ${b.text}`);
+    }
+  }
+  const far = placed.filter((p) => Math.hypot((p.x0 + p.x1) / 2 - 3, (p.y0 + p.y1) / 2 - 3) > 80);
+  assert.ok(far.length > 0 && far.every((p) => p.leader?.[0] === 3 && p.leader[1] === 3), "the far ones lead back to the anchor");
+});
+
+test("a label is left out only when the canvas has no room for it beside the others", () => {
+  // A 100 × 15 px strip holds one 12-character label of 86 px (+4 padding), not two.
+  const labels = new Labels(measuring, 100, 15);
+  labels.add("abcdefghijkl", 50, 7);
+  labels.add("mnopqrstuvwx", 50, 7);
+  assert.deepEqual(labels.draw({}).map((p) => p.text), ["abcdefghijkl"]);
 });

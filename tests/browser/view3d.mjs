@@ -130,14 +130,31 @@ async function main() {
     await page.reload();
     await page.locator("#toggle3d").click();
     await until(`${demo}: the 3-D view draws`, 20_000, () => page.evaluate(() => window.fieldhouse3d?.renders > 5));
-    const missed = new Set();
+    // At each look every agent is named, no name over another, and the ball handler's
+    // name (when someone has the ball, not while a pass or a shot is up) says so.
+    const missed = new Set(), unnamed = [];
     for (let k = 0; k < 12; k++) {
-      const out = await page.evaluate(() => window.fieldhouse3d.outOfFrame ?? ["(no framing)"]);
-      out.forEach((id) => missed.add(id));
+      const look = await page.evaluate(() => {
+        const s = window.fieldhouse3d;
+        const shown = [...document.querySelectorAll("#view3d .names3d span")].filter((n) => !n.hidden).map((n) => {
+          const r = n.getBoundingClientRect();
+          return { text: n.textContent, box: [r.left, r.top, r.right, r.bottom] };
+        });
+        return { out: s.outOfFrame ?? ["(no framing)"], shown, agents: s.agents.map((a) => a.id), holder: s.holder };
+      });
+      look.out.forEach((id) => missed.add(id));
+      const boxes = look.shown.map((n) => n.box), texts = look.shown.map((n) => n.text);
+      const apart = boxes.every((a, i) => boxes.every((b, j) => i === j || a[2] <= b[0] || b[2] <= a[0] || a[3] <= b[1] || b[3] <= a[1]));
+      const everyone = look.agents.every((id) => texts.some((t) => t === id || t.startsWith(`${id} ·`)));
+      const marked = texts.filter((t) => t.endsWith("· ball"));
+      const handler = look.holder ? marked.length === 1 && marked[0] === `${look.holder} · ball` : marked.length === 0;
+      if (!(apart && everyone && handler)) unnamed.push(`[${texts.join(", ")}] holder ${look.holder ?? "nobody"}`);
       await page.waitForTimeout(500);
     }
     check(missed.size === 0,
       `${demo}: the default 3-D camera keeps every agent and the ball in frame (out at some moment: ${[...missed].join(", ") || "none"})`);
+    check(unnamed.length === 0,
+      `${demo}: every agent named in 3-D, names apart, the ball handler's saying so, at each look (not at: ${unnamed.join("; ") || "none"})`);
     await page.locator("#view3d").screenshot({ path: join(ARTIFACTS, `view3d-${demo}-default.png`) });
   }
   check(errors.length === 0, `no page errors: ${errors.join("; ")}`);
