@@ -20,6 +20,9 @@ export class CourtView {
     this.teams = new Map(this.agents.map((a) => [a.id, a.team]));
     /** Cost maps by behaviour: fetched once each; a map is the same at every pose. */
     this.costmaps = new Map();
+    /** What of the ground the picture shows: the half court and a margin for its lines. */
+    const margin = 0.25, half = this.court.width_m / 2;
+    this.frame = { bounds: [-margin, this.court.length_m + margin, -half - margin, half + margin], rotation: 0 };
     this.reset();
   }
 
@@ -76,7 +79,7 @@ export class CourtView {
   draw(canvas, sample, selected) {
     const { g, width, height } = fitCanvas(canvas);
     const c = this.court;
-    const map = (this.lastMap = new FieldMap(width, height, [-0.6, c.length_m + 0.6, -c.width_m / 2 - 0.4, c.width_m / 2 + 0.4]));
+    const map = (this.lastMap = new FieldMap(width, height, this.frame.bounds, this.frame.rotation));
     g.fillStyle = "#2b2b2b";
     g.fillRect(0, 0, width, height);
     const [x0, z0] = map.px(0, -c.width_m / 2);
@@ -157,8 +160,10 @@ export class CourtView {
     g.translate(ax, ay);
     g.rotate(map.angle(agent.heading));
     g.scale(map.scale, map.scale);
-    // Square cells, not a blur between them.
-    g.imageSmoothingEnabled = false;
+    // Smoothed between cell centres: the map samples a continuous time-to-reach, and
+    // drawn as hard cells turned to the agent's heading its edges were staircases.
+    g.imageSmoothingEnabled = true;
+    g.imageSmoothingQuality = "high";
     g.drawImage(image, m.origin[0], m.origin[1], image.width * m.cell_m, image.height * m.cell_m);
     g.restore();
   }

@@ -20,6 +20,12 @@ export class FlyView {
     this.eye = this.field.eye_height_m ?? DEFAULT_EYE_M;
     this.agents = hello.match.agents;
     this.colours = new Map(this.agents.map((a, i) => [a.id, FIELDER_COLOURS[i % FIELDER_COLOURS.length]]));
+    // What of the ground the picture shows: the cricket ring, or baseball's fair
+    // territory turned so centre field (azimuth 45°) points up.
+    const r = this.field.kind === "cricket" ? this.field.boundary_m + 4 : this.field.fence_m;
+    this.frame = this.field.kind === "cricket"
+      ? { bounds: [-r, r, -r, r], rotation: 0 }
+      : { bounds: [-0.75 * r, 0.75 * r, -1.04 * r, 0.08 * r], rotation: -0.75 * Math.PI };
     this.reset();
   }
 
@@ -74,19 +80,10 @@ export class FlyView {
     }
   }
 
-  map(width, height) {
-    if (this.field.kind === "cricket") {
-      const r = this.field.boundary_m + 4;
-      return new FieldMap(width, height, [-r, r, -r, r]);
-    }
-    // Baseball: turn the field so centre field (azimuth 45°) points up.
-    const r = this.field.fence_m;
-    return new FieldMap(width, height, [-0.75 * r, 0.75 * r, -1.04 * r, 0.08 * r], -0.75 * Math.PI);
-  }
 
   draw(canvas, sample, selected) {
     const { g, width, height } = fitCanvas(canvas);
-    const map = (this.lastMap = this.map(width, height));
+    const map = (this.lastMap = new FieldMap(width, height, this.frame.bounds, this.frame.rotation));
     g.fillStyle = "#3f7d3a";
     g.fillRect(0, 0, width, height);
     if (this.field.kind === "cricket") this.drawOval(g, map);
@@ -251,3 +248,4 @@ export class FlyView {
     }
   }
 }
+

@@ -65,6 +65,10 @@ export function showView(kind, id) {
     ended = null;
     const basketball = msg.match.field.kind === "basketball";
     sport = basketball ? new CourtView(msg) : new FlyView(msg);
+    // The field's canvas takes the shape of the ground it shows (no dark bands beside a
+    // square court), no taller than most of the window.
+    const [x0, x1, z0, z1] = sport.frame.bounds, aspect = (x1 - x0) / (z1 - z0);
+    Object.assign($("field").style, { aspectRatio: `${aspect}`, maxWidth: `calc(78vh * ${aspect})` });
     if (three) { three.dispose(); three = new View3d($("view3d"), msg); }
     $("title").textContent = `${msg.match.name || msg.match.id} · ${msg.match.sport}${replay ? " (replay)" : ""}`;
     $("source").textContent = `motion: ${msg.match.motion_source}`;

@@ -209,19 +209,25 @@ async function main() {
   await page.waitForFunction(() => document.getElementById("costmap-text").textContent.includes("moves with"), null, { timeout: 10_000 });
   // The map arrives by its own request: poll until it is drawn.
   const overlay = await until(async () => {
-    const share = await page.evaluate(() => {
+    const shares = await page.evaluate(() => {
       // The floor is wood (red over green over blue) and the surround dark grey: the
       // overlay's greens and blues (squares two seconds away and more) appear nowhere
       // else but on the offense's small markers.
       const c = document.getElementById("field");
       const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
-      let cool = 0;
-      for (let i = 0; i < d.length; i += 4) if (Math.max(d[i + 1], d[i + 2]) > d[i] + 30) cool++;
-      return cool / (c.width * c.height);
+      let cool = 0, surround = 0;
+      for (let i = 0; i < d.length; i += 4) {
+        if (Math.max(d[i + 1], d[i + 2]) > d[i] + 30) cool++;
+        if (Math.max(d[i], d[i + 1], d[i + 2]) < 60) surround++;
+      }
+      return { cool: cool / (c.width * c.height), surround: surround / (c.width * c.height) };
     });
-    return share > 0.1 && share;
+    return shares.cool > 0.1 && shares;
   }, 10_000, "court: the cost-map overlay covers the court (green or blue pixels)");
-  check(overlay > 0.1, `court: the cost-map overlay covers the court (${(100 * overlay).toFixed(1)} % of pixels green or blue)`);
+  check(overlay.cool > 0.1, `court: the cost-map overlay covers the court (${(100 * overlay.cool).toFixed(1)} % of pixels green or blue)`);
+  // The canvas has the court's shape: the dark surround is the lines' margin, not bands
+  // beside a square court on a wide canvas.
+  check(overlay.surround < 0.12, `court: the dark surround is a thin margin (${(100 * overlay.surround).toFixed(1)} % of the canvas)`);
   // The holder changes with passes: read the text in the same look that finds it.
   // A decision on a square names the model of the defender it counted on.
   const decision = await (await page.waitForFunction(() => {
