@@ -40,9 +40,30 @@ pub(super) struct Setting {
     /// (0: its last three looks).
     #[arg(long, value_parser = non_negative)]
     pub smoothing: Option<f64>,
+    /// Weber fraction of the perceived angular rates (0.1: each rate judgement off by
+    /// 10 % of the image's angular speed, one standard deviation), instead of the
+    /// observer's (0 = exact).
+    #[arg(long, value_parser = non_negative)]
+    pub rate_weber: Option<f64>,
+    /// Weber fraction of the distance cue (0.15: off by about 15 %), instead of the
+    /// observer's (0 = exact).
+    #[arg(long, value_parser = non_negative)]
+    pub distance_weber: Option<f64>,
+    /// Range of the distance cue in metres, instead of the observer's: beyond it the
+    /// fielder has none (`inf`: everywhere).
+    #[arg(long, value_parser = positive_or_infinite)]
+    pub distance_range: Option<f64>,
     /// Horizontal catching reach in metres, instead of the observer's.
     #[arg(long, value_parser = positive)]
     pub reach: Option<f64>,
+    /// Seconds before the ball comes down that the fielder finishes the catch by its
+    /// judgement of where, instead of the observer's (0 = its law to the end).
+    #[arg(long, value_parser = non_negative)]
+    pub terminal: Option<f64>,
+    /// Extra reach in metres of a fielder finishing its catch (a lunge), instead of the
+    /// observer's.
+    #[arg(long, value_parser = non_negative)]
+    pub lunge: Option<f64>,
     /// When `lot` takes its reference line of sight: `apex` (the ball's perceived apex)
     /// or seconds after the launch (e.g. 0.5; once the ball is clearly above the eye).
     #[arg(long, default_value = "apex", value_parser = clap::value_parser!(LotReference))]
@@ -54,14 +75,18 @@ impl Setting {
         1.0 / f64::from(self.tick_hz)
     }
 
-    /// `observer` with whatever `--delay`, `--noise-deg`, `--smoothing` and `--reach`
-    /// changed.
+    /// `observer` with whatever the sense, reach and finishing flags changed.
     pub(super) fn observer(&self, preset: Observer) -> Observer {
         Observer {
             delay_s: self.delay.unwrap_or(preset.delay_s),
             noise_deg: self.noise_deg.unwrap_or(preset.noise_deg),
             smoothing_s: self.smoothing.unwrap_or(preset.smoothing_s),
+            rate_weber: self.rate_weber.unwrap_or(preset.rate_weber),
+            distance_weber: self.distance_weber.unwrap_or(preset.distance_weber),
+            distance_range_m: self.distance_range.unwrap_or(preset.distance_range_m),
             reach_m: self.reach.unwrap_or(preset.reach_m),
+            terminal_s: self.terminal.unwrap_or(preset.terminal_s),
+            lunge_m: self.lunge.unwrap_or(preset.lunge_m),
             ..preset
         }
     }
@@ -77,6 +102,7 @@ impl Setting {
                 },
                 noise_seed: seed,
                 lot_reference: self.lot_reference,
+                terminal_s: 0.0,
             },
             zone: CatchZone::default(),
             record_trace,
@@ -112,6 +138,15 @@ pub(super) fn positive(s: &str) -> Result<f64, String> {
         Ok(x)
     } else {
         Err(format!("{s} must be greater than 0"))
+    }
+}
+
+/// A positive number, or `inf` for no bound.
+pub(super) fn positive_or_infinite(s: &str) -> Result<f64, String> {
+    if matches!(s.trim(), "inf" | "infinity") {
+        Ok(f64::INFINITY)
+    } else {
+        positive(s)
     }
 }
 

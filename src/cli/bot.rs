@@ -7,7 +7,7 @@ use super::run::summary;
 use anyhow::{anyhow, bail, Context};
 use clap::Args;
 use fieldhouse::fielding::{Body, Brain, Forecast, Limits, LotReference, StrategyKind};
-use fieldhouse::perception::{PerceptionConfig, PerceptionHistory, Sighting};
+use fieldhouse::perception::{PerceptionConfig, PerceptionHistory, Senses, Sighting};
 use fieldhouse::protocol::{PROTOCOL, VERSION};
 use fieldhouse::words::{figure, plural};
 use futures_util::{SinkExt, StreamExt};
@@ -52,7 +52,7 @@ pub(super) struct BotArgs {
 /// A fielder's mind between perceptions.
 struct Fielding {
     kind: StrategyKind,
-    play: Option<(PerceptionHistory, Brain)>,
+    play: Option<(Senses, PerceptionHistory, Brain)>,
 }
 
 impl Fielding {
@@ -69,13 +69,16 @@ impl Fielding {
             ..Limits::HUMAN
         };
         let kind = self.kind;
-        let (history, brain) = self.play.get_or_insert_with(|| {
+        let (senses, history, brain) = self.play.get_or_insert_with(|| {
             let forecast = || Forecast {
                 point: DVec2::ZERO,
                 t: 0.0,
             };
+            // The server's perception is the ideal eye's: angles and distance as they are.
+            let eye = PerceptionConfig::default();
             (
-                PerceptionHistory::new(&PerceptionConfig::default(), dt),
+                Senses::new(&eye, 0, dt),
+                PerceptionHistory::new(&eye, dt),
                 Brain::new(kind, LotReference::Apex, forecast),
             )
         });
@@ -85,16 +88,14 @@ impl Fielding {
             pos: v(&p["self"]["position"]),
             vel: v(&p["self"]["velocity"]),
         };
-        history.record(
-            Sighting {
-                t,
-                tan_psi: optics["tan_psi"].as_f64().unwrap_or(0.0),
-                toward_ball: DVec2::from_angle(alpha),
-                distance: optics["distance_m"].as_f64().unwrap_or(1.0),
-            },
-            body.pos,
-        );
-        let accel = match history.percept(body.pos, body.vel) {
+        let seen = Sighting {
+            t,
+            tan_psi: optics["tan_psi"].as_f64().unwrap_or(0.0),
+            toward_ball: DVec2::from_angle(alpha),
+            distance: optics["distance_m"].as_f64().unwrap_or(1.0),
+        };
+        history.record(senses.look(&seen, body.pos, body.vel));
+        let accel = match history.percept(body.pos, body.vel, (0.0, 0.0)) {
             Some(percept) if t >= limits.reaction_s => {
                 brain.command(&fieldhouse::fielding::strategy::Situation {
                     percept: Some(&percept),

@@ -9,6 +9,10 @@ use serde::Serialize;
 pub struct CatchZone {
     /// Horizontal reach from the fielder's centre, m.
     pub reach_m: f64,
+    /// How much further a fielder reaches in its last moments, lunging (or stepping and
+    /// leaning) at the ball, m: granted only to a fielder finishing its catch
+    /// ([`super::FielderConfig::terminal_s`]).
+    pub lunge_m: f64,
     /// Lowest height above the ground at which a ball is caught, m.
     pub min_height_m: f64,
     /// Highest height above the ground at which a ball is caught, m.
@@ -20,6 +24,7 @@ impl Default for CatchZone {
     fn default() -> Self {
         CatchZone {
             reach_m: 1.0,
+            lunge_m: 0.0,
             min_height_m: 0.3,
             max_height_m: 2.4,
         }
@@ -37,15 +42,23 @@ pub(crate) struct Pass {
 }
 
 impl CatchZone {
-    /// Examines the tick from (ball0, fielder0) to (ball1, fielder1). Returns `None` when
-    /// the ball is not descending through the height band during the tick.
+    /// The height a fielder aims to take the ball at: the middle of the band.
+    pub fn catch_height_m(&self) -> f64 {
+        0.5 * (self.min_height_m + self.max_height_m)
+    }
+
+    /// Examines the tick from (ball0, fielder0) to (ball1, fielder1), the fielder
+    /// `lunging` or not. Returns `None` when the ball is not descending through the
+    /// height band during the tick.
     pub(crate) fn pass(
         &self,
         ball0: DVec3,
         ball1: DVec3,
         fielder0: DVec2,
         fielder1: DVec2,
+        lunging: bool,
     ) -> Option<Pass> {
+        let reach = self.reach_m + if lunging { self.lunge_m } else { 0.0 };
         let dy = ball1.y - ball0.y;
         if dy >= 0.0 {
             return None;
@@ -67,14 +80,11 @@ impl CatchZone {
             s_enter
         };
         let closest_m = at(closest_s);
-        let caught_s = if at(s_enter) <= self.reach_m {
+        let caught_s = if at(s_enter) <= reach {
             Some(s_enter)
-        } else if closest_m <= self.reach_m {
+        } else if closest_m <= reach {
             // |r0 + dr·s|² = reach², the smaller root: the first moment within reach.
-            let (b, c) = (
-                r0.dot(dr),
-                r0.length_squared() - self.reach_m * self.reach_m,
-            );
+            let (b, c) = (r0.dot(dr), r0.length_squared() - reach * reach);
             let s = (-b - (b * b - dd * c).max(0.0).sqrt()) / dd;
             Some(s.clamp(s_enter, closest_s))
         } else {
@@ -102,6 +112,7 @@ mod tests {
                 DVec3::new(5.0, 0.0, 0.0),
                 DVec2::ZERO,
                 DVec2::ZERO,
+                false,
             )
             .unwrap();
         assert!(p.caught_s.is_some());
@@ -119,7 +130,8 @@ mod tests {
                 DVec3::new(0.0, 1.0, 0.0),
                 DVec3::new(0.0, 1.5, 0.0),
                 DVec2::ZERO,
-                DVec2::ZERO
+                DVec2::ZERO,
+                false
             )
             .is_none());
     }
@@ -133,9 +145,26 @@ mod tests {
                 DVec3::new(3.0, 1.0, 1.0),
                 DVec2::ZERO,
                 DVec2::ZERO,
+                false,
             )
             .unwrap();
         assert!(p.caught_s.is_none());
         assert!((p.closest_m - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_lunge_adds_its_reach_only_to_a_lunging_fielder() {
+        let zone = CatchZone {
+            lunge_m: 0.6,
+            ..CatchZone::default()
+        };
+        let (ball0, ball1) = (DVec3::new(1.5, 1.5, -1.0), DVec3::new(1.5, 1.0, 1.0));
+        let standing = zone
+            .pass(ball0, ball1, DVec2::ZERO, DVec2::ZERO, false)
+            .unwrap();
+        let lunging = zone
+            .pass(ball0, ball1, DVec2::ZERO, DVec2::ZERO, true)
+            .unwrap();
+        assert!(standing.caught_s.is_none() && lunging.caught_s.is_some());
     }
 }

@@ -10,6 +10,7 @@ mod oracles;
 mod path_shape;
 pub mod strategy;
 mod sweep;
+mod terminal;
 mod trial;
 
 pub use body::{Body, Limits};

@@ -84,8 +84,9 @@ pub struct Trial<'a> {
 /// The point and time `flight` descends through the middle of `zone`'s catch band (or
 /// lands, if it never does): what the `predictive` fielder is told.
 pub fn forecast(flight: &Flight, zone: &CatchZone) -> Forecast {
-    let mid = 0.5 * (zone.min_height_m + zone.max_height_m);
-    let s = flight.descending_through(mid).unwrap_or(flight.landing);
+    let s = flight
+        .descending_through(zone.catch_height_m())
+        .unwrap_or(flight.landing);
     Forecast {
         point: DVec2::new(s.pos.x, s.pos.z),
         t: s.t,
@@ -108,7 +109,15 @@ impl Trial<'_> {
         let reaction_s = cfg.fielder.limits.reaction_s;
         let home = flight.samples[0].pos;
         let home = DVec2::new(home.x, home.z);
-        let mut fielder = Fielder::new(strategy, start, home, &cfg.fielder, dt, || self.forecast());
+        let mut fielder = Fielder::new(
+            strategy,
+            start,
+            home,
+            &cfg.fielder,
+            cfg.zone.catch_height_m(),
+            dt,
+            || self.forecast(),
+        );
         let mut path = Vec::with_capacity(flight.samples.len());
         let mut trace = Vec::with_capacity(if cfg.record_trace {
             flight.samples.len()
@@ -144,10 +153,13 @@ impl Trial<'_> {
                     accel: step.accel.to_array(),
                 });
             }
-            if let Some(pass) = cfg
-                .zone
-                .pass(ball.pos, next_ball.pos, before, fielder.body.pos)
-            {
+            if let Some(pass) = cfg.zone.pass(
+                ball.pos,
+                next_ball.pos,
+                before,
+                fielder.body.pos,
+                fielder.finishing(),
+            ) {
                 miss = miss.min(pass.closest_m);
                 if let Some(s) = pass.caught_s {
                     caught_at = Some(ball.t + s * dt);

@@ -1,16 +1,18 @@
-//! What a fielder can see: the optical angles of the ball from its own eye, and their rates,
-//! from its estimate of the ball's path over its last looks.
+//! What a fielder can see: the optical angles of the ball from its own eye and their
+//! rates, judged as a person judges them, and a distance cue only where a person has one.
 //!
 //! A strategy reads only a [`Percept`]: never the ball's future, never its true state
-//! (with noise or delay switched on, what it reads is what its eye would have reported).
+//! (with noise or delay switched on, what it reads is what its senses would have
+//! reported). [`Senses`] makes each look what the eye reports; [`PerceptionHistory`]
+//! turns the looks into the percept.
 
 mod history;
+mod senses;
 
 pub use history::{Percept, PerceptionHistory};
+pub use senses::{DistanceCue, Look, Senses, JUDGEMENT_S};
 
 use glam::{DVec2, DVec3};
-use rand::Rng;
-use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
 /// The sensory side of a fielder.
@@ -20,12 +22,21 @@ pub struct PerceptionConfig {
     pub eye_height_m: f64,
     /// Visuomotor delay: a strategy acts on what the eye saw this long ago. Off by default.
     pub delay_s: f64,
-    /// Standard deviation of Gaussian noise added to both optical angles. Off by default.
+    /// Standard deviation of Gaussian noise added to both optical angles of each look,
+    /// independently. Off by default.
     pub noise_rad: f64,
-    /// How far back, in seconds, the fielder's estimate of the ball's path reaches (see
-    /// [`PerceptionHistory`]); never fewer than three looks. Zero (three looks) is exact
-    /// enough without noise; with noise a longer span averages it away.
+    /// How far back, in seconds, the fielder's fit of the angles reaches (see
+    /// [`PerceptionHistory`]); never fewer than three looks.
     pub smoothing_s: f64,
+    /// Weber fraction of the perceived angular rates: each rate judgement is off by
+    /// this share of the image's angular speed (one standard deviation). Off by default.
+    pub rate_weber: f64,
+    /// Weber fraction of the distance cue (one standard deviation of its relative
+    /// error). Off by default.
+    pub distance_weber: f64,
+    /// Beyond this horizontal distance the fielder has no distance cue at all.
+    /// Unbounded by default.
+    pub distance_range_m: f64,
 }
 
 impl Default for PerceptionConfig {
@@ -35,15 +46,19 @@ impl Default for PerceptionConfig {
             delay_s: 0.0,
             noise_rad: 0.0,
             smoothing_s: 0.0,
+            rate_weber: 0.0,
+            distance_weber: 0.0,
+            distance_range_m: f64::INFINITY,
         }
     }
 }
 
-/// One look at the ball: the line of sight from the eye, plus a distance cue.
+/// The ball as it really is from a fielder's eye: the line of sight and the true
+/// horizontal distance (what traces, plots and the optical measures use; a fielder's
+/// senses make a [`Look`] of it).
 ///
 /// Stored as tan ψ and the unit bearing vector rather than as angles: those are what the
-/// strategies compute with, and keeping them saves every tick the trigonometry that
-/// turning angles back into them would cost. The angles themselves are derived on demand.
+/// strategies compute with. The angles themselves are derived on demand.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sighting {
     /// When the eye saw it, s since the launch.
@@ -53,9 +68,7 @@ pub struct Sighting {
     /// Unit vector on the ground from the fielder toward the ball: (cos α, sin α), the
     /// bearing α measured from +x toward +z (a fixed reference direction).
     pub toward_ball: DVec2,
-    /// Horizontal distance d from the fielder to the ball. The optical strategies do not
-    /// need it to pick a direction; they use it only to scale a gain (binocular disparity
-    /// and the ball's angular size give a human this cue at fly-ball ranges).
+    /// Horizontal distance d from the fielder to the ball.
     pub distance: f64,
 }
 
@@ -72,21 +85,6 @@ impl Sighting {
         }
     }
 
-    /// The same sighting with Gaussian noise of `sd` radians on both optical angles.
-    pub fn blurred(self, sd: f64, rng: &mut impl Rng) -> Sighting {
-        if sd <= 0.0 {
-            return self;
-        }
-        let normal = Normal::new(0.0, sd).expect("noise sd is finite and positive");
-        let psi = self.psi() + normal.sample(rng);
-        let alpha = self.alpha() + normal.sample(rng);
-        Sighting {
-            tan_psi: psi.tan(),
-            toward_ball: DVec2::from_angle(alpha),
-            ..self
-        }
-    }
-
     /// Elevation ψ in radians.
     pub fn psi(&self) -> f64 {
         self.tan_psi.atan()
@@ -95,10 +93,5 @@ impl Sighting {
     /// Bearing α in radians, in (−π, π].
     pub fn alpha(&self) -> f64 {
         self.toward_ball.y.atan2(self.toward_ball.x)
-    }
-
-    /// The ball relative to the eye, rebuilt from the line of sight and distance.
-    pub fn relative_position(&self) -> DVec3 {
-        self.distance * DVec3::new(self.toward_ball.x, self.tan_psi, self.toward_ball.y)
     }
 }

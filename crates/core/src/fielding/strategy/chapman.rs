@@ -65,14 +65,14 @@ impl Chapman {
             return DVec2::ZERO;
         }
         let rate_ref = *self.rate_ref.get_or_insert(p.tan_psi_rate);
-        let d = p.sighting.distance;
+        let d = p.distance;
         let a1 = -RATE_GAIN * (d / p.tan_psi) * (p.tan_psi_rate - rate_ref);
         let a2 = if self.lateral {
             LATERAL_GAIN * d * p.alpha_rate
         } else {
             0.0
         };
-        let toward = p.sighting.toward_ball;
+        let toward = p.toward_ball;
         a1 * toward + a2 * quarter_turn(toward)
     }
 }

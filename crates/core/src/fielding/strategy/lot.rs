@@ -88,7 +88,7 @@ impl Lot {
         let Some(p) = s.percept else {
             return DVec2::ZERO;
         };
-        let (rel, rel_vel) = (p.relative_position, p.relative_velocity);
+        let (rel, rel_vel) = (p.relative_position(), p.relative_velocity());
         let above = p.tan_psi >= CLEARLY_ABOVE_EYE_TAN_PSI;
         let now = match self.reference {
             LotReference::Apex => above && rel_vel.y <= 0.0,

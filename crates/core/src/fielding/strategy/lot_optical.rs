@@ -77,23 +77,24 @@ impl LotOptical {
             return DVec2::ZERO;
         };
         let forward = (s.home - s.body.pos).normalize_or(DVec2::X);
-        let side = quarter_turn(forward);
-        let (rel, rel_vel) = (p.relative_position, p.relative_velocity);
-        let (r, r_vel) = (DVec2::new(rel.x, rel.z), DVec2::new(rel_vel.x, rel_vel.z));
-        let (depth, depth_rate) = (r.dot(forward), r_vel.dot(forward));
+        // β: the ball's bearing from the direction of home plate, turning toward ê_l.
+        let beta = forward
+            .perp_dot(p.toward_ball)
+            .atan2(forward.dot(p.toward_ball));
+        let (sin_beta, cos_beta) = beta.sin_cos();
         // The image plane only sees balls in front of it, clearly above the eye.
-        if depth <= 0.0 || p.tan_psi < CLEARLY_ABOVE_EYE_TAN_PSI {
+        if cos_beta <= 0.0 || p.tan_psi < CLEARLY_ABOVE_EYE_TAN_PSI {
             return DVec2::ZERO;
         }
-        // The image and its velocity, by the quotient rule on L/D and Y/D.
-        let image = |along: f64, along_rate: f64| {
-            (
-                along / depth,
-                (along_rate * depth - along * depth_rate) / (depth * depth),
-            )
-        };
-        let (u, u_rate) = image(r.dot(side), r_vel.dot(side));
-        let (v, v_rate) = image(rel.y, rel_vel.y);
+        let side = quarter_turn(forward);
+        // The image from the angles alone: u = L/D = tan β, v = Y/D = tan ψ / cos β
+        // (the plane's own turn as the fielder moves is left out: home is far).
+        let (u, u_rate) = (sin_beta / cos_beta, p.alpha_rate / (cos_beta * cos_beta));
+        let v = p.tan_psi / cos_beta;
+        let v_rate =
+            p.tan_psi_rate / cos_beta + p.tan_psi * sin_beta / (cos_beta * cos_beta) * p.alpha_rate;
+        // Depth D, as the fielder judges the distance: it only scales the gains.
+        let depth = p.distance * cos_beta;
         let reference = self.reference.get_or_insert(Reference {
             u,
             v,

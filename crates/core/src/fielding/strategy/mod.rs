@@ -12,6 +12,7 @@ mod predictive;
 pub use chapman::Chapman;
 pub use lot::{Lot, LotReference};
 pub use lot_optical::LotOptical;
+pub(crate) use predictive::run_to;
 pub use predictive::{Forecast, Predictive};
 
 use super::{Body, Limits};

@@ -32,19 +32,30 @@ impl Predictive {
         Predictive { forecast }
     }
 
+    /// What it was told.
+    pub(crate) fn forecast(&self) -> &Forecast {
+        &self.forecast
+    }
+
     /// The acceleration wanted this tick, m/s².
     pub(crate) fn command(&mut self, s: &Situation) -> DVec2 {
-        let to_go = self.forecast.point - s.body.pos;
-        let distance = to_go.length();
-        let time_left = self.forecast.t - s.t;
-        let on_time = distance / time_left.max(s.dt);
-        let stopping = (2.0 * s.limits.max_accel * distance).sqrt();
-        let wanted_speed = s.limits.max_speed.min(if s.limits.is_limited() {
-            stopping.max(on_time)
-        } else {
-            on_time
-        });
-        let wanted = to_go.normalize_or_zero() * wanted_speed.min(distance / s.dt);
-        (wanted - s.body.vel) / s.dt
+        run_to(&self.forecast, s)
     }
+}
+
+/// The acceleration, m/s², that takes the fielder of `s` to `goal` by its time, as
+/// quickly as its limits allow (see [`Predictive`]).
+pub(crate) fn run_to(goal: &Forecast, s: &Situation) -> DVec2 {
+    let to_go = goal.point - s.body.pos;
+    let distance = to_go.length();
+    let time_left = goal.t - s.t;
+    let on_time = distance / time_left.max(s.dt);
+    let stopping = (2.0 * s.limits.max_accel * distance).sqrt();
+    let wanted_speed = s.limits.max_speed.min(if s.limits.is_limited() {
+        stopping.max(on_time)
+    } else {
+        on_time
+    });
+    let wanted = to_go.normalize_or_zero() * wanted_speed.min(distance / s.dt);
+    (wanted - s.body.vel) / s.dt
 }

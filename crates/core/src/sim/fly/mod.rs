@@ -103,12 +103,18 @@ impl FlyWorld {
         let fielders = lineup
             .into_iter()
             .map(|(id, strategy, home, config)| Fielding {
-                fielder: Fielder::new(strategy, home, DVec2::ZERO, &config, dt, || {
-                    crate::fielding::Forecast {
+                fielder: Fielder::new(
+                    strategy,
+                    home,
+                    DVec2::ZERO,
+                    &config,
+                    CatchZone::default().catch_height_m(),
+                    dt,
+                    || crate::fielding::Forecast {
                         point: home,
                         t: 0.0,
-                    }
-                }),
+                    },
+                ),
                 id,
                 strategy,
                 config,
@@ -216,9 +222,15 @@ impl FlyWorld {
         let flight = Flight::simulate(launch.initial_state(), &air, self.dt, MAX_FLIGHT_S);
         let predicted = forecast(&flight, &self.zone);
         for f in &mut self.fielders {
-            f.fielder = Fielder::new(f.strategy, f.home, DVec2::ZERO, &f.config, self.dt, || {
-                predicted
-            });
+            f.fielder = Fielder::new(
+                f.strategy,
+                f.home,
+                DVec2::ZERO,
+                &f.config,
+                self.zone.catch_height_m(),
+                self.dt,
+                || predicted,
+            );
             // Every ball starts with the fielders at their positions, at rest, and a
             // bot's orders for the last ball forgotten.
             f.last_seen = None;
@@ -274,10 +286,13 @@ impl FlyWorld {
                     } else {
                         f.fielder.step(ball.t, ball.pos, self.dt);
                     }
-                    if let Some(pass) =
-                        self.zone
-                            .pass(ball.pos, next.pos, before, f.fielder.body.pos)
-                    {
+                    if let Some(pass) = self.zone.pass(
+                        ball.pos,
+                        next.pos,
+                        before,
+                        f.fielder.body.pos,
+                        f.fielder.finishing(),
+                    ) {
                         if pass.caught_s.is_some() {
                             self.score.caught += 1;
                             f.caught += 1;
