@@ -40,11 +40,14 @@ pub(super) struct Setting {
     /// (0: its last three looks).
     #[arg(long, value_parser = non_negative)]
     pub smoothing: Option<f64>,
-    /// Weber fraction of the perceived angular rates (0.1: each rate judgement off by
-    /// 10 % of the image's angular speed, one standard deviation), instead of the
-    /// observer's (0 = exact).
+    /// Weber fraction of the image's perceived angular speed (0.1: off by 10 %, one
+    /// standard deviation), instead of the observer's (0 = exact).
     #[arg(long, value_parser = non_negative)]
     pub rate_weber: Option<f64>,
+    /// Standard deviation of the error in the perceived direction of the image's motion,
+    /// in degrees, instead of the observer's (0 = exact).
+    #[arg(long, value_parser = non_negative)]
+    pub direction_deg: Option<f64>,
     /// Weber fraction of the distance cue (0.15: off by about 15 %), instead of the
     /// observer's (0 = exact).
     #[arg(long, value_parser = non_negative)]
@@ -82,6 +85,7 @@ impl Setting {
             noise_deg: self.noise_deg.unwrap_or(preset.noise_deg),
             smoothing_s: self.smoothing.unwrap_or(preset.smoothing_s),
             rate_weber: self.rate_weber.unwrap_or(preset.rate_weber),
+            direction_deg: self.direction_deg.unwrap_or(preset.direction_deg),
             distance_weber: self.distance_weber.unwrap_or(preset.distance_weber),
             distance_range_m: self.distance_range.unwrap_or(preset.distance_range_m),
             reach_m: self.reach.unwrap_or(preset.reach_m),

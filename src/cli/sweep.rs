@@ -162,7 +162,34 @@ fn print_table(report: &SweepReport, out: &mut impl Write) -> std::io::Result<()
     }
     writeln!(out, "a mean: time-averaged |a| (m/s²); a peak / v peak: per-trial peaks averaged; a max / v max: largest over all trials")?;
     writeln!(out, "path shapes vs the chord from start to end: straight, bulging toward home (→home) or away from it (←home); bulge: median largest deviation / chord (+ toward home); ṙ drift: change of d(tan ψ)/dt over the flight / its mean (0: OAC's constant rate); img bend: scatter of the image across its best line / along it (0: LOT's straight image); medians")?;
-    print_spare(report, out)
+    print_spare(report, out)?;
+    print_finishing(report, out)
+}
+
+/// What the finishing phase decided: catches made only with it, and lost with it.
+fn print_finishing(report: &SweepReport, out: &mut impl Write) -> std::io::Result<()> {
+    if report.strategies.iter().all(|s| s.finishing.is_none()) {
+        return Ok(());
+    }
+    writeln!(out)?;
+    writeln!(
+        out,
+        "the finishing phase, against the same trials without it (no terminal run, no lunge)"
+    )?;
+    for s in &report.strategies {
+        if let Some(f) = s.finishing {
+            writeln!(
+                out,
+                "{:<12} decided {} of {} catches ({:.1}%), lost {}",
+                s.strategy.name(),
+                f.decided,
+                s.caught,
+                100.0 * f.decided as f64 / s.caught.max(1) as f64,
+                f.lost
+            )?;
+        }
+    }
+    Ok(())
 }
 
 /// Catches of catchable balls by their time to spare: where each strategy fails.

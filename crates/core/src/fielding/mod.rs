@@ -22,6 +22,7 @@ pub(crate) use path_shape::OpticalFit;
 pub use path_shape::{PathShape, RunWatch, SignatureSummary, Signatures};
 pub use strategy::{Brain, Forecast, LotReference, StrategyKind};
 pub use sweep::{
-    LaunchDistribution, SpareBin, StrategySummary, Sweep, SweepCase, SweepReport, SPARE_BINS_S,
+    FinishingEffect, LaunchDistribution, SpareBin, StrategySummary, Sweep, SweepCase, SweepReport,
+    SPARE_BINS_S,
 };
 pub use trial::{forecast, Outcome, TraceEntry, Trial, TrialConfig, TrialResult};

@@ -85,7 +85,7 @@ pub struct StrategySummary {
     /// Trials run: one per case.
     pub(crate) trials: usize,
     /// Trials that ended in a catch.
-    pub(crate) caught: usize,
+    pub caught: usize,
     /// `caught / trials` (0 without trials).
     pub catch_rate: f64,
     /// Balls the `predictive` fielder caught, and this strategy's share of them.
@@ -124,6 +124,18 @@ pub struct StrategySummary {
     /// Median over trials of how far the ball's bearing from the fielder turned, degrees:
     /// the constant-bearing signature of Chapman's lateral law is 0.
     pub median_bearing_sweep_deg: f64,
+    /// What the finishing phase decided, when the observer has one: each trial run again
+    /// without it (no terminal run, no lunge) on the same noise.
+    pub finishing: Option<FinishingEffect>,
+}
+
+/// Catches the finishing phase made and lost: the same trials with and without it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FinishingEffect {
+    /// Balls caught with the finishing phase and missed without it.
+    pub decided: usize,
+    /// Balls missed with it and caught without it.
+    pub lost: usize,
 }
 
 /// The upper edges of the time-to-spare bins, s (the last bin has none). A ball's time to
@@ -179,6 +191,9 @@ struct Tally {
     peak_speed: f64,
     mean_accel: f64,
     signatures: Signatures,
+    /// Whether the same trial without the finishing phase caught the ball (`None` when
+    /// the observer has none).
+    caught_without_finishing: Option<bool>,
 }
 
 impl Sweep {
@@ -238,9 +253,21 @@ impl Sweep {
         strategy: StrategyKind,
         record_trace: bool,
     ) -> TrialResult {
+        self.trial_with(self.config(), case_index, case, strategy, record_trace)
+    }
+
+    /// [`Self::trial`] with `config` for the sweep's own.
+    fn trial_with(
+        &self,
+        config: TrialConfig,
+        case_index: usize,
+        case: &SweepCase,
+        strategy: StrategyKind,
+        record_trace: bool,
+    ) -> TrialResult {
         let mut config = TrialConfig {
             record_trace,
-            ..self.config()
+            ..config
         };
         config.fielder.noise_seed ^= (case_index as u64) << 8 | strategy as u64;
         Trial {
@@ -260,6 +287,13 @@ impl Sweep {
         seed: u64,
     ) -> SweepReport {
         let zone = self.config().zone;
+        // The same trials without the finishing phase, when there is one.
+        let unfinished = (self.observer.terminal_s > 0.0).then(|| {
+            let mut config = self.config();
+            config.fielder.terminal_s = 0.0;
+            config.zone.lunge_m = 0.0;
+            config
+        });
         let tallies: Vec<(bool, Vec<Tally>)> = cases
             .par_iter()
             .enumerate()
@@ -284,6 +318,9 @@ impl Sweep {
                             peak_speed: r.peak_speed,
                             mean_accel: r.mean_accel,
                             signatures: Signatures::of(&r.path, home, &r.optical),
+                            caught_without_finishing: unfinished.map(|config| {
+                                self.trial_with(config, i, case, s, false).outcome.caught
+                            }),
                         }
                     })
                     .collect();
@@ -352,5 +389,13 @@ fn summarise<'a>(
         median_rate_drift: median(shapes.median_rate_drift),
         median_image_bend: median(shapes.median_image_bend),
         median_bearing_sweep_deg: median(shapes.median_bearing_sweep_deg),
+        finishing: tallies
+            .iter()
+            .all(|(_, t)| t.caught_without_finishing.is_some())
+            .then(|| FinishingEffect {
+                decided: count(&|_, t| t.caught && t.caught_without_finishing == Some(false)),
+                lost: count(&|_, t| !t.caught && t.caught_without_finishing == Some(true)),
+            })
+            .filter(|_| n > 0),
     }
 }

@@ -8,7 +8,8 @@
 //! of them, with a quadratic in time by least squares, and reads the angle and its rate
 //! off the fit. Nothing here places the ball in space: the angles are what the eye
 //! measures, and a quadratic through three looks is exact to the square of the tick.
-//! Rate judgements then carry their own error ([`super::Senses::rate_errors`]).
+//! The judgement of the image's motion then carries its own error
+//! ([`super::Senses::rate_errors`]).
 //!
 //! **Distance** is the senses' cue where there is one (with its rate, judged from the
 //! ball's optical expansion), carried over the delay at that rate; beyond the
@@ -98,9 +99,9 @@ impl PerceptionHistory {
     }
 
     /// The percept of a fielder now at `fielder` moving at `fielder_velocity` ((x, z) in m
-    /// and m/s), with its rate judgements off by `rate_errors` (shares of the image's
-    /// angular speed, elevation and bearing), or `None` until enough looks have passed
-    /// the delay for a fit.
+    /// and m/s), its judgement of the image's motion off by `rate_errors` (a share of its
+    /// speed, an angle of its direction: [`super::Senses::rate_errors`]), or `None` until
+    /// enough looks have passed the delay for a fit.
     pub fn percept(
         &self,
         fielder: DVec2,
@@ -120,10 +121,12 @@ impl PerceptionHistory {
         let (alpha, mut alpha_rate) =
             quadratic(window.clone().map(|l| (tick(l), unwrap(l.alpha))), at);
         (psi_rate, alpha_rate) = (psi_rate / self.dt, alpha_rate / self.dt);
-        // Weber's law on the image's angular speed.
-        let speed = psi_rate.hypot(psi.cos() * alpha_rate);
-        psi_rate += rate_errors.0 * speed;
-        alpha_rate += rate_errors.1 * speed / psi.cos().max(1e-6);
+        // The image's angular velocity, judged: its speed off by a share (Weber's law),
+        // its direction by an angle.
+        let across = psi.cos().max(1e-6);
+        let image = DVec2::new(psi_rate, across * alpha_rate);
+        let judged = DVec2::from_angle(rate_errors.1).rotate(image) * (1.0 + rate_errors.0);
+        (psi_rate, alpha_rate) = (judged.x, judged.y / across);
         // The distance as judged at the newest look, carried over the delay at its
         // judged rate.
         let (distance, distance_rate, distance_seen) = match newest.distance_cue {
@@ -396,25 +399,28 @@ mod tests {
         );
     }
 
-    /// A rate judgement off by a share e of the image's angular speed ω moves dψ/dt by
-    /// e·ω, so d(tan ψ)/dt by e·ω/cos²ψ; the bearing's rate by e·ω/cos ψ.
+    /// The image moves at (dψ/dt, cos ψ·dα/dt). A speed judged a share e too fast and a
+    /// direction turned by φ make it (1 + e)·R(φ) of that: check both rates against the
+    /// closed form, and that the angles and the distance are untouched.
     #[test]
-    fn rate_errors_are_shares_of_the_images_angular_speed() {
+    fn the_images_motion_is_judged_off_in_speed_and_direction() {
         let mut h = PerceptionHistory::new(&config(0.0, 0.0), DT);
         for n in 0..10 {
             let t = n as f64 * DT;
             h.record(look(t, quadratic_ball, |_| DVec2::ZERO, DVec2::ZERO));
         }
         let exact = h.percept(DVec2::ZERO, DVec2::ZERO, (0.0, 0.0)).unwrap();
-        let off = h.percept(DVec2::ZERO, DVec2::ZERO, (0.1, -0.05)).unwrap();
+        let (e, phi) = (0.1, 0.05);
+        let off = h.percept(DVec2::ZERO, DVec2::ZERO, (e, phi)).unwrap();
         let t = 9.0 * DT;
         let (psi, psi_rate) = (0.2 + 0.3 * t - 0.04 * t * t, 0.3 - 0.08 * t);
-        let alpha_rate = -0.1 + 0.04 * t;
-        let omega = psi_rate.hypot(psi.cos() * alpha_rate);
-        let tan_psi_shift = off.tan_psi_rate - exact.tan_psi_rate;
-        assert!((tan_psi_shift - 0.1 * omega / psi.cos().powi(2)).abs() < 1e-9);
-        let alpha_shift = off.alpha_rate - exact.alpha_rate;
-        assert!((alpha_shift + 0.05 * omega / psi.cos()).abs() < 1e-9);
+        let across = psi.cos() * (-0.1 + 0.04 * t);
+        let judged = (
+            (1.0 + e) * (psi_rate * phi.cos() - across * phi.sin()),
+            (1.0 + e) * (psi_rate * phi.sin() + across * phi.cos()),
+        );
+        assert!((off.tan_psi_rate - judged.0 / psi.cos().powi(2)).abs() < 1e-9);
+        assert!((off.alpha_rate - judged.1 / psi.cos()).abs() < 1e-9);
         assert_eq!((off.tan_psi, off.distance), (exact.tan_psi, exact.distance));
     }
 

@@ -28,9 +28,12 @@ pub struct PerceptionConfig {
     /// How far back, in seconds, the fielder's fit of the angles reaches (see
     /// [`PerceptionHistory`]); never fewer than three looks.
     pub smoothing_s: f64,
-    /// Weber fraction of the perceived angular rates: each rate judgement is off by
-    /// this share of the image's angular speed (one standard deviation). Off by default.
+    /// Weber fraction of the image's perceived angular speed: each judgement of it is
+    /// off by this share (one standard deviation). Off by default.
     pub rate_weber: f64,
+    /// Standard deviation of the error in the perceived direction of the image's
+    /// motion, rad. Off by default.
+    pub direction_rad: f64,
     /// Weber fraction of the distance cue (one standard deviation of its relative
     /// error). Off by default.
     pub distance_weber: f64,
@@ -47,6 +50,7 @@ impl Default for PerceptionConfig {
             noise_rad: 0.0,
             smoothing_s: 0.0,
             rate_weber: 0.0,
+            direction_rad: 0.0,
             distance_weber: 0.0,
             distance_range_m: f64::INFINITY,
         }

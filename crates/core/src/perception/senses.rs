@@ -3,13 +3,16 @@
 //! **Angles** (elevation ψ, bearing α) are what the eye measures best; each look may
 //! carry independent Gaussian noise ([`PerceptionConfig::noise_rad`]).
 //!
-//! **Rates** are judged, not differentiated: people discriminate angular speeds with a
-//! Weber fraction of 5–10 % at best and about 17 % for changes of speed (Werkhoven, Snippe
-//! & Toet 1992, *Vision Res.* 32:2313), and detect gradual acceleration poorly (Calderone
-//! & Kaiser 1989, *Percept. Psychophys.* 45:391). So a rate judgement is off by a share
-//! of the image's angular speed, [`PerceptionConfig::rate_weber`] standard deviations of
-//! it, on each of the two rates the strategies use. The error is the fielder's, not the
-//! look's: a fit over many looks does not average it away.
+//! **Rates** are judged, not differentiated. The image of the ball moves across the eye
+//! with an angular velocity (dψ/dt, cos ψ·dα/dt); people judge its speed with a Weber
+//! fraction of about 7 % at best (84 % correct, 4–64°/s; De Bruyn & Orban 1988, *Vision
+//! Res.* 28:1323), reached after about 0.1 s of motion (Snowden & Braddick 1991, *Vision
+//! Res.* 31:907), and worse for changes of speed, about 17 % (Werkhoven, Snippe & Toet
+//! 1992) to 30 % (Snowden & Braddick); gradual acceleration is detected poorly (Calderone
+//! & Kaiser 1989). Its direction they judge to about 1.8° (De Bruyn & Orban). So the
+//! perceived speed is off by [`PerceptionConfig::rate_weber`] of itself and the direction
+//! by [`PerceptionConfig::direction_rad`] (standard deviations). The errors are the
+//! fielder's, not the look's: a fit over many looks does not average them away.
 //!
 //! **Distance** is a cue only up close: beyond about 30 m most absolute distance cues
 //! (disparity, vergence, motion parallax, optical expansion) fall below threshold
@@ -24,8 +27,8 @@
 //!
 //! **How errors last** (*assumption*). A judgement integrates about a tenth of a second
 //! of motion, and successive judgements share most of it, so an error is not new on
-//! every 60 Hz look: each of the four errors (two angular rates, distance, closing
-//! speed) is an
+//! every 60 Hz look: each of the four errors (the image's speed and direction, distance,
+//! closing speed) is an
 //! Ornstein–Uhlenbeck process of unit variance with correlation time [`JUDGEMENT_S`]
 //! (white noise per look would be averaged away by the strategies' own loops, which take
 //! a third of a second to respond, and flatter the fielder).
@@ -38,7 +41,7 @@ use rand_distr::{Distribution, Normal, StandardNormal};
 
 /// The correlation time of the senses' errors, s: how long one judgement of a rate or a
 /// distance is held before the next is independent of it. *Assumption*: about the
-/// 0.1 s over which motion is integrated for a speed judgement.
+/// 0.1 s over which speed discrimination reaches its best (Snowden & Braddick 1991).
 pub const JUDGEMENT_S: f64 = 0.1;
 
 /// One look as the fielder has it: the angles its eye reported, the distance cue if it
@@ -75,8 +78,8 @@ pub struct Senses {
     rng: ChaCha8Rng,
     /// How much of an error survives one tick: exp(−dt / [`JUDGEMENT_S`]).
     persistence: f64,
-    /// The standard-normal states of the errors of the elevation rate, the bearing rate,
-    /// the distance and the closing speed.
+    /// The standard-normal states of the errors of the image's speed and direction, the
+    /// distance and the closing speed.
     errors: [f64; 4],
     /// The true distance at the last look, (t, d): the closing speed's truth is its
     /// change over one tick.
@@ -107,7 +110,7 @@ impl Senses {
             (0.0, 1.0)
         };
         let rates = c.rate_weber > 0.0;
-        let needed = [rates, rates, c.distance_weber > 0.0, rates];
+        let needed = [rates, c.direction_rad > 0.0, c.distance_weber > 0.0, rates];
         for (error, needed) in self.errors.iter_mut().zip(needed) {
             if needed {
                 let draw: f64 = StandardNormal.sample(&mut self.rng);
@@ -138,11 +141,15 @@ impl Senses {
         }
     }
 
-    /// The errors of the two rate judgements now, as shares of the image's angular
-    /// speed: (elevation rate, bearing rate), each of standard deviation `rate_weber`.
+    /// The errors of the judgement of the image's motion now: (relative error of its
+    /// speed, error of its direction in rad), of standard deviations `rate_weber` and
+    /// `direction_rad`.
     pub fn rate_errors(&self) -> (f64, f64) {
-        let w = self.config.rate_weber;
-        (w * self.errors[0], w * self.errors[1])
+        let c = &self.config;
+        (
+            c.rate_weber * self.errors[0],
+            c.direction_rad * self.errors[1],
+        )
     }
 }
 
