@@ -309,9 +309,10 @@ fn a_basketball_scenario_with_bots_runs_with_builtin_brains() {
 /// Replays recorded before the protocol's messages were typed (frames were built as
 /// JSON values and rounded afterwards) and before replays were compressed, kept as they
 /// were written (tests/fixtures/README.md). Every sport plays differently since then
-/// (fielders fit the ball's path since simulation version 2; basketball moves with more
-/// of the capture since version 3): the files still read, and verifying them names the
-/// version change, not only the first frame that differs.
+/// (fielders fit the ball's path since simulation version 2, and perceive from angles
+/// since version 4; basketball moves with more of the capture since version 3): the
+/// files still read, and verifying them names the version change, not only the first
+/// frame that differs.
 #[test]
 fn replays_recorded_by_an_older_release_still_read_and_say_which_simulation_they_need() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
@@ -326,7 +327,7 @@ fn replays_recorded_by_an_older_release_still_read_and_say_which_simulation_they
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{file}");
         assert!(
-            err.contains("recorded by simulation version 1 and this build simulates version 3"),
+            err.contains("recorded by simulation version 1 and this build simulates version 4"),
             "{file}: {err}"
         );
         let info = stdout(&format!("replay info {}", path.display()));

@@ -115,12 +115,14 @@ impl PerceptionHistory {
         let ahead = self.delay_ticks as f64 * self.dt;
         let tick = |look: &Look| (look.t - newest.t) / self.dt;
         let at = ahead / self.dt;
-        let (psi, mut psi_rate) = quadratic(window.clone().map(|l| (tick(l), l.psi)), at);
+        let (tan_psi, tan_psi_rate) = quadratic(window.clone().map(|l| (tick(l), l.psi.tan())), at);
+        let psi = tan_psi.atan();
+        let mut psi_rate = tan_psi_rate / self.dt * psi.cos().powi(2);
         // Bearings unwrapped about the newest, so a fit never straddles ±π.
         let unwrap = |a: f64| newest.alpha + (a - newest.alpha + PI).rem_euclid(TAU) - PI;
         let (alpha, mut alpha_rate) =
             quadratic(window.clone().map(|l| (tick(l), unwrap(l.alpha))), at);
-        (psi_rate, alpha_rate) = (psi_rate / self.dt, alpha_rate / self.dt);
+        alpha_rate /= self.dt;
         // The image's angular velocity, judged: its speed off by a share (Weber's law),
         // its direction by an angle.
         let across = psi.cos().max(1e-6);
@@ -135,7 +137,7 @@ impl PerceptionHistory {
         };
         let delayed = Percept {
             t: newest.t + ahead,
-            tan_psi: psi.tan(),
+            tan_psi,
             tan_psi_rate: psi_rate / psi.cos().powi(2),
             toward_ball: DVec2::from_angle(alpha),
             alpha_rate,
@@ -236,16 +238,17 @@ mod tests {
     const EYE: f64 = 1.7;
     const DT: f64 = 1.0 / 60.0;
 
-    /// A ball whose angles from a fielder standing at the origin are exactly quadratic in
-    /// time, ψ = 0.2 + 0.3t − 0.04t², α = 0.5 − 0.1t + 0.02t², at a distance that is not
-    /// (d = 60 − 8t + 0.3t³): the fit must read them exactly, at any window and delay.
+    /// A ball whose optical variables from a fielder standing at the origin are exactly
+    /// quadratic in time, tan ψ = 0.2 + 0.3t − 0.04t², α = 0.5 − 0.1t + 0.02t², at a
+    /// distance that is not (d = 60 − 8t + 0.3t³): the fit must read them exactly, at
+    /// any window and delay.
     fn quadratic_ball(t: f64) -> DVec3 {
-        let (psi, alpha, d) = (
+        let (tan_psi, alpha, d) = (
             0.2 + 0.3 * t - 0.04 * t * t,
             0.5 - 0.1 * t + 0.02 * t * t,
             60.0 - 8.0 * t + 0.3 * t * t * t,
         );
-        DVec3::new(d * alpha.cos(), EYE + d * psi.tan(), d * alpha.sin())
+        DVec3::new(d * alpha.cos(), EYE + d * tan_psi, d * alpha.sin())
     }
 
     /// A ball in vacuum.
@@ -413,7 +416,9 @@ mod tests {
         let (e, phi) = (0.1, 0.05);
         let off = h.percept(DVec2::ZERO, DVec2::ZERO, (e, phi)).unwrap();
         let t = 9.0 * DT;
-        let (psi, psi_rate) = (0.2 + 0.3 * t - 0.04 * t * t, 0.3 - 0.08 * t);
+        let (tan_psi, tan_psi_rate) = (0.2 + 0.3 * t - 0.04 * t * t, 0.3 - 0.08 * t);
+        let psi = f64::atan(tan_psi);
+        let psi_rate = tan_psi_rate * psi.cos().powi(2);
         let across = psi.cos() * (-0.1 + 0.04 * t);
         let judged = (
             (1.0 + e) * (psi_rate * phi.cos() - across * phi.sin()),

@@ -35,7 +35,10 @@ pub use crate::protocol::Action;
 ///    cuts are held to the capture's own smoothness; no shot goes in from behind the
 ///    backboard, and no square the shot clock cannot allow is chosen (fly balls play as
 ///    in version 2).
-pub const VERSION: u32 = 3;
+/// 4. Fielders perceive from angles: tan ψ and the bearing fitted by quadratics over
+///    their looks instead of the ball's path placed in space (baseball and cricket play
+///    differently by fractions of a millimetre a tick; basketball plays as in version 3).
+pub const VERSION: u32 = 4;
 
 use crate::basketball::{Capabilities, Order};
 use crate::protocol::{Agent, AgentInfo, Ball, Event, Field, MatchInfo, Score, Sensed};
