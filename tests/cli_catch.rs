@@ -257,27 +257,42 @@ fn the_optical_signatures_tell_chapman_from_lot() {
     assert!(num(&lot["median_image_bend"]) < num(&chapman["median_image_bend"]));
 }
 
-/// With a person's senses (0.2 s late, 0.05° of noise a look) the optical strategies
-/// still catch most catchable balls, because the fielder fits the ball's path over
-/// 0.2 s and carries it over the delay; reading rates off its last three looks instead
-/// (`--smoothing 0`) the noise wrecks them. Bounds sit below the measured 96 % and 91 %
-/// by the scatter of 232 balls; the three-look fielders catch 69 % and 37 %.
+/// Each of a person's senses costs catches in the direction it should: the same 300
+/// launches and the same draws of every error (switching a sense off or up only rescales
+/// its own), so the comparisons are paired. Worse judgements of the image's speed,
+/// direction or distance and a longer delay each catch fewer balls; without the
+/// finishing phase fewer too. The margins sit inside the measured gaps (e.g. speed ±0 %
+/// against ±20 %: 97 % and 73 % for chapman).
 #[test]
-fn a_human_observer_needs_its_fit_to_catch() {
+fn each_sense_costs_catches_in_its_own_direction() {
     let rates = |extra: &str| {
         let doc = json(&format!(
             "catch-sweep --n 300 --seed 2 --observers human --strategies chapman,lot-optical --json {extra}"
         ));
         let rate = |k: usize| num(&doc[0]["strategies"][k]["catchable_rate"]);
-        (rate(0), rate(1))
+        [rate(0), rate(1)]
     };
-    let (chapman, lot) = rates("");
-    assert!(chapman >= 0.9 && lot >= 0.85, "{chapman} {lot}");
-    let (chapman_raw, lot_raw) = rates("--smoothing 0");
-    assert!(
-        chapman_raw < chapman - 0.15 && lot_raw < lot - 0.3,
-        "{chapman_raw} {lot_raw}"
-    );
+    let preset = rates("");
+    // Catches with `extra` less the preset's, for chapman and lot-optical.
+    let gain = |extra: &str| {
+        let other = rates(extra);
+        [other[0] - preset[0], other[1] - preset[1]]
+    };
+    let better = |extra: &str, by: f64| {
+        let g = gain(extra);
+        assert!(g.iter().all(|&x| x > by), "{extra}: {g:?} from {preset:?}");
+    };
+    let worse = |extra: &str, by: f64| {
+        let g = gain(extra);
+        assert!(g.iter().all(|&x| x < -by), "{extra}: {g:?} from {preset:?}");
+    };
+    better("--rate-weber 0", 0.05);
+    worse("--rate-weber 0.2", 0.08);
+    better("--delay 0", -0.005);
+    worse("--delay 0.4", 0.1);
+    worse("--distance-weber 0.5", 0.02);
+    worse("--direction-deg 6", 0.01);
+    worse("--terminal 0 --lunge 0", 0.03);
 }
 
 #[test]

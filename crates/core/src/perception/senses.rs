@@ -37,7 +37,7 @@ use super::{PerceptionConfig, Sighting};
 use glam::DVec2;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal, StandardNormal};
+use rand_distr::{Distribution, StandardNormal};
 
 /// The correlation time of the senses' errors, s: how long one judgement of a rate or a
 /// distance is held before the next is independent of it. *Assumption*: about the
@@ -109,24 +109,23 @@ impl Senses {
         } else {
             (0.0, 1.0)
         };
-        let rates = c.rate_weber > 0.0;
-        let needed = [rates, c.direction_rad > 0.0, c.distance_weber > 0.0, rates];
-        for (error, needed) in self.errors.iter_mut().zip(needed) {
-            if needed {
-                let draw: f64 = StandardNormal.sample(&mut self.rng);
-                *error = keep * *error + fresh * draw;
-            }
+        // Every error is drawn on every look, used or not, so that switching one sense
+        // off leaves the others' errors as they were: experiments compare the same
+        // fielder with and without a sense, not two fielders with different luck.
+        for error in &mut self.errors {
+            let draw: f64 = StandardNormal.sample(&mut self.rng);
+            *error = keep * *error + fresh * draw;
         }
         let closing = self
             .last
             .map_or(0.0, |(t, d)| (truth.distance - d) / (truth.t - t).max(1e-9));
         self.last = Some((truth.t, truth.distance));
-        let (mut psi, mut alpha) = (truth.psi(), truth.alpha());
-        if c.noise_rad > 0.0 {
-            let normal = Normal::new(0.0, c.noise_rad).expect("noise sd is finite and positive");
-            psi += normal.sample(&mut self.rng);
-            alpha += normal.sample(&mut self.rng);
-        }
+        let blur: [f64; 2] = [
+            StandardNormal.sample(&mut self.rng),
+            StandardNormal.sample(&mut self.rng),
+        ];
+        let psi = truth.psi() + c.noise_rad * blur[0];
+        let alpha = truth.alpha() + c.noise_rad * blur[1];
         let distance_cue = (truth.distance <= c.distance_range_m).then(|| DistanceCue {
             distance_m: truth.distance * (c.distance_weber * self.errors[2]).exp(),
             rate_m_s: closing * (1.0 + c.rate_weber * self.errors[3]),
