@@ -135,6 +135,10 @@ fn bad_arguments_get_clear_errors() {
         ("--strategy lot --lot-reference -1", "write `apex` or seconds after the launch"),
         ("--strategy chapman --observer robot", "expected one of ideal, human"),
         ("--strategy chapman --smoothing -0.1", "must not be negative"),
+        ("--strategy chapman --rate-weber -0.1", "must not be negative"),
+        ("--strategy chapman --distance-range 0", "must be greater than 0"),
+        ("--strategy chapman --distance-range far", "not a number"),
+        ("--strategy chapman --terminal inf", "not a finite number"),
     ];
     for (extra, expected) in cases {
         let err = stderr_of(&format!("{base} {extra}"));
@@ -169,18 +173,57 @@ fn a_sweep_reports_the_observers_settings_and_flags_change_them() {
     let doc = json("catch-sweep --n 5 --observers human,ideal --delay 0.1 --json");
     let (human, ideal) = (&doc[0]["observer"], &doc[1]["observer"]);
     assert_eq!(human["name"], "human");
-    assert_eq!(num(&human["delay_s"]), 0.1);
-    assert_eq!(num(&human["noise_deg"]), 0.05);
-    assert_eq!(num(&human["smoothing_s"]), 0.2);
-    assert_eq!(num(&human["reach_m"]), 0.9);
-    assert_eq!(num(&ideal["delay_s"]), 0.1);
-    assert_eq!(num(&ideal["noise_deg"]), 0.0);
-    assert_eq!(num(&ideal["reach_m"]), 1.0);
+    let setting = |o: &Value, key: &str| num(&o[key]);
+    for (key, value) in [
+        ("delay_s", 0.1),
+        ("rate_weber", 0.1),
+        ("direction_deg", 2.0),
+        ("distance_weber", 0.15),
+        ("distance_range_m", 30.0),
+        ("noise_deg", 0.0),
+        ("smoothing_s", 0.1),
+        ("reach_m", 0.9),
+        ("terminal_s", 0.5),
+        ("lunge_m", 0.6),
+    ] {
+        assert_eq!(setting(human, key), value, "{key}");
+    }
+    assert_eq!(setting(ideal, "delay_s"), 0.1);
+    assert_eq!(setting(ideal, "rate_weber"), 0.0);
+    assert_eq!(setting(ideal, "reach_m"), 1.0);
+    // An unbounded range has no JSON number.
+    assert!(ideal["distance_range_m"].is_null(), "{ideal}");
     let text = String::from_utf8(fieldhouse("catch-sweep --n 5 --observers human").stdout).unwrap();
     assert!(
         text.starts_with(
-            "observer human: delay 0.2 s, noise 0.05°, smoothing 0.2 s, reach 0.9 m\n"
+            "observer human: delay 0.2 s, image speed ±10 % and direction ±2°, distance ±15 % \
+             within 30 m, angles ±0°, smoothing 0.1 s, reach 0.9 m, finishing 0.5 s with a 0.6 m \
+             lunge\n"
         ),
+        "{text}"
+    );
+    let changed = json(
+        "catch-sweep --n 5 --observers human --rate-weber 0.05 --direction-deg 1 \
+         --distance-weber 0.3 --distance-range inf --terminal 0 --lunge 0 --json",
+    );
+    let human = &changed[0]["observer"];
+    assert_eq!(
+        [
+            setting(human, "rate_weber"),
+            setting(human, "direction_deg"),
+            setting(human, "distance_weber"),
+            setting(human, "terminal_s"),
+            setting(human, "lunge_m")
+        ],
+        [0.05, 1.0, 0.3, 0.0, 0.0]
+    );
+    assert!(human["distance_range_m"].is_null(), "{human}");
+    let text = String::from_utf8(
+        fieldhouse("catch-sweep --n 5 --observers human --distance-range inf --terminal 0").stdout,
+    )
+    .unwrap();
+    assert!(
+        text.contains("distance ±15 % at any range") && text.contains("no finishing phase"),
         "{text}"
     );
 }
