@@ -18,8 +18,10 @@
 //! * [`physics`]: ball flight. Gravity, Nathan's drag and Magnus lift, a fixed-step RK4
 //!   integrator, bounces and rolls; baseball and cricket presets.
 //! * [`perception`]: what a fielder can see from its eye (the elevation tan ψ and bearing
-//!   α of the ball, with optional delay and noise) and its estimate of the present from
-//!   its looks: a least-squares fit of the ball's path, carried over the delay.
+//!   α of the ball) and judge, with a person's errors (the image's speed and direction, a
+//!   distance cue only up close), and its estimate of the present from its looks:
+//!   least-squares fits of the angles, carried over the delay with its own movement
+//!   taken out.
 //! * [`fielding`]: fielders with human limits, the ideal and human observers, the
 //!   sub-tick catch test, the catching strategies (Chapman/OAC with Tresilian's lateral
 //!   term, Gillies & Dodgson's LOT, McBeath's optical LOT, trajectory prediction), single

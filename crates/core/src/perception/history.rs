@@ -3,11 +3,12 @@
 //!
 //! **Why a fit, not differences.** Reading rates off two or three noisy looks
 //! multiplies the noise by the tick rate (and the optical acceleration by its square).
-//! The visual system integrates motion over time instead. So the fielder fits each angle
-//! (elevation ψ and bearing α) over its last looks, [`PerceptionConfig::smoothing_s`]
-//! of them, with a quadratic in time by least squares, and reads the angle and its rate
-//! off the fit. Nothing here places the ball in space: the angles are what the eye
-//! measures, and a quadratic through three looks is exact to the square of the tick.
+//! The visual system integrates motion over time instead. So the fielder fits the
+//! elevation (as tan ψ, the quantity Chapman's law is about) and the bearing α over its
+//! last looks, [`PerceptionConfig::smoothing_s`] of them, each with a quadratic in time
+//! by least squares, and reads the value and its rate off the fit. Nothing here places
+//! the ball in space: the angles are what the eye measures, and a quadratic through
+//! three looks is exact to the square of the tick (and exact for Chapman's linear tan ψ).
 //! The judgement of the image's motion then carries its own error
 //! ([`super::Senses::rate_errors`]).
 //!
