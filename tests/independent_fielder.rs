@@ -204,36 +204,20 @@ struct Run {
 /// A fielder starting at `start` and running by Chapman's law, with Tresilian's lateral
 /// term at `lateral_gain` (0 for `chapman-1d`).
 fn chapman_run(flight: &Flight, start: [f64; 2], lateral_gain: f64) -> Run {
-    let dt = 1.0 / TICK_HZ;
     let (mut pos, mut vel) = (start, [0.0, 0.0]);
     let mut path = Vec::new();
     let mut held_rate: Option<f64> = None;
     for (tick, segment) in flight.at_ticks.windows(2).enumerate() {
         path.push(pos);
         let now = look(&segment[0], pos, vel);
-        // The law acts after the reaction time while the ball is clearly above the eye:
-        // the fielder stands until then, and runs on without a command in the last
-        // ticks before a catch below it. The rate of tan ψ at its first step is the one
-        // it holds.
+        // The law acts after the reaction time.
         let reacted = tick as f64 / TICK_HZ >= REACTION_S;
-        let mut command = [0.0, 0.0];
-        if reacted && now.tan_psi >= CLEARLY_ABOVE {
-            let held = *held_rate.get_or_insert(now.tan_psi_rate);
-            let toward = [now.alpha.cos(), now.alpha.sin()];
-            let sideways = [-toward[1], toward[0]];
-            let radial = -RADIAL_GAIN * now.distance / now.tan_psi * (now.tan_psi_rate - held);
-            let lateral = lateral_gain * now.distance * now.alpha_rate;
-            command = std::array::from_fn(|i| radial * toward[i] + lateral * sideways[i]);
-        }
-        // The body: the acceleration's length clipped (its direction kept), then the
-        // speed's; constant acceleration over the tick moves it by the mean velocity.
-        let accel = scale(command, (TOP_ACCEL / length2(command)).min(1.0));
-        let pushed = [vel[0] + accel[0] * dt, vel[1] + accel[1] * dt];
-        let next_vel = scale(pushed, (TOP_SPEED / length2(pushed)).min(1.0));
-        let next_pos = [
-            pos[0] + 0.5 * (vel[0] + next_vel[0]) * dt,
-            pos[1] + 0.5 * (vel[1] + next_vel[1]) * dt,
-        ];
+        let command = if reacted {
+            chapman_law(&now, &mut held_rate, lateral_gain)
+        } else {
+            [0.0, 0.0]
+        };
+        let (next_pos, next_vel) = move_body(pos, vel, command);
         if passes_within(&segment[0], &segment[1], pos, next_pos, REACH) {
             return Run { caught: true, path };
         }
@@ -243,6 +227,36 @@ fn chapman_run(flight: &Flight, start: [f64; 2], lateral_gain: f64) -> Run {
         caught: false,
         path,
     }
+}
+
+/// Chapman's law with Tresilian's lateral term at `lateral_gain`, once the ball is
+/// clearly above the eye (the fielder stands until then, and runs on without a command in
+/// the last ticks before a catch below it); the rate of tan ψ at its first step is the
+/// one it holds.
+fn chapman_law(now: &Sight, held_rate: &mut Option<f64>, lateral_gain: f64) -> [f64; 2] {
+    if now.tan_psi < CLEARLY_ABOVE {
+        return [0.0, 0.0];
+    }
+    let held = *held_rate.get_or_insert(now.tan_psi_rate);
+    let toward = [now.alpha.cos(), now.alpha.sin()];
+    let sideways = [-toward[1], toward[0]];
+    let radial = -RADIAL_GAIN * now.distance / now.tan_psi * (now.tan_psi_rate - held);
+    let lateral = lateral_gain * now.distance * now.alpha_rate;
+    std::array::from_fn(|i| radial * toward[i] + lateral * sideways[i])
+}
+
+/// The body over one tick: the acceleration's length clipped (its direction kept), then
+/// the speed's; constant acceleration over the tick moves it by the mean velocity.
+fn move_body(pos: [f64; 2], vel: [f64; 2], command: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+    let dt = 1.0 / TICK_HZ;
+    let accel = scale(command, (TOP_ACCEL / length2(command)).min(1.0));
+    let pushed = [vel[0] + accel[0] * dt, vel[1] + accel[1] * dt];
+    let next_vel = scale(pushed, (TOP_SPEED / length2(pushed)).min(1.0));
+    let next_pos = [
+        pos[0] + 0.5 * (vel[0] + next_vel[0]) * dt,
+        pos[1] + 0.5 * (vel[1] + next_vel[1]) * dt,
+    ];
+    (next_pos, next_vel)
 }
 
 /// What the human fielder keeps of one look: when, tan ψ, α, the distance and its rate
@@ -364,14 +378,7 @@ fn human_chapman_run(flight: &Flight, start: [f64; 2]) -> Run {
                 tan_psi_rate: (v[1] * d - r[1] * d_rate) / (d * d),
                 alpha_rate: (r[0] * v[2] - r[2] * v[0]) / (d * d),
             };
-            if now.tan_psi >= CLEARLY_ABOVE {
-                let held = *held_rate.get_or_insert(now.tan_psi_rate);
-                let toward = [now.alpha.cos(), now.alpha.sin()];
-                let sideways = [-toward[1], toward[0]];
-                let radial = -RADIAL_GAIN * now.distance / now.tan_psi * (now.tan_psi_rate - held);
-                let lateral = LATERAL_GAIN * now.distance * now.alpha_rate;
-                command = std::array::from_fn(|i| radial * toward[i] + lateral * sideways[i]);
-            }
+            command = chapman_law(&now, &mut held_rate, LATERAL_GAIN);
             // The finish: where the judged ball comes down through the catch height under
             // gravity alone, if the cue gives a distance and the ball is falling to it.
             let disc = v[1] * v[1] + 2.0 * GRAVITY * (r[1] - catch_height);
@@ -397,13 +404,7 @@ fn human_chapman_run(flight: &Flight, start: [f64; 2]) -> Run {
                 }
             }
         }
-        let accel = scale(command, (TOP_ACCEL / length2(command)).min(1.0));
-        let pushed = [vel[0] + accel[0] * dt, vel[1] + accel[1] * dt];
-        let next_vel = scale(pushed, (TOP_SPEED / length2(pushed)).min(1.0));
-        let next_pos = [
-            pos[0] + 0.5 * (vel[0] + next_vel[0]) * dt,
-            pos[1] + 0.5 * (vel[1] + next_vel[1]) * dt,
-        ];
+        let (next_pos, next_vel) = move_body(pos, vel, command);
         let reach = HUMAN_REACH + if finishing { HUMAN_LUNGE } else { 0.0 };
         if passes_within(&segment[0], &segment[1], pos, next_pos, reach) {
             return Run { caught: true, path };
