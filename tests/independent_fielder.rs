@@ -622,13 +622,15 @@ fn an_independent_chapman_fielder_catches_the_balls_the_binary_catches() {
             "{name}: the catch rates differ: {:?}",
             rates[k]
         );
-        // (b) The same balls, not only as many. The paths agree to centimetres (below),
+        // (b) The same balls, not only as many. The paths agree to millimetres (below),
         // so a decision can differ only for a ball that passes within about that of the
-        // edge of the 1 m reach or of the catch band's ends. There were none in 300 when
-        // this was written; 97 % leaves room for a few such balls, and fails a side that
-        // catches other balls at the same rate.
+        // edge of the reach or of the catch band's ends. There were none in 300 when
+        // this was written; 99 % leaves room for three such balls, and fails a side that
+        // catches other balls at a similar rate: an oracle without the lunge catches
+        // 72.7 % against 75.0 %, within the 3 points of (a), but decides 7 balls
+        // differently (97.7 %).
         assert!(
-            agreement >= 0.97,
+            agreement >= 0.99,
             "{name}: the same decision on only {:.1}% of launches",
             100.0 * agreement
         );
