@@ -19,7 +19,8 @@ pub struct FielderConfig {
     /// When a `lot` fielder takes its reference (other strategies ignore it).
     pub lot_reference: LotReference,
     /// How long before the ball comes down the fielder stops steering by its law and
-    /// finishes the catch ([`super::terminal`]), as it judges it, s; 0: never.
+    /// finishes the catch (a run to where it judges the ball comes down, and a lunge), as
+    /// it judges it, s; 0: never.
     pub terminal_s: f64,
 }
 
