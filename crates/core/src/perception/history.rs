@@ -116,7 +116,7 @@ impl PerceptionHistory {
         let ahead = self.delay_ticks as f64 * self.dt;
         let tick = |look: &Look| (look.t - newest.t) / self.dt;
         let at = ahead / self.dt;
-        let (tan_psi, tan_psi_rate) = quadratic(window.clone().map(|l| (tick(l), l.psi.tan())), at);
+        let (tan_psi, tan_psi_rate) = quadratic(window.clone().map(|l| (tick(l), l.tan_psi)), at);
         let psi = tan_psi.atan();
         let mut psi_rate = tan_psi_rate / self.dt * psi.cos().powi(2);
         // Bearings unwrapped about the newest, so a fit never straddles ±π.
@@ -278,7 +278,7 @@ mod tests {
         let h = 1e-6;
         Look {
             t,
-            psi: s.psi(),
+            tan_psi: s.tan_psi,
             alpha: s.alpha(),
             distance_cue: Some(DistanceCue {
                 distance_m: s.distance,

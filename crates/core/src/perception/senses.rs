@@ -50,8 +50,8 @@ pub const JUDGEMENT_S: f64 = 0.1;
 pub struct Look {
     /// When the eye looked, s since the launch.
     pub t: f64,
-    /// Elevation ψ above the horizontal through the eye, rad.
-    pub psi: f64,
+    /// tan ψ, ψ the elevation above the horizontal through the eye.
+    pub tan_psi: f64,
     /// Bearing α from +x toward +z, rad.
     pub alpha: f64,
     /// The horizontal distance as the fielder judges it; `None` beyond the cue's range.
@@ -84,6 +84,8 @@ pub struct Senses {
     /// The true distance at the last look, (t, d): the closing speed's truth is its
     /// change over one tick.
     last: Option<(f64, f64)>,
+    /// Whether any error is on.
+    noisy: bool,
 }
 
 impl Senses {
@@ -95,6 +97,14 @@ impl Senses {
             persistence: (-dt / JUDGEMENT_S).exp(),
             errors: [0.0; 4],
             last: None,
+            noisy: [
+                config.rate_weber,
+                config.direction_rad,
+                config.distance_weber,
+                config.noise_rad,
+            ]
+            .iter()
+            .any(|&sd| sd > 0.0),
         }
     }
 
@@ -111,20 +121,28 @@ impl Senses {
         };
         // Every error is drawn on every look, used or not, so that switching one sense
         // off leaves the others' errors as they were: experiments compare the same
-        // fielder with and without a sense, not two fielders with different luck.
-        for error in &mut self.errors {
-            let draw: f64 = StandardNormal.sample(&mut self.rng);
-            *error = keep * *error + fresh * draw;
+        // fielder with and without a sense, not two fielders with different luck. An
+        // exact eye (every error off) draws nothing.
+        let mut blur = [0.0; 2];
+        if self.noisy {
+            for error in &mut self.errors {
+                let draw: f64 = StandardNormal.sample(&mut self.rng);
+                *error = keep * *error + fresh * draw;
+            }
+            blur = [
+                StandardNormal.sample(&mut self.rng),
+                StandardNormal.sample(&mut self.rng),
+            ];
         }
         let closing = self
             .last
             .map_or(0.0, |(t, d)| (truth.distance - d) / (truth.t - t).max(1e-9));
         self.last = Some((truth.t, truth.distance));
-        let blur: [f64; 2] = [
-            StandardNormal.sample(&mut self.rng),
-            StandardNormal.sample(&mut self.rng),
-        ];
-        let psi = truth.psi() + c.noise_rad * blur[0];
+        let tan_psi = if c.noise_rad == 0.0 {
+            truth.tan_psi
+        } else {
+            (truth.psi() + c.noise_rad * blur[0]).tan()
+        };
         let alpha = truth.alpha() + c.noise_rad * blur[1];
         let distance_cue = (truth.distance <= c.distance_range_m).then(|| DistanceCue {
             distance_m: truth.distance * (c.distance_weber * self.errors[2]).exp(),
@@ -132,7 +150,7 @@ impl Senses {
         });
         Look {
             t: truth.t,
-            psi,
+            tan_psi,
             alpha,
             distance_cue,
             fielder,
