@@ -31,8 +31,9 @@
 //!    once ([`session::Session::step`]).
 //! 4. The task drains [`driver::MatchDriver::poll_output`] (`Ticker::carry_out`): an
 //!    [`driver::Output::Frame`] is published on the match's watch channel, whose bytes
-//!    every spectator socket sends unchanged, and handed to the replay's writer thread
-//!    (`server::recording`); an [`driver::Output::Perception`] goes to its bot's queue.
+//!    a few fan-out tasks (`server::fanout`) write unchanged to every spectator's socket,
+//!    and handed to the replay's writer thread (`server::recording`); an
+//!    [`driver::Output::Perception`] goes to its bot's queue.
 
 pub use fieldhouse_core::{
     basketball, costmap, driver, fielding, motion, names, perception, physics, protocol, replay,

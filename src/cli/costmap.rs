@@ -86,11 +86,20 @@ pub(super) struct CacheArgs {
     no_cache: bool,
 }
 
+/// The default cache directory: `$XDG_CACHE_HOME/fieldhouse`, else `~/.cache/fieldhouse`.
+/// Read here, at the edge: the core is told its directories.
+fn default_cache_dir() -> Option<PathBuf> {
+    std::env::var_os("XDG_CACHE_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))
+        .map(|d| d.join("fieldhouse"))
+}
+
 impl CacheArgs {
     /// The cache directory to use, if any.
     pub(super) fn dir(&self) -> Option<PathBuf> {
         (!self.no_cache)
-            .then(|| self.cache_dir.clone().or_else(cache::default_dir))
+            .then(|| self.cache_dir.clone().or_else(default_cache_dir))
             .flatten()
     }
 

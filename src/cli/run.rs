@@ -139,7 +139,12 @@ pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("{stem}.jsonl.zst")));
-    let header = replay::header(&info, &scenario, &motion);
+    let header = replay::header(
+        &info,
+        &scenario,
+        &motion,
+        fieldhouse_server::wall::since_epoch(),
+    );
     let encoding = Encoding::for_path(&path);
     let recorder = Recorder::create(&path, &header, encoding).with_context(|| {
         format!(

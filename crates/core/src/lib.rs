@@ -5,11 +5,15 @@
 //! or a network crate (`scripts/check-architecture` fails if it does), so "the core does
 //! no I/O" is checked, not a convention.
 //!
-//! Its only I/O is reading files at its edge, before any tick: motion capture (a user's
-//! `--mocap DIR`; the CMU clips are embedded), the cost-map cache, scenario and replay
-//! files. These stay here because each reader is also what validates the format (a BVH
-//! parser, a replay reader that stops at a torn record), and the fuzz targets exercise
-//! exactly those, on this crate alone.
+//! It reads no clock and no environment: times (when a recording started) and
+//! directories (the cost-map cache) are handed in by the edge, the server and the CLI.
+//! Its only file I/O is in named readers and writers, each given its path: motion capture
+//! (a user's `--mocap DIR`; the CMU clips are embedded), the cost-map cache file, and
+//! replay files. These stay here because each reader is also what validates the format
+//! (a BVH parser, a replay reader that stops at a torn record), and the fuzz targets
+//! exercise exactly those, on this crate alone. `clippy.toml` forbids clocks, the
+//! environment and `std::fs` elsewhere in the crate (tests excepted), and
+//! `scripts/check-architecture` fails if a new place allows them.
 //!
 //! # Layout
 //!
@@ -62,6 +66,8 @@
 //! * [`names`]: the names users type for presets, and the error a wrong one gets.
 //! * [`words`]: how counts and figures read in text for people (`1 possession`, `2.82`).
 
+// Tests may touch files and read the environment; the crate itself may not (clippy.toml).
+#![cfg_attr(test, allow(clippy::disallowed_methods))]
 // Every public item of the core is documented: other crates build on it, and its
 // documentation is where units, frames and the papers' conventions are stated.
 #![warn(missing_docs)]

@@ -12,6 +12,10 @@
 //! which runs this test with `FIELDHOUSE_BLESS=1`: it then writes the files
 //! (zstd level 19) and removes the ones they replace.
 
+#![allow(
+    clippy::disallowed_methods,
+    reason = "a test reads the shipped files and its bless switch"
+)]
 use fieldhouse_core::basketball::Mover;
 use fieldhouse_core::costmap::cache;
 use fieldhouse_core::motion::{Mirroring, MotionLibrary, FPS};

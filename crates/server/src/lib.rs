@@ -20,6 +20,7 @@
 //! * [`recording`]: writing a match's replay on a thread of its own, bounded.
 //! * [`retention`]: deleting the oldest replays past the configured size and age.
 //! * [`api`]: the REST API, health, readiness and metrics.
+//! * [`error`]: the JSON error every HTTP endpoint answers with, and its status.
 //! * [`auth`]: tokens, compared in constant time.
 //! * [`listener`]: the accept loop: every connection counted and capped (per address
 //!   and in all), header and idle timeouts, descriptors kept for health checks.
@@ -27,6 +28,8 @@
 //! * [`budget`]: what a client may send a second, on every socket kind.
 //! * [`admission`]: who may open a WebSocket: origin and host policy, room for
 //!   spectators.
+//! * [`hosts`]: what a Host or Origin header and the allowed hosts and origins may name.
+//! * [`wall`]: the time of day, read in one place (the core has no clock).
 //! * [`metrics`]: Prometheus counters.
 //! * [`motion`]: the motion poses a spectator poses skeletons from, served once.
 //! * [`demo`]: the built-in demo matches.
@@ -59,6 +62,7 @@ pub mod spectator;
 pub mod state;
 pub mod sweep;
 pub mod upgrade;
+pub mod wall;
 pub mod web;
 
 pub use config::ServerConfig;

@@ -78,7 +78,12 @@ pub fn spawn(
         .as_deref()
         .filter(|_| record)
         .and_then(|dir| {
-            let header = replay::header(&info, &scenario, app.caps.source.fingerprint());
+            let header = replay::header(
+                &info,
+                &scenario,
+                app.caps.source.fingerprint(),
+                crate::wall::since_epoch(),
+            );
             let files = InDir {
                 app: app.clone(),
                 dir: dir.to_path_buf(),
@@ -151,9 +156,7 @@ fn recording_limit(config: &ServerConfig, scenario: &Scenario) -> Limit {
 }
 
 fn unix_seconds() -> u64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs())
+    crate::wall::since_epoch().as_secs()
 }
 
 struct Ticker {
@@ -428,9 +431,7 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> &str {
 /// after `"type":"frame"`, where a load generator finds it without parsing the frame.
 fn stamped(frame: &str) -> String {
     const HEAD: &str = r#"{"type":"frame","#;
-    let sent_us = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_micros());
+    let sent_us = crate::wall::since_epoch().as_micros();
     match frame.strip_prefix(HEAD) {
         Some(rest) => format!(r#"{HEAD}"sent_us":{sent_us},{rest}"#),
         None => frame.to_owned(),

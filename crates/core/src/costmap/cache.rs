@@ -179,18 +179,14 @@ pub fn file_name(motion_fingerprint: &str, behaviour: &str, inputs: &impl Serial
     format!("capability-{safe}-{hex}.bin")
 }
 
-/// The default cache directory: `$XDG_CACHE_HOME/fieldhouse`, else `~/.cache/fieldhouse`.
-pub fn default_dir() -> Option<PathBuf> {
-    std::env::var_os("XDG_CACHE_HOME")
-        .map(PathBuf::from)
-        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))
-        .map(|d| d.join("fieldhouse"))
-}
-
 /// The graph and maps of `behaviour`: shipped in the binary or read from the cache, as
 /// `reuse` allows, if either holds them; else made by `build` and stored in the cache
 /// directory. A cache that cannot be read or written is logged and otherwise ignored:
 /// what `build` makes is still good. Returns them and where they came from.
+#[allow(
+    clippy::disallowed_methods,
+    reason = "a named reader: the cost-map cache file, given its directory"
+)]
 pub fn build_or_load<E>(
     reuse: Reuse<'_>,
     motion_fingerprint: &str,
@@ -320,6 +316,10 @@ pub fn decode_payload(payload: &[u8]) -> Result<Cached, CacheError> {
 }
 
 /// Writes `cached` to `path` atomically (temporary file, sync, rename).
+#[allow(
+    clippy::disallowed_methods,
+    reason = "a named writer: the cost-map cache file, given its path"
+)]
 pub fn store(path: &Path, cached: &Cached) -> std::io::Result<()> {
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir)?;

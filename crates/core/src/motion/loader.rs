@@ -132,6 +132,10 @@ impl FileKind {
 /// Loads every `DIR/<behaviour>/*.bvh` and `*.amc` (with its `.asf`; the folder name is
 /// the behaviour; other files are ignored), resampled to `fps`, sorted by (behaviour,
 /// name), with `mirroring`.
+#[allow(
+    clippy::disallowed_methods,
+    reason = "a named reader: a user's motion-capture directory, given its path"
+)]
 pub(super) fn load_library(
     dir: &Path,
     fps: f64,
@@ -330,6 +334,10 @@ fn file_name(path: &Path) -> String {
 }
 
 /// The `*.bvh`, `*.asf` and `*.amc` files in one behaviour folder, sorted.
+#[allow(
+    clippy::disallowed_methods,
+    reason = "a named reader: a user's motion-capture directory, given its path"
+)]
 fn motion_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     for entry in fs::read_dir(dir)? {

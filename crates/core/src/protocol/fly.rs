@@ -239,7 +239,7 @@ pub struct SelfSensed {
     pub velocity: [f64; 2],
 }
 
-/// The ball as a fielder's eye sees it (SCIENCE.md, "Optics").
+/// The ball as a fielder's eye sees it (docs/catching.md, "What a fielder sees").
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
 pub struct Optics {
     /// The ball's bearing on the ground, radians from +x toward +z.

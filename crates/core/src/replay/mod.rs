@@ -243,12 +243,16 @@ mod records {
     }
 }
 
-/// The header record of a replay: what was played, with what, and when. A value, since
-/// a recording of several files adds its segment's fields to it.
-pub fn header(match_info: &impl Serialize, scenario: &Scenario, motion: &str) -> Value {
-    let started_unix_ms = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_millis() as u64);
+/// The header record of a replay: what was played, with what, and when (`started`,
+/// since the Unix epoch: the caller reads the clock). A value, since a recording of
+/// several files adds its segment's fields to it.
+pub fn header(
+    match_info: &impl Serialize,
+    scenario: &Scenario,
+    motion: &str,
+    started: std::time::Duration,
+) -> Value {
+    let started_unix_ms = started.as_millis() as u64;
     serde_json::to_value(records::Header {
         fieldhouse: env!("CARGO_PKG_VERSION"),
         format: FORMAT,
@@ -266,6 +270,10 @@ pub fn header(match_info: &impl Serialize, scenario: &Scenario, motion: &str) ->
 
 impl Recorder {
     /// Creates `path` (never overwriting a file) and writes the header.
+    #[allow(
+        clippy::disallowed_methods,
+        reason = "a named writer: a new replay file, given its path"
+    )]
     pub fn create(path: &Path, header: &Value, encoding: Encoding) -> io::Result<Recorder> {
         let file = std::fs::OpenOptions::new()
             .write(true)
@@ -563,6 +571,10 @@ pub enum ReplayError {
 /// it that does not read is where the readable prefix ends. It reads the whole file
 /// into memory: for tools run on a file of one's own, never for the server, which reads
 /// through an [`Index`].
+#[allow(
+    clippy::disallowed_methods,
+    reason = "a named reader: a replay file, given its path"
+)]
 pub fn read(path: &Path) -> Result<Replay, ReplayError> {
     let bytes = std::fs::read(path).map_err(|source| ReplayError::Io {
         path: path.to_path_buf(),
