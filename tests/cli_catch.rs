@@ -254,7 +254,7 @@ fn check_sweep_report(doc: &Value) {
         let in_bins: u64 = bins.iter().map(|b| b["catchable"].as_u64().unwrap()).sum();
         assert_eq!(in_bins, catchable);
         for b in bins {
-            assert!(b["caught"].as_u64() <= b["catchable"].as_u64());
+            assert!(b["caught"].as_u64().unwrap() <= b["catchable"].as_u64().unwrap());
             // `predictive` defines catchability: it catches every catchable ball.
             if s["strategy"] == "predictive" {
                 assert_eq!(b["caught"], b["catchable"]);

@@ -53,6 +53,7 @@ fn trickled_headers_and_silent_connections_are_closed_at_the_header_timeout() {
     let mut writer = trickle.try_clone().unwrap();
     let dripping = std::thread::spawn(move || {
         for k in 0..20 {
+            // The drip: one header line every 300 ms, slower than the header timeout allows.
             std::thread::sleep(Duration::from_millis(300));
             if writer
                 .write_all(format!("X-Drip-{k}: 1\r\n").as_bytes())

@@ -347,6 +347,8 @@ async fn viewers_and_slow_downloads_of_a_big_replay_cost_a_fraction_of_its_size(
         viewers.push(viewer);
     }
     let downloads: Vec<_> = (0..8).map(|_| slow_download(&server, "big")).collect();
+    // Time for every slow download to be under way and holding what it holds: memory is
+    // read while they are stalled, not before they start.
     tokio::time::sleep(Duration::from_millis(500)).await;
     let grew = memory_kb(&server, "VmRSS:").saturating_sub(before);
     eprintln!("8 viewers and 8 slow downloads of a {size_kb} kB replay: resident memory grew {grew} kB (from {before} kB)");
@@ -707,18 +709,20 @@ async fn retention_deletes_the_oldest_replays_and_never_the_one_being_written() 
     let mut early = connect(&server.ws(&format!("/ws/replays/{live_replay}"))).await;
     let seen_early = next(&mut early).await["replay"].clone();
     // The writer writes whole chunks: one that lands after the early viewer came.
-    let early_last = seen_early["last_tick"].as_u64();
+    let early_last = seen_early["last_tick"]
+        .as_u64()
+        .expect("a viewer is told the last tick");
     common::until(
         Duration::from_secs(10),
         "no chunk was written after the early viewer came",
-        || last_tick_in(&dir.join(&recording)) > early_last,
+        || last_tick_in(&dir.join(&recording)).is_some_and(|t| t > early_last),
     )
     .await;
     let mut late = connect(&server.ws(&format!("/ws/replays/{live_replay}"))).await;
     let seen_late = next(&mut late).await["replay"].clone();
     assert_eq!(seen_late["complete"], false);
     assert!(
-        seen_late["last_tick"].as_u64() > early_last,
+        seen_late["last_tick"].as_u64().unwrap() > early_last,
         "{seen_early} {seen_late}"
     );
     assert_eq!(seen_late["first_tick"], 0);
@@ -1313,6 +1317,8 @@ async fn a_recording_being_written_is_watched_as_its_chunks_land() {
             assert_eq!(first["tick"], 0);
             assert_eq!(first["match"], live.as_str());
         }
+        // The recording lands a chunk at a time: the next viewer comes a little later,
+        // when more of it may have landed.
         tokio::time::sleep(Duration::from_millis(300)).await;
     }
     eprintln!("last ticks seen by viewers as the recording went: {seen:?}");
