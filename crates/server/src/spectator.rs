@@ -177,6 +177,9 @@ async fn listen(
             let _ = said.send(ending);
         }
         if matches!(read, Read::Closed) {
+            // No frame after the answering close either: the fan-out may be about to
+            // write one.
+            wire.leave();
             answer_close(&mut socket).await;
             return;
         }
