@@ -340,7 +340,8 @@ fn each_sense_costs_catches_in_its_own_direction() {
 
 #[test]
 fn sweep_draws_svg_plots() {
-    let dir = std::env::temp_dir().join(format!("fieldhouse-svg-{}", std::process::id()));
+    let scratch = tempfile::tempdir().unwrap();
+    let dir = scratch.path();
     let out = fieldhouse(&format!(
         "catch-sweep --n 8 --strategies chapman,lot-optical --svg {}",
         dir.display()
@@ -362,7 +363,6 @@ fn sweep_draws_svg_plots() {
     }
     let svg = std::fs::read_to_string(dir.join("human/launch-0-paths.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.contains("chapman") && svg.trim_end().ends_with("</svg>"));
-    std::fs::remove_dir_all(dir).unwrap();
 }
 
 #[test]

@@ -5,24 +5,14 @@ mod common;
 
 use common::{failure, fieldhouse, json, repository_mocap};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// A scratch directory under the system temp dir, removed when dropped.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("fieldhouse-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
+fn scratch(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("fieldhouse-{name}-"))
+        .tempdir()
+        .unwrap()
 }
 
 #[test]
@@ -97,25 +87,25 @@ fn the_embedded_capture_is_the_default_and_a_directory_replaces_it() {
         "each clip and its mirror image"
     );
     // A user's directory replaces it, by flag or by environment, named without its path.
-    let dir = Scratch::new("user-mocap");
-    std::fs::create_dir_all(dir.0.join("run")).unwrap();
+    let dir = scratch("user-mocap");
+    std::fs::create_dir_all(dir.path().join("run")).unwrap();
     for name in ["16_36.bvh", "16_45.bvh"] {
         std::fs::copy(
             repository_mocap().join("run").join(name),
-            dir.0.join("run").join(name),
+            dir.path().join("run").join(name),
         )
         .unwrap();
     }
     let by_flag = json(&format!(
         "motion-graph --behaviour run --json --mocap {}",
-        dir.0.display()
+        dir.path().display()
     ));
     let source = by_flag["motion_source"].as_str().unwrap();
     assert!(
         source.starts_with("user capture: 2 clips and their mirror images, fingerprint "),
         "{source}"
     );
-    assert!(!source.contains(&*dir.0.to_string_lossy()), "{source}");
+    assert!(!source.contains(&*dir.path().to_string_lossy()), "{source}");
     assert_eq!(
         by_flag["clips"],
         serde_json::json!(["16_36", "16_36-mirror", "16_45", "16_45-mirror"])
@@ -124,7 +114,7 @@ fn the_embedded_capture_is_the_default_and_a_directory_replaces_it() {
     // fingerprint.
     let captured = json(&format!(
         "motion-graph --behaviour run --json --no-mirror --mocap {}",
-        dir.0.display()
+        dir.path().display()
     ));
     let plain = captured["motion_source"].as_str().unwrap();
     assert!(
@@ -135,7 +125,7 @@ fn the_embedded_capture_is_the_default_and_a_directory_replaces_it() {
     assert_eq!(captured["clips"], serde_json::json!(["16_36", "16_45"]));
     let by_env = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
         .args(["motion-graph", "--behaviour", "run", "--json"])
-        .env("FIELDHOUSE_MOCAP_DIR", &dir.0)
+        .env("FIELDHOUSE_MOCAP_DIR", dir.path())
         .output()
         .unwrap();
     let by_env: Value = serde_json::from_slice(&by_env.stdout).unwrap();
@@ -162,8 +152,8 @@ fn motion_errors_name_what_is_wrong() {
 
 #[test]
 fn a_corrupt_clip_is_reported_and_the_rest_still_load() {
-    let dir = Scratch::new("corrupt-mocap");
-    let run = dir.0.join("run");
+    let dir = scratch("corrupt-mocap");
+    let run = dir.path().join("run");
     std::fs::create_dir_all(&run).unwrap();
     for name in ["16_36.bvh", "16_45.bvh"] {
         std::fs::copy(repository_mocap().join("run").join(name), run.join(name)).unwrap();
@@ -176,7 +166,7 @@ fn a_corrupt_clip_is_reported_and_the_rest_still_load() {
     std::fs::write(run.join("16_99.bvh"), lines.join("\n")).unwrap();
     let out = fieldhouse(&format!(
         "motion-graph --mocap {} --behaviour run --json",
-        dir.0.display()
+        dir.path().display()
     ));
     assert!(
         out.status.success(),
@@ -209,8 +199,8 @@ fn costmap(extra: &str, cache: &Path) -> Value {
 
 #[test]
 fn a_cost_map_is_a_grid_of_frames_in_the_agents_frame() {
-    let cache = Scratch::new("costmap-grid");
-    let doc = costmap("--method search --obstacle 2,-1,3,1", &cache.0);
+    let cache = scratch("costmap-grid");
+    let doc = costmap("--method search --obstacle 2,-1,3,1", cache.path());
     let (cell, size) = (
         doc["cell_m"].as_f64().unwrap(),
         doc["size_m"].as_f64().unwrap(),
@@ -245,29 +235,29 @@ fn a_cost_map_is_a_grid_of_frames_in_the_agents_frame() {
 
 #[test]
 fn cost_maps_are_cached_and_a_corrupt_cache_is_rebuilt() {
-    let cache = Scratch::new("costmap-cache");
-    let first = costmap("--method mc --iterations 3000", &cache.0);
+    let cache = scratch("costmap-cache");
+    let first = costmap("--method mc --iterations 3000", cache.path());
     assert_eq!(first["from_cache"], false);
-    let again = costmap("--method mc --iterations 3000", &cache.0);
+    let again = costmap("--method mc --iterations 3000", cache.path());
     assert_eq!(again["from_cache"], true);
     assert_eq!(again["costs"], first["costs"]);
     // Other parameters, another map.
     assert_eq!(
-        costmap("--method mc --iterations 3001", &cache.0)["from_cache"],
+        costmap("--method mc --iterations 3001", cache.path())["from_cache"],
         false
     );
-    for entry in std::fs::read_dir(&cache.0).unwrap() {
+    for entry in std::fs::read_dir(cache.path()).unwrap() {
         std::fs::write(entry.unwrap().path(), b"{\"costs\": [[1, 2").unwrap();
     }
-    let rebuilt = costmap("--method mc --iterations 3000", &cache.0);
+    let rebuilt = costmap("--method mc --iterations 3000", cache.path());
     assert_eq!(rebuilt["from_cache"], false);
     assert_eq!(rebuilt["costs"], first["costs"]);
 }
 
 #[test]
 fn the_heat_map_is_a_png_of_the_grid() {
-    let dir = Scratch::new("costmap-png");
-    let file = dir.0.join("run.png");
+    let dir = scratch("costmap-png");
+    let file = dir.path().join("run.png");
     let out = fieldhouse(&format!(
         "costmap --behaviour run --method grassfire --size 10 --cell 0.5 --no-cache --png {}",
         file.display()
@@ -344,12 +334,12 @@ fn costmap_arguments_are_checked() {
 
 #[test]
 fn an_interrupted_build_leaves_no_cache_file() {
-    let cache = Scratch::new("costmap-interrupt");
+    let cache = scratch("costmap-interrupt");
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_fieldhouse"))
         .args(
             format!(
                 "costmap --behaviour run --method mc --iterations 50000000 --cache-dir {}",
-                cache.0.display()
+                cache.path().display()
             )
             .split_whitespace(),
         )
@@ -366,15 +356,15 @@ fn an_interrupted_build_leaves_no_cache_file() {
     );
     child.kill().unwrap();
     child.wait().unwrap();
-    let left: Vec<_> = std::fs::read_dir(&cache.0)
+    let left: Vec<_> = std::fs::read_dir(cache.path())
         .map(|d| d.flatten().map(|e| e.path()).collect())
         .unwrap_or_default();
     assert!(left.is_empty(), "an interrupted build left {left:?}");
     // The next run builds from scratch and caches a complete map.
-    let doc = costmap("--method mc --iterations 2000", &cache.0);
+    let doc = costmap("--method mc --iterations 2000", cache.path());
     assert_eq!(doc["from_cache"], false);
     assert_eq!(
-        costmap("--method mc --iterations 2000", &cache.0)["from_cache"],
+        costmap("--method mc --iterations 2000", cache.path())["from_cache"],
         true
     );
 }

@@ -399,19 +399,17 @@ impl Replays {
 mod tests {
     use super::scan;
     use fieldhouse_core::replay::Encoding;
-    use std::path::PathBuf;
 
-    fn empty_dir(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("fieldhouse-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
+    fn empty_dir() -> tempfile::TempDir {
+        tempfile::tempdir().unwrap()
     }
 
     #[test]
     fn the_walk_finds_regular_files_with_one_name_and_passes_over_the_rest() {
-        let dir = empty_dir("walk");
-        let outside = empty_dir("walk-outside");
+        let dir = empty_dir();
+        let dir = dir.path();
+        let outside = empty_dir();
+        let outside = outside.path();
         for name in [
             "a.jsonl",
             "b.jsonl.zst",
@@ -437,16 +435,16 @@ mod tests {
         );
         // A directory that cannot be read is an error, not an empty directory.
         assert!(scan(&dir.join("missing")).is_err());
-        std::fs::remove_dir_all(&dir).unwrap();
-        std::fs::remove_dir_all(&outside).unwrap();
     }
 
     /// Deleting goes by name, and only while the name still names the file weighed: a
     /// name swapped since for a link, another file or a second name of one is left.
     #[test]
     fn a_name_swapped_after_the_walk_is_not_deleted() {
-        let dir = empty_dir("swapped");
-        let outside = empty_dir("swapped-outside");
+        let dir = empty_dir();
+        let dir = dir.path();
+        let outside = empty_dir();
+        let outside = outside.path();
         std::fs::write(outside.join("precious"), "keep me").unwrap();
         for name in [
             "kept.jsonl",
@@ -485,7 +483,5 @@ mod tests {
             std::fs::read_to_string(outside.join("precious")).unwrap(),
             "keep me"
         );
-        std::fs::remove_dir_all(&dir).unwrap();
-        std::fs::remove_dir_all(&outside).unwrap();
     }
 }

@@ -695,9 +695,8 @@ mod tests {
     /// descriptors) is listed from its directory entry with the error, not left out.
     #[test]
     fn a_replay_that_cannot_be_opened_now_is_listed_with_an_error_not_left_out() {
-        let dir = std::env::temp_dir().join(format!("fieldhouse-listed-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
+        let scratch = tempfile::tempdir().unwrap();
+        let dir = scratch.path().to_path_buf();
         std::fs::write(dir.join("busy.jsonl"), "not read\n").unwrap();
         std::fs::write(dir.join("gone.jsonl"), "not read\n").unwrap();
         let entries = replay_dir::scan(&dir).unwrap();
@@ -713,6 +712,5 @@ mod tests {
         assert!(!error.contains(dir.to_str().unwrap()), "{error}");
         assert_eq!(entries[1].id, "gone");
         assert!(listed(&replays, &entries[1]).is_none());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -147,8 +147,8 @@ mod tests {
 
     #[test]
     fn a_sweep_deletes_the_oldest_first_down_to_its_limits_by_name_alone() {
-        let dir = std::env::temp_dir().join(format!("fieldhouse-sweep-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
+        let scratch = tempfile::tempdir().unwrap();
+        let dir = scratch.path().to_path_buf();
         std::fs::create_dir_all(dir.join("outside")).unwrap();
         let day = Duration::from_secs(86_400);
         replay(&dir, "ancient.jsonl", 10, day * 30);
@@ -190,6 +190,5 @@ mod tests {
         );
         assert!(dir.join("outside/precious.jsonl").exists());
         assert!(sweep(&dir.join("missing"), keep, writing, |_, _| {}).is_err());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -6,23 +6,14 @@ use glam::DVec2;
 use std::f64::consts::{PI, TAU};
 
 use crate::fixtures::{cmu_library as library, mocap_dir};
+use tempfile::TempDir;
 
 /// A scratch directory, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(test: &str) -> TempDir {
-        let dir = std::env::temp_dir().join(format!("fieldhouse-{test}-{}", std::process::id()));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = fs::remove_dir_all(&self.0);
-    }
+fn temp_dir(test: &str) -> TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("fieldhouse-{test}-"))
+        .tempdir()
+        .unwrap()
 }
 
 fn joint(clip: &Clip, name: &str) -> usize {
@@ -234,8 +225,8 @@ fn the_heading_is_the_way_the_toes_point() {
 
 #[test]
 fn a_corrupt_file_costs_one_clip_and_names_its_line() {
-    let tmp = TempDir::new("corrupt");
-    let run = tmp.0.join("run");
+    let tmp = temp_dir("corrupt");
+    let run = tmp.path().join("run");
     fs::create_dir(&run).unwrap();
     let good = fs::read(mocap_dir().join("run/16_36.bvh")).unwrap();
     fs::write(run.join("16_36.bvh"), &good).unwrap();
@@ -251,9 +242,9 @@ fn a_corrupt_file_costs_one_clip_and_names_its_line() {
     fs::write(run.join("broken.bvh"), &good[..line_start + 20]).unwrap();
     // Not BVH, so not looked at.
     fs::write(run.join("notes.txt"), "jogging").unwrap();
-    fs::write(tmp.0.join("README.md"), "motion").unwrap();
+    fs::write(tmp.path().join("README.md"), "motion").unwrap();
 
-    let lib = load_library(&tmp.0, FPS, Mirroring::Off).unwrap();
+    let lib = load_library(tmp.path(), FPS, Mirroring::Off).unwrap();
     assert_eq!(lib.clips().len(), 1);
     assert_eq!(lib.clips()[0].name, "16_36");
     assert_eq!(lib.problems().len(), 1);
@@ -270,20 +261,26 @@ fn a_corrupt_file_costs_one_clip_and_names_its_line() {
     // Only the good file counts toward the fingerprint.
     fs::remove_file(run.join("broken.bvh")).unwrap();
     assert_eq!(
-        load_library(&tmp.0, FPS, Mirroring::Off).unwrap().source,
+        load_library(tmp.path(), FPS, Mirroring::Off)
+            .unwrap()
+            .source,
         lib.source
     );
 }
 
 #[test]
 fn nothing_to_load_is_an_error_that_keeps_the_problems() {
-    let tmp = TempDir::new("empty");
-    let err = load_library(&tmp.0.join("missing"), FPS, Mirroring::Off).unwrap_err();
+    let tmp = temp_dir("empty");
+    let err = load_library(&tmp.path().join("missing"), FPS, Mirroring::Off).unwrap_err();
     assert!(matches!(err, LibraryError::Unreadable { .. }), "{err}");
 
-    fs::create_dir(tmp.0.join("run")).unwrap();
-    fs::write(tmp.0.join("run/only_pose.bvh"), "HIERARCHY\nROOT Hips\n{\n").unwrap();
-    match load_library(&tmp.0, FPS, Mirroring::Off).unwrap_err() {
+    fs::create_dir(tmp.path().join("run")).unwrap();
+    fs::write(
+        tmp.path().join("run/only_pose.bvh"),
+        "HIERARCHY\nROOT Hips\n{\n",
+    )
+    .unwrap();
+    match load_library(tmp.path(), FPS, Mirroring::Off).unwrap_err() {
         LibraryError::Empty { problems, .. } => {
             assert_eq!(problems.len(), 1);
             assert_eq!(problems[0].line, Some(3));
@@ -393,14 +390,14 @@ fn the_glitches_of_the_source_are_read_as_they_are() {
 /// A library folder of subject 102's skeleton and clip 102_12, and `extra` files
 /// (behaviour/name, bytes) beside them.
 fn amc_library(test: &str, extra: &[(&str, Vec<u8>)]) -> TempDir {
-    let tmp = TempDir::new(test);
-    let defense = tmp.0.join("defense");
+    let tmp = temp_dir(test);
+    let defense = tmp.path().join("defense");
     fs::create_dir(&defense).unwrap();
     for file in ["102.asf", "102_12.amc"] {
         fs::copy(mocap_dir().join("defense").join(file), defense.join(file)).unwrap();
     }
     for (rel, bytes) in extra {
-        let path = tmp.0.join(rel);
+        let path = tmp.path().join(rel);
         fs::create_dir_all(path.parent().unwrap()).unwrap();
         fs::write(path, bytes).unwrap();
     }
@@ -437,11 +434,11 @@ fn a_broken_amc_costs_its_clip_and_names_its_line() {
             ("defense/102_93.amc", with_line(64, "4")),
         ],
     );
-    let lib = load_library(&tmp.0, FPS, Mirroring::Off).unwrap();
+    let lib = load_library(tmp.path(), FPS, Mirroring::Off).unwrap();
     assert_eq!(lib.clips().len(), 1, "{:?}", lib.problems());
     assert_eq!(lib.clips()[0].name, "102_12");
     assert_eq!(lib.problems().len(), 4);
-    let defense = tmp.0.join("defense");
+    let defense = tmp.path().join("defense");
     for (file, line, message) in [
         ("102_90.amc", 184, "frame 7 has no line for `lfemur`"),
         ("102_91.amc", 40, "bone `femur` is not in the skeleton"),
@@ -461,12 +458,12 @@ fn a_broken_amc_costs_its_clip_and_names_its_line() {
     }
     // The clip's skeleton counts toward the fingerprint, the broken clips do not.
     let alone = amc_library("amc-alone", &[]);
-    let clean = load_library(&alone.0, FPS, Mirroring::Off).unwrap();
+    let clean = load_library(alone.path(), FPS, Mirroring::Off).unwrap();
     assert_eq!(clean.source.fingerprint(), lib.source.fingerprint());
-    let mut skeleton = fs::read(alone.0.join("defense/102.asf")).unwrap();
+    let mut skeleton = fs::read(alone.path().join("defense/102.asf")).unwrap();
     skeleton.extend_from_slice(b"# a comment changes the file, not the clip\n");
-    fs::write(alone.0.join("defense/102.asf"), skeleton).unwrap();
-    let commented = load_library(&alone.0, FPS, Mirroring::Off).unwrap();
+    fs::write(alone.path().join("defense/102.asf"), skeleton).unwrap();
+    let commented = load_library(alone.path(), FPS, Mirroring::Off).unwrap();
     assert_eq!(commented.clips()[0].frame(5), clean.clips()[0].frame(5));
     assert_ne!(commented.source.fingerprint(), clean.source.fingerprint());
 }
@@ -496,7 +493,7 @@ fn a_missing_or_bad_skeleton_costs_the_clips_that_need_it() {
             ("bad/102_13.amc", clip),
         ],
     );
-    let lib = load_library(&tmp.0, FPS, Mirroring::Off).unwrap();
+    let lib = load_library(tmp.path(), FPS, Mirroring::Off).unwrap();
     let loaded: Vec<(&str, &str)> = lib
         .clips()
         .iter()
@@ -504,19 +501,19 @@ fn a_missing_or_bad_skeleton_costs_the_clips_that_need_it() {
         .collect();
     assert_eq!(loaded, [("defense", "102_12"), ("renamed", "102_12")]);
     assert_eq!(lib.problems().len(), 4, "{:?}", lib.problems());
-    let solo = problem_at(&lib, &tmp.0.join("solo/102_12.amc"));
+    let solo = problem_at(&lib, &tmp.path().join("solo/102_12.amc"));
     assert_eq!(solo.line, None);
     assert_eq!(
         solo.message,
         "no skeleton: no solo/102.asf, and not exactly one .asf file beside the clip"
     );
-    assert!(problem_at(&lib, &tmp.0.join("two/102_12.amc"))
+    assert!(problem_at(&lib, &tmp.path().join("two/102_12.amc"))
         .message
         .contains("two/102.asf"));
     let bad: Vec<&LoadProblem> = lib
         .problems()
         .iter()
-        .filter(|p| p.file == tmp.0.join("bad/102.asf"))
+        .filter(|p| p.file == tmp.path().join("bad/102.asf"))
         .collect();
     assert_eq!(bad.len(), 2);
     for (problem, clip) in bad.iter().zip(["102_12.amc", "102_13.amc"]) {
@@ -536,15 +533,15 @@ fn a_missing_or_bad_skeleton_costs_the_clips_that_need_it() {
 
 #[test]
 fn an_empty_library_says_what_it_looked_for() {
-    let tmp = TempDir::new("nothing");
-    fs::create_dir(tmp.0.join("run")).unwrap();
-    fs::write(tmp.0.join("run/notes.txt"), "nothing to load").unwrap();
-    let err = load_library(&tmp.0, FPS, Mirroring::Off).unwrap_err();
+    let tmp = temp_dir("nothing");
+    fs::create_dir(tmp.path().join("run")).unwrap();
+    fs::write(tmp.path().join("run/notes.txt"), "nothing to load").unwrap();
+    let err = load_library(tmp.path(), FPS, Mirroring::Off).unwrap_err();
     assert_eq!(
         err.to_string(),
         format!(
             "no motion clip could be loaded from {} (looked for DIR/<behaviour>/*.bvh, and *.amc with their .asf skeleton)",
-            tmp.0.display()
+            tmp.path().display()
         )
     );
 }
