@@ -423,7 +423,7 @@ mod tests {
         std::os::unix::fs::symlink(outside.join("secret"), dir.join("link.jsonl")).unwrap();
         std::fs::hard_link(outside.join("secret"), dir.join("hard.jsonl")).unwrap();
         std::fs::create_dir(dir.join("sub.jsonl")).unwrap();
-        let found = scan(&dir).unwrap();
+        let found = scan(dir).unwrap();
         let ids: Vec<(&str, Encoding)> = found.iter().map(|e| (e.id.as_str(), e.named)).collect();
         assert_eq!(
             ids,
@@ -455,7 +455,7 @@ mod tests {
         ] {
             std::fs::write(dir.join(name), "x").unwrap();
         }
-        let found = scan(&dir).unwrap();
+        let found = scan(dir).unwrap();
         let entry = |id: &str| found.iter().find(|e| e.id == id).unwrap();
         let swap = |name: &str| std::fs::remove_file(dir.join(name)).unwrap();
         swap("linked.jsonl");
@@ -473,7 +473,7 @@ mod tests {
         }
         drop(old);
         assert!(entry("kept").remove().unwrap());
-        let mut left: Vec<String> = std::fs::read_dir(&dir)
+        let mut left: Vec<String> = std::fs::read_dir(dir)
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .collect();
