@@ -55,10 +55,8 @@ pub(crate) struct Fielder {
     config: FielderConfig,
     /// Home plate on the ground: the batter, whom every fielder faces.
     home: DVec2,
-    /// The height it takes the ball at, m above the ground.
-    catch_height_m: f64,
-    /// Whether it is finishing the catch (and may lunge).
-    finishing: bool,
+    /// How it finishes the catch, and whether it has begun to.
+    finish: Finish,
 }
 
 impl Fielder {
@@ -80,14 +78,17 @@ impl Fielder {
             senses: Senses::new(&config.perception, config.noise_seed, dt),
             config: *config,
             home,
-            catch_height_m,
-            finishing: false,
+            finish: Finish {
+                lead_s: config.terminal_s,
+                height_above_eye: catch_height_m - config.perception.eye_height_m,
+                finishing: false,
+            },
         }
     }
 
     /// Whether the fielder is in its terminal phase: finishing the catch, and lunging.
     pub(crate) fn finishing(&self) -> bool {
-        self.finishing
+        self.finish.finishing
     }
 
     /// Looks at the ball (at `ball` at time `t`), decides, and moves for `dt`. Before its
@@ -112,12 +113,8 @@ impl Fielder {
             };
             // The law runs to the end, so whatever it remembers stays current.
             let by_law = self.brain.command(&situation);
-            let finish = Finish {
-                lead_s: self.config.terminal_s,
-                height_above_eye: self.catch_height_m - eye,
-            };
-            finish
-                .command(&self.brain, &mut self.finishing, &situation)
+            self.finish
+                .command(&self.brain, &situation)
                 .unwrap_or(by_law)
         } else {
             DVec2::ZERO
@@ -128,27 +125,31 @@ impl Fielder {
 }
 
 /// When and where a fielder finishes its catch.
+#[derive(Debug, Clone)]
 struct Finish {
     /// How long before the ball is due the terminal phase starts, s (0: never).
     lead_s: f64,
     /// The catch height relative to the eye, m.
     height_above_eye: f64,
+    /// Whether it has begun (and may lunge).
+    finishing: bool,
 }
 
 impl Finish {
     /// The terminal phase's command, once the fielder judges the ball is due within
-    /// `lead_s` (setting `finishing`); `None` before then or while it cannot judge where.
-    /// `predictive` keeps running to its forecast, and finishes (lunges) on its time.
-    fn command(&self, brain: &Brain, finishing: &mut bool, s: &Situation) -> Option<DVec2> {
+    /// `lead_s` (and from then on `finishing`); `None` before then or while it cannot
+    /// judge where. `predictive` keeps running to its forecast, and finishes (lunges) on
+    /// its time.
+    fn command(&mut self, brain: &Brain, s: &Situation) -> Option<DVec2> {
         if self.lead_s <= 0.0 {
             return None;
         }
         if let Brain::Predictive(p) = brain {
-            *finishing |= p.forecast().t - s.t <= self.lead_s;
+            self.finishing |= p.forecast().t - s.t <= self.lead_s;
             return None;
         }
         let due = terminal::arrival(s.percept?, s.body.pos, s.body.vel, self.height_above_eye)?;
-        *finishing |= due.t - s.t <= self.lead_s;
-        finishing.then(|| run_to(&due, s))
+        self.finishing |= due.t - s.t <= self.lead_s;
+        self.finishing.then(|| run_to(&due, s))
     }
 }
