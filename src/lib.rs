@@ -6,8 +6,8 @@
 //! them under one name for its command line, tests and benchmarks:
 //!
 //! * `fieldhouse-core` (re-exported here module by module: [`physics`], [`perception`],
-//!   [`fielding`], [`motion`], [`costmap`], [`basketball`], [`sim`], [`driver`], [`protocol`],
-//!   [`session`], [`replay`], [`strict_json`], [`names`], [`words`]): the deterministic
+//!   [`fielding`], [`motion`], [`costmap`], [`basketball`], [`sim`], [`driver`], [`budget`],
+//!   [`protocol`], [`session`], [`replay`], [`strict_json`], [`names`], [`words`]): the deterministic
 //!   simulation core. It cannot depend on tokio, axum or a network crate.
 //! * [`server`] (`fieldhouse-server`): the I/O shell. Match tasks drive the core's
 //!   worlds on tokio; WebSockets for spectators, bots and replay viewers; the REST API;
@@ -20,23 +20,28 @@
 //! # Follow one tick
 //!
 //! 1. A bot's command arrives on its socket (`server::bot`, the bot socket loop), is
-//!    checked (size, strict JSON, message budget), decoded by [`protocol::decode`], and
-//!    sent to its match's task as a `server::state::Control::Command`.
+//!    checked for size and WebSocket framing, decoded by [`protocol::decode`] (strict
+//!    JSON), and sent to its match's task as a `server::state::Control::Driver`.
 //! 2. The match task (`server::match_task`, `Ticker::forward`) hands it to the match's
-//!    [`driver::MatchDriver::handle`] as a [`driver::Event::Command`] with `now`; the
-//!    driver checks its tick window and passes it to [`sim::World::command`].
+//!    [`driver::MatchDriver::handle`] as a [`driver::Event::BotSaid`] with `now`; the
+//!    driver decides what it costs (an answer to a perception is free, anything else
+//!    pays the seat's [`budget`]), checks its tick window and passes it to
+//!    [`sim::World::command`].
 //! 3. The task sleeps until the time [`driver::MatchDriver::poll_timeout`] names, then
 //!    calls [`driver::MatchDriver::handle_timeout`], which steps the
 //!    [`session::Session`]: [`sim::World::step`], and on frame ticks the frame encoded
 //!    once ([`session::Session::step`]).
-//! 4. The task drains [`driver::MatchDriver::poll_output`] (`Ticker::carry_out`): an
+//! 4. The task drains [`driver::MatchDriver::poll_transmit`] (perceptions, errors and
+//!    closes for bot connections, each to its connection's queue) and
+//!    [`driver::MatchDriver::poll_output`] (`Ticker::carry_out`): an
 //!    [`driver::Output::Frame`] is published on the match's watch channel, whose bytes
 //!    a few fan-out tasks (`server::fanout`) write unchanged to every spectator's socket,
-//!    and handed to the replay's writer thread (`server::recording`); an
-//!    [`driver::Output::Perception`] goes to its bot's queue.
+//!    and handed to the replay's writer thread (`server::recording`). When the match
+//!    ends, the driver frames what is left and encodes the `end` once
+//!    ([`driver::Output::End`]); the task finishes the replay, then publishes it.
 
 pub use fieldhouse_core::{
-    basketball, costmap, driver, fielding, motion, names, perception, physics, protocol, replay,
+    basketball, budget, costmap, driver, fielding, motion, names, perception, physics, protocol, replay,
     session, sim, strict_json, words,
 };
 pub use fieldhouse_loadgen as loadgen;

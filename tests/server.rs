@@ -187,7 +187,11 @@ async fn a_bots_commands_move_its_agent_and_a_disconnect_hands_it_back() {
     let mut again = connect(&server.ws(&format!("/ws/matches/{id}/play?token={token}"))).await;
     assert_eq!(next(&mut again).await["agent"], "cf");
     next_of(&mut again, "perception").await;
-    assert!(bot_controls(&server, &id, "cf"));
+    // The API says who plays each agent as the newest frame does: by the next frame.
+    until(Duration::from_secs(5), "cf was not taken back", || {
+        bot_controls(&server, &id, "cf")
+    })
+    .await;
 }
 
 /// Lock-step over real sockets: the bot's answers reach the match task and play its

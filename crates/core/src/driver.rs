@@ -1,14 +1,16 @@
 //! The rules of a running match, without I/O: a [`MatchDriver`] owns the match's
-//! [`Session`] (and so its world) and its bot seats, and decides when to tick and what
-//! to tell whom. It never reads a clock, sleeps, or touches a socket or a channel: the
-//! shell (the server's match task) tells it the time, as a [`Duration`] since the match
-//! task started, and the events that arrived; it asks the driver when to wake it next
-//! ([`MatchDriver::poll_timeout`]), and carries out what the driver wants done
-//! ([`MatchDriver::poll_output`]). This is the shape of quinn-proto's `Connection`:
-//! every policy below is tested with made-up times instead of sleeps and wall-clock
-//! assertions, and the driver lives in the deterministic core with the world it
-//! drives, where the compiler keeps it from doing I/O. (How long a tick takes to compute is the shell's to measure, around the call
-//! that ticked.)
+//! [`Session`] (and so its world), its bot seats (who plays each agent, what each bot
+//! owes and may still send) and its end, and decides when to tick and what to tell whom.
+//! It never reads a clock, sleeps, or touches a socket or a channel: the shell (the
+//! server's match task) tells it the time, as a [`Duration`] since the match task
+//! started, and what arrived; it asks the driver when to wake it next
+//! ([`MatchDriver::poll_timeout`]), and carries out what the driver wants done: what to
+//! send to which bot connection ([`MatchDriver::poll_transmit`]) and what to publish,
+//! record and count ([`MatchDriver::poll_output`]). This is the shape of quinn-proto's
+//! `Connection`: every policy below is tested with made-up times instead of sleeps and
+//! wall-clock assertions, and the driver lives in the deterministic core with the world
+//! it drives, where the compiler keeps it from doing I/O. (How long a tick takes to
+//! compute is the shell's to measure, around the call that ticked.)
 //!
 //! The policies:
 //!
@@ -32,21 +34,41 @@
 //!   as an answer. In the window, it answers its tick even if the world rejects it
 //!   (lockstep waits for bots to speak, not to be right); a rejected one gets
 //!   `rejected` with the world's reason, an accepted one is logged for the replay.
+//! * **What a bot may send.** Each seat has a message budget ([`MessageBudget`]). A
+//!   command that answers a perception the bot was sent passes free, once (a lock-step
+//!   bot answers every perception at once, and a match may perceive faster than any
+//!   fixed rate: charging those answers disconnected bots that did exactly what the
+//!   protocol asks). Everything else pays, unreadable messages too: over budget it is
+//!   dropped (`rate_limited`, said once a run), and a bot that goes on sending a burst
+//!   past it is flooding: its connection is closed ([`Close::Flooding`]) and its agent
+//!   goes back to its brain. Only the newest [`OWED_MAX`] perceptions are remembered.
 //! * **Seats.** An agent plays its built-in brain until a bot joins it. A second
-//!   connection joining the same agent takes it over: the old one is told `replaced`,
-//!   and its later commands and its leaving are ignored. A bot leaving hands its agent
-//!   back to the brain. Every change of hands is logged for the replay.
-//! * **The end.** A finished world ends the match with reason `finished`; a stop (the
-//!   API's delete, or nobody left to send controls) with `deleted`. After the end the
-//!   driver does nothing more. (A server shutdown and a panic are the shell's.)
+//!   connection joining the same agent takes it over: the old one is told `replaced`
+//!   and closed ([`Close::Replaced`]), and its later messages and its leaving are
+//!   ignored. A bot leaving hands its agent back to the brain. Every change of hands is
+//!   logged for the replay, and the world shows it in its frames (`controller`).
+//! * **The end.** A finished world ends the match ([`EndReason::Finished`]); the shell
+//!   ends it for any other reason with [`MatchDriver::stop`]. Either way the driver
+//!   frames what happened since the last frame, encodes the `end` message once, and
+//!   does nothing more.
 
-use crate::protocol::{encode, ErrorMessage, Perception};
+use crate::budget::{MessageBudget, Verdict};
+use crate::protocol::{encode, ClientMessage, End, ErrorMessage, Perception, Score};
 use crate::replay;
 use crate::session::Session;
 use crate::sim::{Action, Mode, Scenario};
 use crate::tags;
 use std::collections::VecDeque;
+use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::time::Duration;
+
+/// A bot connection, as the shell numbers them (unique while the server runs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Conn(pub u64);
+
+/// What a client sent that is not a message of the protocol: the `error` code and text
+/// it is answered with (see [`crate::protocol::decode`]).
+pub type Unreadable = (&'static str, String);
 
 /// What the shell forwards to the driver.
 #[derive(Debug, Clone, PartialEq)]
@@ -55,29 +77,51 @@ pub enum Event {
     BotJoin {
         /// The agent's index, in the world's order of agents.
         agent: usize,
-        /// The shell's id of the connection.
-        conn: u64,
+        /// The connection.
+        conn: Conn,
     },
     /// Connection `conn` of agent `agent` is gone.
     BotLeave {
         /// The agent's index, in the world's order of agents.
         agent: usize,
-        /// The shell's id of the connection.
-        conn: u64,
+        /// The connection.
+        conn: Conn,
     },
-    /// A bot's command for its agent, for tick `tick`.
-    Command {
+    /// Connection `conn` of agent `agent` sent a message, read as the protocol says, or
+    /// something that is not one.
+    BotSaid {
         /// The agent's index, in the world's order of agents.
         agent: usize,
-        /// The shell's id of the connection it came on.
-        conn: u64,
-        /// The tick of the perception it answers.
-        tick: u64,
-        /// What the agent is to do.
-        action: Action,
+        /// The connection it came on.
+        conn: Conn,
+        /// What it said.
+        said: Result<ClientMessage, Unreadable>,
     },
-    /// The match is deleted.
-    Stop,
+}
+
+/// Why a match ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EndReason {
+    /// Its world reached its end (duration, possessions or launches).
+    Finished,
+    /// The API deleted it, or nobody is left who could send it anything.
+    Deleted,
+    /// The server is stopping.
+    Shutdown,
+    /// The server failed while running it (a bug, logged).
+    Error,
+}
+
+impl EndReason {
+    /// The reason as `end` messages and replay footers write it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            EndReason::Finished => "finished",
+            EndReason::Deleted => "deleted",
+            EndReason::Shutdown => "shutdown",
+            EndReason::Error => "error",
+        }
+    }
 }
 
 /// When the driver next needs [`MatchDriver::handle_timeout`].
@@ -88,11 +132,71 @@ pub enum Wake {
     Now,
     /// At this time since the match task started (a time already past: at once).
     At(Duration),
-    /// Never: the match has ended.
-    Never,
 }
 
-/// What the driver wants done, in order.
+/// Why the driver closes a bot's connection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Close {
+    /// Another connection took over its agent.
+    Replaced,
+    /// It went on sending a whole burst past its budget.
+    Flooding,
+}
+
+impl Close {
+    /// The reason the close frame gives.
+    pub fn reason(self) -> &'static str {
+        match self {
+            Close::Replaced => "another connection took over this agent",
+            Close::Flooding => "too many messages",
+        }
+    }
+}
+
+/// What to send to a bot connection, in order.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Transmit {
+    /// A `perception` for `tick`, which the bot owes an answer.
+    Perception {
+        /// The connection to send it on.
+        conn: Conn,
+        /// The tick perceived.
+        tick: u64,
+        /// The encoded `perception` message.
+        text: String,
+    },
+    /// An `error` (a client error, for the metrics).
+    Error {
+        /// The connection to send it on.
+        conn: Conn,
+        /// Its code, as the message carries it.
+        code: &'static str,
+        /// The encoded `error` message.
+        text: String,
+    },
+    /// Close the connection, after what was sent before: nothing follows for it.
+    Close {
+        /// The connection to close.
+        conn: Conn,
+        /// Why.
+        why: Close,
+    },
+}
+
+/// How a match ended: what the shell tells everyone and writes in the replay's footer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ending {
+    /// The last tick played.
+    pub tick: u64,
+    /// Why it ended.
+    pub reason: EndReason,
+    /// The final score; `None` when the world could not be read (after a panic).
+    pub result: Option<Score>,
+    /// The encoded `end` message.
+    pub message: String,
+}
+
+/// What to publish, record and count, in order.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Output {
     /// A tick was played; the world is now at `tick`. (The shell shows the tick and
@@ -108,54 +212,51 @@ pub enum Output {
         /// The encoded `frame` message.
         frame: String,
     },
-    /// A `perception` for the bot on connection `conn` of agent `agent`, for `tick`:
-    /// it owes an answer to it.
-    Perception {
-        /// The agent's index.
-        agent: usize,
-        /// The connection to send it on.
-        conn: u64,
-        /// The tick perceived.
-        tick: u64,
-        /// The encoded `perception` message.
-        text: String,
-    },
-    /// An `error` for the bot on connection `conn` (a client error, for the metrics);
-    /// `replaced`: its agent was taken over, and this is the connection's last message.
-    Error {
-        /// The agent's index.
-        agent: usize,
-        /// The connection to send it on.
-        conn: u64,
-        /// The encoded `error` message.
-        text: String,
-        /// Whether the connection lost its agent to another and is to be closed.
-        replaced: bool,
-    },
     /// A record for the replay's log (a bot's `command` or `control` record).
     Log(String),
-    /// Who controls `agent` now (`true`: a bot).
-    Controlled {
-        /// The agent's index.
-        agent: usize,
-        /// Whether a bot controls it (`false`: its built-in brain).
-        by_bot: bool,
-    },
     /// A tick started more than a tick period late.
     Overrun,
-    /// The match ended, and why; nothing follows.
-    End {
-        /// `finished` or `deleted`.
-        reason: &'static str,
-    },
+    /// The match ended; nothing follows.
+    End(Ending),
 }
 
+/// How many of a bot's unanswered perceptions are remembered: an answer to an older one
+/// pays its way like any message.
+pub const OWED_MAX: usize = 64;
+
 /// A bot seated at an agent.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug)]
 struct Seat {
-    conn: u64,
-    /// The latest tick it has answered.
-    answered: Option<u64>,
+    conn: Conn,
+    /// The ticks of the perceptions it was sent and has not answered, oldest first.
+    owed: VecDeque<u64>,
+    budget: MessageBudget,
+}
+
+impl Seat {
+    fn owe(&mut self, tick: u64) {
+        if self.owed.len() == OWED_MAX {
+            self.owed.pop_front();
+        }
+        self.owed.push_back(tick);
+    }
+
+    /// Whether a command for `tick` answers a perception still owed; every owed
+    /// perception up to `tick` is answered from now on.
+    fn settle(&mut self, tick: u64) -> bool {
+        let before = self.owed.len();
+        self.owed.retain(|&t| t > tick);
+        self.owed.len() < before
+    }
+}
+
+/// How much a bot may send: the same for every seat of every match.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BotLimits {
+    /// Messages a second, sustained.
+    pub messages_per_second: u32,
+    /// Messages at once.
+    pub burst: u32,
 }
 
 /// One match's rules over its session: see the module's documentation.
@@ -165,6 +266,7 @@ pub struct MatchDriver {
     period: Duration,
     deadline: Duration,
     perceive_every: u64,
+    limits: BotLimits,
     agent_ids: Vec<String>,
     seats: Vec<Option<Seat>>,
     /// When the next tick is due on the cadence (`realtime`, and `lockstep` when no
@@ -172,14 +274,18 @@ pub struct MatchDriver {
     next_tick: Duration,
     /// Lockstep: a tick is waiting for the bots, until this at the latest.
     waiting_until: Option<Duration>,
+    /// The last tick played, as reported: what the end says if the world cannot be read.
+    ticked: u64,
+    transmits: VecDeque<Transmit>,
     outputs: VecDeque<Output>,
     ended: bool,
 }
 
 impl MatchDriver {
     /// A driver for `session`, paced as `scenario` says, started at time zero: the first
-    /// tick is due a period from now (at once in `fast`). Every agent plays its brain.
-    pub fn new(session: Session, scenario: &Scenario) -> MatchDriver {
+    /// tick is due a period from now (at once in `fast`). Every agent plays its brain
+    /// until a bot joins it; bots may send as `limits` say.
+    pub fn new(session: Session, scenario: &Scenario, limits: BotLimits) -> MatchDriver {
         let agents = session.world.agent_ids();
         let period = scenario.tick_period();
         MatchDriver {
@@ -187,41 +293,45 @@ impl MatchDriver {
             period,
             deadline: scenario.lockstep_deadline(),
             perceive_every: session.world.perception_every_ticks(),
-            seats: vec![None; agents.len()],
+            limits,
+            seats: agents.iter().map(|_| None).collect(),
             agent_ids: agents,
+            ticked: session.world.tick(),
             session,
             next_tick: period,
             waiting_until: None,
+            transmits: VecDeque::new(),
             outputs: VecDeque::new(),
             ended: false,
         }
     }
 
-    /// The session being played: its world, for the shell's status and metrics.
-    pub fn session(&self) -> &Session {
-        &self.session
+    /// The tick the world is at.
+    pub fn tick(&self) -> u64 {
+        self.session.world.tick()
     }
 
-    /// The session, for the shell's last frame and result once the match has ended.
-    pub fn session_mut(&mut self) -> &mut Session {
-        &mut self.session
-    }
-
-    /// When to call [`MatchDriver::handle_timeout`] next.
+    /// When to call [`MatchDriver::handle_timeout`] next. (After the end there is nothing
+    /// to wait for: the shell stops driving the driver once it has the end.)
     pub fn poll_timeout(&self) -> Wake {
-        match (self.ended, self.mode, self.waiting_until) {
-            (true, _, _) => Wake::Never,
-            (false, Mode::Fast, _) => Wake::Now,
-            (false, Mode::Lockstep, Some(until)) => Wake::At(until),
+        match (self.mode, self.waiting_until) {
+            _ if self.ended => Wake::Now,
+            (Mode::Fast, _) => Wake::Now,
+            (Mode::Lockstep, Some(until)) => Wake::At(until),
             // Seated bots are owed nothing until the next perception: no clock to wait for.
-            (false, Mode::Lockstep, None) if self.seated() => Wake::Now,
-            (false, _, _) => Wake::At(self.next_tick),
+            (Mode::Lockstep, None) if self.seated() => Wake::Now,
+            _ => Wake::At(self.next_tick),
         }
     }
 
-    /// The next thing to do, if any.
+    /// The next thing to publish, record or count, if any.
     pub fn poll_output(&mut self) -> Option<Output> {
         self.outputs.pop_front()
+    }
+
+    /// The next thing to send to a bot connection, if any.
+    pub fn poll_transmit(&mut self) -> Option<Transmit> {
+        self.transmits.pop_front()
     }
 
     /// Time has come to `now`: ticks once if a tick is due (several late ticks take
@@ -231,7 +341,7 @@ impl MatchDriver {
             return;
         }
         if self.session.world.finished() {
-            return self.end("finished");
+            return self.end(EndReason::Finished);
         }
         match (self.mode, self.waiting_until) {
             (Mode::Fast, _) => {}
@@ -257,68 +367,121 @@ impl MatchDriver {
                 self.next_tick += self.period;
             }
         }
-        self.tick(now);
+        self.tick_at(now);
     }
 
-    /// Something the shell was told, at `now`. In lockstep, the answer (or departure)
+    /// Something a bot connection did, at `now`. In lockstep, the answer (or departure)
     /// that a waiting tick lacked plays it at once.
     pub fn handle(&mut self, event: Event, now: Duration) {
         if self.ended {
             return;
         }
         match event {
-            Event::Stop => return self.end("deleted"),
             Event::BotJoin { agent, conn } => {
-                if let Some(old) = self.seats[agent] {
-                    // The old connection closes once it has passed this on.
-                    let why = "another connection took over this agent";
-                    self.tell(agent, old.conn, "replaced", why, true);
+                if let Some(old) = self.seats[agent].take() {
+                    self.tell(old.conn, "replaced", Close::Replaced.reason());
+                    self.transmits.push_back(Transmit::Close {
+                        conn: old.conn,
+                        why: Close::Replaced,
+                    });
                 }
+                let (rate, burst) = (self.limits.messages_per_second, self.limits.burst);
                 self.seats[agent] = Some(Seat {
                     conn,
-                    answered: None,
+                    owed: VecDeque::new(),
+                    budget: MessageBudget::new(rate, burst, now),
                 });
                 self.set_controlled(agent, true);
             }
             Event::BotLeave { agent, conn } => {
-                if self.seats[agent].is_some_and(|s| s.conn == conn) {
-                    self.seats[agent] = None;
-                    // Back to the built-in brain until a bot reconnects.
-                    self.set_controlled(agent, false);
+                if self.seated_at(agent, conn) {
+                    self.vacate(agent);
                 }
             }
-            Event::Command {
-                agent,
-                conn,
-                tick,
-                action,
-            } => self.command(agent, conn, tick, &action),
+            Event::BotSaid { agent, conn, said } => self.said(agent, conn, said, now),
         }
         if self.waiting_until.is_some() && self.all_answered() {
             self.next_tick = now + self.period;
-            self.tick(now);
+            self.tick_at(now);
         }
     }
 
-    fn command(&mut self, agent: usize, conn: u64, tick: u64, action: &Action) {
-        if self.seats[agent].is_none_or(|s| s.conn != conn) {
-            return; // a replaced connection
+    /// Ends the match now, for `reason` (the shell's: a delete, a shutdown, a failure),
+    /// unless it has ended already. After a panic inside the world (`Error`) the world
+    /// may be half-stepped: the last frame and the result are read under a guard, and
+    /// left out if reading them panics too.
+    pub fn stop(&mut self, reason: EndReason) {
+        if !self.ended {
+            self.end(reason);
         }
+    }
+
+    /// Whether `conn` holds the seat of `agent` (not a connection replaced or closed).
+    fn seated_at(&self, agent: usize, conn: Conn) -> bool {
+        self.seats[agent].as_ref().is_some_and(|s| s.conn == conn)
+    }
+
+    /// The seat of `agent` is free again: the agent plays its brain until a bot joins.
+    fn vacate(&mut self, agent: usize) {
+        self.seats[agent] = None;
+        self.set_controlled(agent, false);
+    }
+
+    fn said(
+        &mut self,
+        agent: usize,
+        conn: Conn,
+        said: Result<ClientMessage, Unreadable>,
+        now: Duration,
+    ) {
+        if !self.seated_at(agent, conn) {
+            return; // a replaced or closed connection
+        }
+        let world_tick = self.session.world.tick();
+        let every = self.perceive_every;
+        let seat = self.seats[agent].as_mut().expect("seated");
+        let answers = match &said {
+            Ok(ClientMessage::Command { tick, .. }) => {
+                in_window(*tick, world_tick, every).is_ok() && seat.settle(*tick)
+            }
+            Err(_) => false,
+        };
+        if !answers {
+            match seat.budget.charge(now) {
+                Verdict::Take => {}
+                Verdict::Refuse { warn } => {
+                    if warn {
+                        let why = "too many messages; slow down or be disconnected";
+                        self.tell(conn, "rate_limited", why);
+                    }
+                    return;
+                }
+                Verdict::Flooding => {
+                    let why = Close::Flooding;
+                    self.transmits.push_back(Transmit::Close { conn, why });
+                    return self.vacate(agent);
+                }
+            }
+        }
+        match said {
+            Ok(ClientMessage::Command { tick, action }) => self.command(agent, conn, tick, &action),
+            Err((code, message)) => self.tell(conn, code, &message),
+        }
+    }
+
+    fn command(&mut self, agent: usize, conn: Conn, tick: u64, action: &Action) {
         let now = self.session.world.tick();
         if let Err((code, text)) = in_window(tick, now, self.perceive_every) {
-            return self.tell(agent, conn, code, &text, false);
+            return self.tell(conn, code, &text);
         }
-        // Any command answers its tick, even one the world rejects: lockstep waits for
-        // bots to speak, not to be right.
-        if let Some(s) = &mut self.seats[agent] {
-            s.answered = Some(s.answered.map_or(tick, |a| a.max(tick)));
-        }
+        // Any command in the window answers its tick, even one the world rejects:
+        // lockstep waits for bots to speak, not to be right.
         match self.session.world.command(agent, action) {
             Ok(()) => {
                 let record = replay::command_record(now, &self.agent_ids[agent], action);
                 self.outputs.push_back(Output::Log(record));
             }
-            Err(reason) => self.tell(agent, conn, "rejected", &reason, false),
+            Err(reason) => self.tell(conn, "rejected", &reason),
         }
     }
 
@@ -327,20 +490,19 @@ impl MatchDriver {
         self.seats.iter().any(Option::is_some)
     }
 
+    /// Whether no seated bot owes the perception of the tick the world is at.
     fn all_answered(&self) -> bool {
         let tick = self.session.world.tick();
-        self.seats
-            .iter()
-            .flatten()
-            .all(|s| s.answered.is_some_and(|t| t >= tick))
+        self.seats.iter().flatten().all(|s| !s.owed.contains(&tick))
     }
 
     /// Plays one tick at `now`: its frame if one is due, then perceptions for the bots
     /// (and, in lockstep, a wait for their answers), then the end if the world finished.
-    fn tick(&mut self, now: Duration) {
+    fn tick_at(&mut self, now: Duration) {
         self.waiting_until = None;
         let frame = self.session.step();
         let tick = self.session.world.tick();
+        self.ticked = tick;
         self.outputs.push_back(Output::Ticked { tick });
         if let Some(frame) = frame {
             self.outputs.push_back(Output::Frame { tick, frame });
@@ -352,14 +514,14 @@ impl MatchDriver {
             }
         }
         if self.session.world.finished() {
-            self.end("finished");
+            self.end(EndReason::Finished);
         }
     }
 
     fn perceive(&mut self) {
         let world = &self.session.world;
         let (tick, time_s) = (world.tick(), world.time_s());
-        for (agent, seat) in self.seats.iter().enumerate() {
+        for (agent, seat) in self.seats.iter_mut().enumerate() {
             let Some(seat) = seat else { continue };
             let text = encode(&Perception {
                 kind: tags::Perception,
@@ -368,24 +530,18 @@ impl MatchDriver {
                 agent: &self.agent_ids[agent],
                 perception: world.perception(agent),
             });
-            self.outputs.push_back(Output::Perception {
-                agent,
-                conn: seat.conn,
-                tick,
-                text,
-            });
+            seat.owe(tick);
+            let conn = seat.conn;
+            self.transmits
+                .push_back(Transmit::Perception { conn, tick, text });
         }
     }
 
-    /// An `error` for connection `conn` of `agent`.
-    fn tell(&mut self, agent: usize, conn: u64, code: &str, message: &str, replaced: bool) {
+    /// An `error` for connection `conn`.
+    fn tell(&mut self, conn: Conn, code: &'static str, message: &str) {
         let text = encode(&ErrorMessage::new(code, message));
-        self.outputs.push_back(Output::Error {
-            agent,
-            conn,
-            text,
-            replaced,
-        });
+        self.transmits
+            .push_back(Transmit::Error { conn, code, text });
     }
 
     fn set_controlled(&mut self, agent: usize, by_bot: bool) {
@@ -393,13 +549,40 @@ impl MatchDriver {
         let tick = self.session.world.tick();
         let record = replay::control_record(tick, &self.agent_ids[agent], by_bot);
         self.outputs.push_back(Output::Log(record));
-        self.outputs.push_back(Output::Controlled { agent, by_bot });
     }
 
-    fn end(&mut self, reason: &'static str) {
+    /// The end: the last frame if anything happened since the previous one, then the
+    /// `end` message, encoded once.
+    fn end(&mut self, reason: EndReason) {
         self.ended = true;
         self.waiting_until = None;
-        self.outputs.push_back(Output::End { reason });
+        let session = &mut self.session;
+        let read = catch_unwind(AssertUnwindSafe(|| {
+            let frame = session.last_frame();
+            (session.world.tick(), session.world.result(), frame)
+        }));
+        let (tick, result) = match read {
+            Ok((tick, result, frame)) => {
+                if let Some(frame) = frame {
+                    self.outputs.push_back(Output::Frame { tick, frame });
+                }
+                (tick, Some(result))
+            }
+            Err(_) => (self.ticked, None),
+        };
+        let message = encode(&End {
+            kind: tags::End,
+            match_id: session.id(),
+            tick,
+            reason: reason.as_str(),
+            result: result.as_ref(),
+        });
+        self.outputs.push_back(Output::End(Ending {
+            tick,
+            reason,
+            result,
+            message,
+        }));
     }
 }
 
@@ -425,7 +608,10 @@ fn in_window(tick: u64, now: u64, every: u64) -> Result<(), (&'static str, Strin
 
 #[cfg(test)]
 mod tests {
-    use super::{in_window, Event, MatchDriver, Output, Wake};
+    use super::{
+        in_window, BotLimits, Close, Conn, EndReason, Event, MatchDriver, Output, Transmit, Wake,
+    };
+    use crate::protocol::ClientMessage;
     use crate::session::Session;
     use crate::sim::{Action, Scenario, World};
     use serde_json::{json, Value};
@@ -457,6 +643,12 @@ mod tests {
 
     const MS: Duration = Duration::from_millis(1);
 
+    /// A bot may send 20 messages a second, 10 at once (answers to perceptions aside).
+    const LIMITS: BotLimits = BotLimits {
+        messages_per_second: 20,
+        burst: 10,
+    };
+
     /// A baseball match in `mode` at 100 Hz (a 10 ms period, perceptions every tick)
     /// with a 400 ms lockstep deadline, whose fielders `cf` (agent 0) and `lf` (agent 1)
     /// are bot slots and `rf` (agent 2) is not, plus `extra` fields.
@@ -481,62 +673,103 @@ mod tests {
         // Baseball needs no motion capabilities (building them takes seconds).
         let world = World::new(&scenario, None).unwrap();
         let session = Session::new(world, "m".into(), scenario.tick_hz, scenario.frame_hz);
-        MatchDriver::new(session, &scenario)
+        MatchDriver::new(session, &scenario, LIMITS)
     }
 
     fn outputs(d: &mut MatchDriver) -> Vec<Output> {
         std::iter::from_fn(|| d.poll_output()).collect()
     }
 
-    fn tick(d: &MatchDriver) -> u64 {
-        d.session().world.tick()
+    fn sent(d: &mut MatchDriver) -> Vec<Transmit> {
+        std::iter::from_fn(|| d.poll_transmit()).collect()
     }
 
-    fn stand(agent: usize, conn: u64, tick: u64) -> Event {
-        Event::Command {
+    fn tick(d: &MatchDriver) -> u64 {
+        d.tick()
+    }
+
+    fn join(agent: usize, conn: u64) -> Event {
+        Event::BotJoin {
             agent,
-            conn,
-            tick,
-            action: Action::Stand {},
+            conn: Conn(conn),
         }
     }
 
-    /// The perceptions among `outputs`: (agent, conn, tick).
-    fn perceptions(outputs: &[Output]) -> Vec<(usize, u64, u64)> {
-        outputs
-            .iter()
-            .filter_map(|o| match o {
-                Output::Perception {
-                    agent, conn, tick, ..
-                } => Some((*agent, *conn, *tick)),
+    fn leave(agent: usize, conn: u64) -> Event {
+        Event::BotLeave {
+            agent,
+            conn: Conn(conn),
+        }
+    }
+
+    fn command(agent: usize, conn: u64, tick: u64, action: Action) -> Event {
+        Event::BotSaid {
+            agent,
+            conn: Conn(conn),
+            said: Ok(ClientMessage::Command { tick, action }),
+        }
+    }
+
+    fn stand(agent: usize, conn: u64, tick: u64) -> Event {
+        command(agent, conn, tick, Action::Stand {})
+    }
+
+    /// The perceptions sent: (conn, tick).
+    fn perceptions(sent: &[Transmit]) -> Vec<(u64, u64)> {
+        sent.iter()
+            .filter_map(|t| match t {
+                Transmit::Perception { conn, tick, .. } => Some((conn.0, *tick)),
                 _ => None,
             })
             .collect()
     }
 
-    /// The errors among `outputs`: (agent, conn, code, replaced).
-    fn errors(outputs: &[Output]) -> Vec<(usize, u64, String, bool)> {
-        outputs
-            .iter()
-            .filter_map(|o| match o {
-                Output::Error {
-                    agent,
-                    conn,
-                    text,
-                    replaced,
-                } => {
+    /// The errors sent: (conn, code), each checked to be the `error` message it says.
+    fn errors(sent: &[Transmit]) -> Vec<(u64, &'static str)> {
+        sent.iter()
+            .filter_map(|t| match t {
+                Transmit::Error { conn, code, text } => {
                     let v: Value = serde_json::from_str(text).unwrap();
-                    assert_eq!(v["type"], "error");
-                    Some((*agent, *conn, v["code"].as_str()?.to_owned(), *replaced))
+                    assert_eq!(
+                        (v["type"].as_str(), v["code"].as_str()),
+                        (Some("error"), Some(*code))
+                    );
+                    Some((conn.0, *code))
                 }
                 _ => None,
             })
             .collect()
     }
 
-    fn ended(outputs: &[Output]) -> Option<&'static str> {
+    fn closes(sent: &[Transmit]) -> Vec<(u64, Close)> {
+        sent.iter()
+            .filter_map(|t| match t {
+                Transmit::Close { conn, why } => Some((conn.0, *why)),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// The `end` among `outputs`, as its message says it.
+    fn ended(outputs: &[Output]) -> Option<Value> {
         outputs.iter().find_map(|o| match o {
-            Output::End { reason } => Some(*reason),
+            Output::End(ending) => {
+                let end: Value = serde_json::from_str(&ending.message).unwrap();
+                assert_eq!(end["reason"], ending.reason.as_str());
+                assert_eq!(end["tick"], ending.tick);
+                Some(end)
+            }
+            _ => None,
+        })
+    }
+
+    /// The controller of agent `k` in the frames among `outputs` (the last one).
+    fn controller(outputs: &[Output], k: usize) -> Option<Option<Value>> {
+        outputs.iter().rev().find_map(|o| match o {
+            Output::Frame { frame, .. } => {
+                let f: Value = serde_json::from_str(frame).unwrap();
+                Some(f["agents"][k].get("controller").cloned())
+            }
             _ => None,
         })
     }
@@ -565,7 +798,7 @@ mod tests {
                 .filter(|o| matches!(o, Output::Frame { tick, .. } if *tick == k))
                 .count();
             assert_eq!(frames, usize::from(k % 2 == 0), "tick {k}");
-            assert!(perceptions(&out).is_empty());
+            assert!(sent(&mut d).is_empty());
         }
         assert_eq!(d.poll_timeout(), Wake::At(110 * MS));
     }
@@ -613,13 +846,13 @@ mod tests {
     /// which perceived for both: the outputs so far are drained.
     fn lockstep_with_two_bots() -> MatchDriver {
         let mut d = driver("lockstep", json!({}));
-        d.handle(Event::BotJoin { agent: 0, conn: 1 }, Duration::ZERO);
-        d.handle(Event::BotJoin { agent: 1, conn: 2 }, Duration::ZERO);
+        d.handle(join(0, 1), Duration::ZERO);
+        d.handle(join(1, 2), Duration::ZERO);
         // With bots seated, a tick that owes them nothing plays at once.
         assert_eq!(d.poll_timeout(), Wake::Now);
         d.handle_timeout(10 * MS);
-        let out = outputs(&mut d);
-        assert_eq!(perceptions(&out), vec![(0, 1, 1), (1, 2, 1)]);
+        outputs(&mut d);
+        assert_eq!(perceptions(&sent(&mut d)), vec![(1, 1), (2, 1)]);
         d
     }
 
@@ -638,7 +871,7 @@ mod tests {
         assert_eq!(tick(&d), 2);
         let out = outputs(&mut d);
         assert!(out.contains(&Output::Ticked { tick: 2 }));
-        assert_eq!(perceptions(&out), vec![(0, 1, 2), (1, 2, 2)]);
+        assert_eq!(perceptions(&sent(&mut d)), vec![(1, 2), (2, 2)]);
         assert_eq!(d.poll_timeout(), Wake::At(413 * MS));
         // Commands are logged for the replay at the tick they act on.
         let logs: Vec<&Output> = out.iter().filter(|o| matches!(o, Output::Log(_))).collect();
@@ -651,16 +884,9 @@ mod tests {
         );
         // An answer for a later tick counts too, a rejected one as well.
         d.handle(stand(0, 1, 3), 14 * MS);
-        let shoot = Event::Command {
-            agent: 1,
-            conn: 2,
-            tick: 2,
-            action: Action::Shoot {},
-        };
-        d.handle(shoot, 15 * MS);
+        d.handle(command(1, 2, 2, Action::Shoot {}), 15 * MS);
         assert_eq!(tick(&d), 3);
-        let out = outputs(&mut d);
-        assert_eq!(errors(&out), vec![(1, 2, "rejected".into(), false)]);
+        assert_eq!(errors(&sent(&mut d)), vec![(2, "rejected")]);
     }
 
     #[test]
@@ -671,9 +897,11 @@ mod tests {
         assert_eq!(tick(&d), 1);
         d.handle_timeout(410 * MS);
         assert_eq!(tick(&d), 2);
-        let out = outputs(&mut d);
-        assert!(!out.contains(&Output::Overrun), "a wait is not an overrun");
-        assert_eq!(perceptions(&out), vec![(0, 1, 2), (1, 2, 2)]);
+        assert!(
+            !outputs(&mut d).contains(&Output::Overrun),
+            "a wait is not an overrun"
+        );
+        assert_eq!(perceptions(&sent(&mut d)), vec![(1, 2), (2, 2)]);
         // Silent again: the next deadline, counted from this tick.
         assert_eq!(d.poll_timeout(), Wake::At(810 * MS));
         d.handle_timeout(810 * MS);
@@ -698,7 +926,7 @@ mod tests {
         .unwrap();
         let world = World::new(&scenario, Some(crate::fixtures::cmu_capabilities())).unwrap();
         let session = Session::new(world, "m".into(), scenario.tick_hz, scenario.frame_hz);
-        MatchDriver::new(session, &scenario)
+        MatchDriver::new(session, &scenario, LIMITS)
     }
 
     #[test]
@@ -707,7 +935,7 @@ mod tests {
         assert_eq!(d.perceive_every, 15);
         // No bot yet: real time, for the spectators.
         assert_eq!(d.poll_timeout(), Wake::At(d.period));
-        d.handle(Event::BotJoin { agent: 0, conn: 1 }, MS);
+        d.handle(join(0, 1), MS);
         // The clock stands still from here: the match goes at the bot's pace alone.
         let now = 2 * MS;
         for perception in 1..=20u64 {
@@ -723,15 +951,14 @@ mod tests {
             let tick = tick(&d);
             assert_eq!(tick, 15 * perception, "a tick that perceives, then a wait");
             assert_eq!(d.poll_timeout(), Wake::At(now + 1000 * MS));
-            let out = outputs(&mut d);
-            assert_eq!(perceptions(&out), vec![(0, 1, tick)]);
-            assert!(!out.contains(&Output::Overrun));
+            assert!(!outputs(&mut d).contains(&Output::Overrun));
+            assert_eq!(perceptions(&sent(&mut d)), vec![(1, tick)]);
             // The answer plays the next tick at once, whatever the clock says.
             d.handle(stand(0, 1, tick), now);
             assert_eq!(self::tick(&d), tick + 1);
         }
         // The bot gone, real time again: a period after the last tick.
-        d.handle(Event::BotLeave { agent: 0, conn: 1 }, now);
+        d.handle(leave(0, 1), now);
         assert_eq!(d.poll_timeout(), Wake::At(now + d.period));
     }
 
@@ -744,10 +971,10 @@ mod tests {
         }
         assert_eq!(tick(&d), 5);
         // A bot leaving while a tick waits for it: the tick goes at once.
-        d.handle(Event::BotJoin { agent: 0, conn: 7 }, 50 * MS);
+        d.handle(join(0, 7), 50 * MS);
         d.handle_timeout(60 * MS);
         assert_eq!(d.poll_timeout(), Wake::At(460 * MS));
-        d.handle(Event::BotLeave { agent: 0, conn: 7 }, 70 * MS);
+        d.handle(leave(0, 7), 70 * MS);
         assert_eq!(tick(&d), 7);
         assert_eq!(d.poll_timeout(), Wake::At(80 * MS));
     }
@@ -758,8 +985,7 @@ mod tests {
         // Perceptions every tick: at tick 1 the window is ticks 0 to 2.
         d.handle(stand(0, 1, 3), 20 * MS);
         d.handle(stand(1, 2, 2), 20 * MS);
-        let out = outputs(&mut d);
-        assert_eq!(errors(&out), vec![(0, 1, "future_tick".into(), false)]);
+        assert_eq!(errors(&sent(&mut d)), vec![(1, "future_tick")]);
         assert_eq!(tick(&d), 1, "cf's future command answers nothing");
         // So tick 1 waits for cf until its deadline; and so on, cf silent.
         while tick(&d) < 8 {
@@ -770,12 +996,13 @@ mod tests {
         }
         assert_eq!(d.poll_timeout(), Wake::At(3210 * MS));
         outputs(&mut d);
+        sent(&mut d);
         // At tick 8 the window is ticks 4 to 9.
         d.handle(stand(0, 1, 3), 3000 * MS);
         d.handle(stand(1, 2, 8), 3000 * MS);
         assert_eq!(tick(&d), 8, "cf's stale command answers nothing");
+        assert_eq!(errors(&sent(&mut d)), vec![(1, "stale_tick")]);
         let out = outputs(&mut d);
-        assert_eq!(errors(&out), vec![(0, 1, "stale_tick".into(), false)]);
         assert!(
             !out.iter()
                 .any(|o| matches!(o, Output::Log(r) if r.contains("\"cf\""))),
@@ -784,7 +1011,7 @@ mod tests {
         // An old tick still in the window acts, but does not answer tick 8.
         d.handle(stand(0, 1, 4), 3000 * MS);
         assert_eq!(tick(&d), 8);
-        assert!(errors(&outputs(&mut d)).is_empty());
+        assert!(errors(&sent(&mut d)).is_empty());
         d.handle(stand(0, 1, 8), 3000 * MS);
         assert_eq!(tick(&d), 9);
     }
@@ -792,102 +1019,184 @@ mod tests {
     #[test]
     fn a_second_join_replaces_the_first() {
         let mut d = lockstep_with_two_bots();
-        d.handle(Event::BotJoin { agent: 0, conn: 3 }, 20 * MS);
-        let out = outputs(&mut d);
-        assert_eq!(errors(&out), vec![(0, 1, "replaced".into(), true)]);
-        assert!(out.contains(&Output::Controlled {
-            agent: 0,
-            by_bot: true
-        }));
+        d.handle(join(0, 3), 20 * MS);
+        let out = sent(&mut d);
+        assert_eq!(errors(&out), vec![(1, "replaced")]);
+        assert_eq!(closes(&out), vec![(1, Close::Replaced)]);
+        assert!(
+            matches!(out.last(), Some(Transmit::Close { .. })),
+            "the close comes last"
+        );
+        assert_eq!(
+            outputs(&mut d),
+            vec![Output::Log(crate::replay::control_record(1, "cf", true))]
+        );
         // The old connection's commands and leave are ignored: they neither act, nor
-        // answer, nor free the seat.
-        d.handle(stand(0, 1, 1), 21 * MS);
-        d.handle(Event::BotLeave { agent: 0, conn: 1 }, 22 * MS);
+        // answer, nor free the seat, nor are charged.
+        for _ in 0..100 {
+            d.handle(stand(0, 1, 1), 21 * MS);
+        }
+        d.handle(leave(0, 1), 22 * MS);
+        assert_eq!((outputs(&mut d), sent(&mut d)), (vec![], vec![]));
+        // The new connection was sent no perception yet, so it owes none: lf's answer
+        // plays the tick, and the next perception goes to the new one.
         d.handle(stand(1, 2, 1), 23 * MS);
-        assert_eq!(tick(&d), 1, "waits for the new connection");
-        let out = outputs(&mut d);
-        assert!(errors(&out).is_empty());
-        assert!(!out.iter().any(|o| matches!(o, Output::Controlled { .. })));
-        assert!(!out
-            .iter()
-            .any(|o| matches!(o, Output::Log(r) if r.contains("\"cf\""))));
-        // The new one answers for the agent, and hears its perceptions.
-        d.handle(stand(0, 3, 1), 24 * MS);
         assert_eq!(tick(&d), 2);
-        assert_eq!(perceptions(&outputs(&mut d)), vec![(0, 3, 2), (1, 2, 2)]);
+        assert_eq!(perceptions(&sent(&mut d)), vec![(3, 2), (2, 2)]);
+        d.handle(stand(1, 2, 2), 24 * MS);
+        assert_eq!(tick(&d), 2, "waits for the new connection");
+        d.handle(stand(0, 3, 2), 24 * MS);
+        assert_eq!(tick(&d), 3);
+        let logs = outputs(&mut d);
+        assert!(logs.contains(&Output::Log(crate::replay::command_record(
+            2,
+            "cf",
+            &Action::Stand {}
+        ))));
     }
 
     #[test]
     fn leaving_returns_the_agent_to_its_brain() {
         let mut d = driver("realtime", json!({}));
-        d.handle(Event::BotJoin { agent: 0, conn: 5 }, Duration::ZERO);
+        d.handle(join(0, 5), Duration::ZERO);
         assert_eq!(
             outputs(&mut d),
-            vec![
-                Output::Log(crate::replay::control_record(0, "cf", true)),
-                Output::Controlled {
-                    agent: 0,
-                    by_bot: true
-                },
-            ]
+            vec![Output::Log(crate::replay::control_record(0, "cf", true))]
         );
         d.handle_timeout(10 * MS);
-        assert_eq!(perceptions(&outputs(&mut d)), vec![(0, 5, 1)]);
-        let frame = |d: &mut MatchDriver| {
-            let f: Value = serde_json::from_str(&d.session_mut().frame()).unwrap();
-            f["agents"][0].get("controller").cloned()
-        };
-        assert_eq!(frame(&mut d), Some(json!("bot")));
-        d.handle(Event::BotLeave { agent: 0, conn: 5 }, 15 * MS);
+        assert_eq!(perceptions(&sent(&mut d)), vec![(5, 1)]);
+        d.handle_timeout(20 * MS);
+        let frames = outputs(&mut d);
+        assert_eq!(
+            controller(&frames, 0),
+            Some(Some(json!("bot"))),
+            "the frame says so"
+        );
+        assert_eq!(perceptions(&sent(&mut d)), vec![(5, 2)]);
+        d.handle(leave(0, 5), 25 * MS);
         assert_eq!(
             outputs(&mut d),
-            vec![
-                Output::Log(crate::replay::control_record(1, "cf", false)),
-                Output::Controlled {
-                    agent: 0,
-                    by_bot: false
-                },
-            ]
+            vec![Output::Log(crate::replay::control_record(2, "cf", false))]
         );
-        assert_eq!(frame(&mut d), None, "the built-in brain plays cf again");
-        d.handle_timeout(20 * MS);
-        assert!(perceptions(&outputs(&mut d)).is_empty());
+        d.handle_timeout(30 * MS);
+        d.handle_timeout(40 * MS);
+        let frames = outputs(&mut d);
+        assert_eq!(
+            controller(&frames, 0),
+            Some(None),
+            "the built-in brain plays cf again"
+        );
+        assert!(sent(&mut d).is_empty());
         // Its commands are no one's now.
-        d.handle(stand(0, 5, 2), 25 * MS);
-        assert_eq!(outputs(&mut d), vec![]);
+        d.handle(stand(0, 5, 4), 45 * MS);
+        assert_eq!((outputs(&mut d), sent(&mut d)), (vec![], vec![]));
     }
 
     #[test]
-    fn stop_ends_the_match_as_deleted() {
+    fn answers_pass_free_and_anything_else_pays_until_a_flood_closes_the_connection() {
         let mut d = lockstep_with_two_bots();
-        d.handle(Event::Stop, 20 * MS);
-        assert_eq!(outputs(&mut d), vec![Output::End { reason: "deleted" }]);
-        assert_eq!(d.poll_timeout(), Wake::Never);
-        // Nothing happens after the end.
+        // 300 answers in 3 s of match time, 5 times the 20 a second allowed: all free.
+        for k in 1..=300u64 {
+            let now = k * 10 * MS.as_millis() as u64;
+            let now = Duration::from_millis(now);
+            d.handle(stand(0, 1, k), now);
+            d.handle(stand(1, 2, k), now);
+            assert_eq!(tick(&d), k + 1);
+            let out = sent(&mut d);
+            assert!(errors(&out).is_empty(), "{out:?}");
+        }
+        outputs(&mut d);
+        // What is not an answer pays: a second command for the same tick, an unreadable
+        // message. The burst of 10 is taken, the 11th refused with a warning, once.
+        let at = 3010 * MS;
+        let garbage = || Event::BotSaid {
+            agent: 0,
+            conn: Conn(1),
+            said: Err(("bad_json", "expected value at line 1 column 1".into())),
+        };
+        d.handle(garbage(), at);
+        for _ in 0..9 {
+            d.handle(stand(0, 1, 300), at);
+        }
+        let out = sent(&mut d);
+        assert_eq!(
+            errors(&out),
+            vec![(1, "bad_json")],
+            "the unreadable one is answered"
+        );
+        assert_eq!(outputs(&mut d).len(), 9, "the paid commands act");
+        for _ in 0..5 {
+            d.handle(garbage(), at);
+        }
+        assert_eq!(
+            errors(&sent(&mut d)),
+            vec![(1, "rate_limited")],
+            "dropped, warned once"
+        );
+        // A whole burst past the budget: flooding, closed, the agent back to its brain.
+        for _ in 0..6 {
+            d.handle(garbage(), at);
+        }
+        let out = sent(&mut d);
+        assert_eq!(closes(&out), vec![(1, Close::Flooding)]);
+        assert_eq!(
+            outputs(&mut d),
+            vec![Output::Log(crate::replay::control_record(301, "cf", false))]
+        );
+        // Its later messages and its leaving are ignored; lf plays on.
+        d.handle(garbage(), at);
+        d.handle(leave(0, 1), at);
+        assert_eq!((outputs(&mut d), sent(&mut d)), (vec![], vec![]));
+        d.handle(stand(1, 2, 301), at);
+        assert_eq!(tick(&d), 302, "only lf is waited for");
+    }
+
+    #[test]
+    fn a_stop_frames_what_is_unframed_then_ends_once_and_nothing_follows() {
+        let mut d = lockstep_with_two_bots();
+        d.stop(EndReason::Deleted);
+        let out = outputs(&mut d);
+        // Tick 1 had no frame (frames every other tick): the end brings it.
+        assert!(
+            matches!(&out[..], [Output::Frame { tick: 1, .. }, Output::End(_)]),
+            "{out:?}"
+        );
+        let end = ended(&out).unwrap();
+        assert_eq!(
+            (&end["type"], &end["match"], &end["reason"], &end["tick"]),
+            (&json!("end"), &json!("m"), &json!("deleted"), &json!(1))
+        );
+        assert!(end["result"].is_object(), "{end}");
+        // Nothing happens after the end, a second stop included.
+        d.stop(EndReason::Shutdown);
         d.handle(stand(0, 1, 1), 21 * MS);
+        d.handle(join(2, 9), 21 * MS);
         d.handle_timeout(5000 * MS);
-        assert_eq!((tick(&d), outputs(&mut d)), (1, vec![]));
+        assert_eq!(
+            (tick(&d), outputs(&mut d), sent(&mut d)),
+            (1, vec![], vec![])
+        );
     }
 
     #[test]
     fn a_finished_world_ends_the_match_as_finished() {
         let mut d = driver("fast", json!({"duration_s": 0.5}));
         let mut last = vec![];
-        while d.poll_timeout() == Wake::Now {
+        while !last.iter().any(|o| matches!(o, Output::End(_))) {
+            assert_eq!(d.poll_timeout(), Wake::Now);
             d.handle_timeout(Duration::ZERO);
             last = outputs(&mut d);
         }
         assert_eq!(tick(&d), 50);
-        assert_eq!(ended(&last), Some("finished"));
-        // The last tick's frame is published before the end.
+        assert_eq!(ended(&last).unwrap()["reason"], "finished");
+        // The last tick's frame is published before the end, and not twice.
         assert!(matches!(
             &last[..],
             [
                 Output::Ticked { tick: 50 },
                 Output::Frame { tick: 50, .. },
-                Output::End { .. }
+                Output::End(_)
             ]
         ));
-        assert_eq!(d.poll_timeout(), Wake::Never);
     }
 }

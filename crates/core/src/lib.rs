@@ -58,6 +58,8 @@
 //!   tick policies, lock-step deadlines, the stale/future tick windows and bot seats.
 //!   It takes events and `now` and says when it next needs waking; the server's match
 //!   task only forwards sockets and timers to it.
+//! * [`budget`]: token buckets: what a client may send a second (a bot's, kept by the
+//!   driver; a spectator's, by its socket), with the time handed in.
 //! * [`replay`]: replay files (JSON lines: header, frames, bot commands, footer with a
 //!   hash over the frames), written append-only, read back to a torn record, verified by
 //!   re-simulation.
@@ -73,6 +75,7 @@
 #![warn(missing_docs)]
 
 pub mod basketball;
+pub mod budget;
 pub mod costmap;
 pub mod driver;
 pub mod fielding;

@@ -7,6 +7,25 @@ use crate::protocol::{write_frame, Event, Frame, FrameShape};
 use crate::sim::World;
 use crate::tags;
 
+/// How every frame starts: `type` is its first key.
+const FRAME_HEAD: &str = r#"{"type":"frame","#;
+
+/// `frame` with `"sent_us": sent_us` (when it was sent, µs since the Unix epoch) as its
+/// second key, right after `"type":"frame"`, where a load generator finds it without
+/// parsing the frame. A frame is encoded once for every spectator and the replay (which
+/// must not carry the stamp); a stamped copy is made only when the server is asked to
+/// stamp frames (a load test), so the stamp goes into the encoded bytes instead of
+/// encoding the frame a second time. Every frame starts with the same head (tested for
+/// each sport), so there is always a place for it.
+pub fn stamped(frame: &str, sent_us: u64) -> String {
+    let rest = frame.strip_prefix(FRAME_HEAD);
+    debug_assert!(rest.is_some(), "a frame starts with {FRAME_HEAD}: {frame}");
+    match rest {
+        Some(rest) => format!(r#"{FRAME_HEAD}"sent_us":{sent_us},{rest}"#),
+        None => frame.to_owned(),
+    }
+}
+
 /// A match being played: its world, id and frame rate, and the events not yet framed.
 pub struct Session {
     /// The match's world, for its clock, status and result.
@@ -34,6 +53,11 @@ impl Session {
             framed: None,
             shape: FrameShape::CURRENT,
         }
+    }
+
+    /// The match's id, as its frames and `end` carry it.
+    pub fn id(&self) -> &str {
+        &self.id
     }
 
     /// The session writing its frames as an older protocol version did: what verifying
@@ -102,5 +126,35 @@ impl Session {
     /// Whether the match's stop needs a last frame (see [`Session::last_frame`]).
     pub fn last_frame_due(&self) -> bool {
         self.framed != Some(self.world.tick()) || !self.events.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{stamped, Session};
+    use crate::sim::{Scenario, World};
+    use serde_json::{json, Value};
+
+    #[test]
+    fn every_sport_s_frames_take_the_stamp_as_their_second_key() {
+        for sport in ["baseball", "cricket", "basketball"] {
+            let scenario = Scenario::from_value(json!({"sport": sport})).unwrap();
+            let caps = (sport == "basketball").then(crate::fixtures::cmu_capabilities);
+            let world = World::new(&scenario, caps).unwrap();
+            let mut session = Session::new(world, "m".into(), scenario.tick_hz, scenario.frame_hz);
+            let mut frames = vec![session.frame()];
+            frames.extend((0..200).filter_map(|_| session.step()));
+            for frame in frames {
+                let out = stamped(&frame, 1_700_000_000_123_456);
+                assert!(
+                    out.starts_with(r#"{"type":"frame","sent_us":1700000000123456,"#),
+                    "{out}"
+                );
+                let mut stamped: Value = serde_json::from_str(&out).unwrap();
+                let original: Value = serde_json::from_str(&frame).unwrap();
+                stamped.as_object_mut().unwrap().remove("sent_us");
+                assert_eq!(stamped, original, "nothing else changes");
+            }
+        }
     }
 }

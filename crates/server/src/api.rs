@@ -13,7 +13,6 @@ use axum::http::request::Parts;
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::Json;
-use fieldhouse_core::driver::Event;
 use fieldhouse_core::sim::Scenario;
 use serde_json::{json, Value};
 use std::collections::HashMap;
@@ -49,29 +48,35 @@ fn admin(app: &AppState, headers: &HeaderMap) -> Result<(), ApiError> {
 
 /// A match as the API lists it.
 pub fn summary(entry: &MatchEntry) -> Value {
-    let controlled = entry.controlled.lock().expect("not poisoned").clone();
+    // The lobby shows the score and who plays each agent; both are in the newest frame
+    // (the world's own view: `controller` is there while a bot plays an agent), which is
+    // parsed here rather than kept apart on the tick path, where it would cost every
+    // match a copy per frame for a page that asks every few seconds.
+    let mut frame = serde_json::from_str::<Value>(entry.published.borrow().frame.as_str())
+        .unwrap_or(Value::Null);
+    let by_bot = |id: &Value| {
+        frame["agents"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .any(|a| &a["id"] == id && a["controller"] == "bot")
+    };
     let agents: Vec<Value> = entry
         .info
         .agents
         .iter()
-        .zip(controlled)
-        .map(|(a, bot)| {
+        .map(|a| {
             let a = serde_json::to_value(a).expect("agents serialise");
             json!({
                 "id": a["id"],
                 "team": a["team"],
                 "strategy": a["strategy"],
-                "controller": if bot { "bot" } else { "builtin" },
+                "controller": if by_bot(&a["id"]) { "bot" } else { "builtin" },
                 "bot_slot": entry.tokens.iter().any(|(_, id, _)| Some(id.as_str()) == a["id"].as_str()),
             })
         })
         .collect();
-    // The lobby shows the score; it lives in the newest frame, which is parsed here
-    // rather than kept apart on the tick path, where it would cost every match a copy
-    // per frame for a page that asks every few seconds.
-    let score = serde_json::from_str::<Value>(entry.published.borrow().frame.as_str())
-        .map(|mut frame| frame["score"].take())
-        .unwrap_or(Value::Null);
+    let score = frame["score"].take();
     json!({
         "id": entry.info.id,
         "name": entry.info.name,
@@ -178,7 +183,7 @@ pub fn start(
         .expect("not poisoned")
         .insert(id.clone(), entry.clone());
     // Matches that end fast could otherwise pile up between sweeps.
-    sweep::sweep(app, std::time::Instant::now());
+    sweep::sweep(app, tokio::time::Instant::now());
     Ok((id, entry))
 }
 
@@ -193,7 +198,7 @@ pub async fn delete(
         .expect("not poisoned")
         .remove(&id)
         .ok_or_else(|| ApiError::not_found(&id))?;
-    let _ = entry.control.send(Control::Driver(Event::Stop)).await;
+    let _ = entry.control.send(Control::Stop).await;
     tracing::info!(%id, "match deleted");
     Ok(Json(json!({"id": id, "status": "deleted"})))
 }

@@ -25,7 +25,6 @@
 //! * [`listener`]: the accept loop: every connection counted and capped (per address
 //!   and in all), header and idle timeouts, descriptors kept for health checks.
 //! * [`upgrade`]: the WebSocket handshake and the frame meter under every socket.
-//! * [`budget`]: what a client may send a second, on every socket kind.
 //! * [`admission`]: who may open a WebSocket: origin and host policy, room for
 //!   spectators.
 //! * [`hosts`]: what a Host or Origin header and the allowed hosts and origins may name.
@@ -41,7 +40,6 @@ pub mod agones;
 pub mod api;
 pub mod auth;
 pub mod bot;
-pub mod budget;
 pub mod config;
 pub mod demo;
 pub mod error;

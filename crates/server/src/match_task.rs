@@ -15,26 +15,21 @@ use super::fanout::Published;
 use super::metrics::Metrics;
 use super::recording::{self, InDir, Limit, Recording};
 use super::slot::Slot;
-use super::state::{AppState, Control, MatchEntry, ToBot};
-use fieldhouse_core::driver::{Event, MatchDriver, Output, Wake};
-use fieldhouse_core::protocol::{encode, End};
+use super::state::{AppState, Control, MatchEntry};
+use fieldhouse_core::driver::{
+    BotLimits, Close, Conn, EndReason, Ending, Event, MatchDriver, Output, Transmit, Wake,
+};
 use fieldhouse_core::replay;
-use fieldhouse_core::session::Session;
+use fieldhouse_core::session::{self, Session};
 use fieldhouse_core::sim::{Mode, Scenario, ScenarioError, World};
-use fieldhouse_core::tags;
 use futures_util::FutureExt;
+use std::collections::HashMap;
 use std::panic::AssertUnwindSafe;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
-use tokio::sync::{mpsc, watch};
+use tokio::sync::{mpsc, oneshot, watch};
 use tokio::time::Instant;
 use tokio_tungstenite::tungstenite::Utf8Bytes;
-
-/// Where to reach the bot connected to an agent (its seat is the driver's).
-struct Bot {
-    conn: u64,
-    out: mpsc::Sender<ToBot>,
-}
 
 /// Builds the world a scenario describes and starts its task, which holds `slot` until
 /// it ends, recording it if `record` and the server records matches. Returns the match
@@ -66,11 +61,13 @@ pub fn spawn(
             (k, a.id.clone(), new_token())
         })
         .collect::<Vec<_>>();
-    // Agents play their built-in brains until a bot connects.
-    let controlled = vec![false; agent_ids.len()];
     let mut session = Session::new(world, id.clone(), scenario.tick_hz, scenario.frame_hz);
     let first = Utf8Bytes::from(session.frame());
-    let driver = MatchDriver::new(session, &scenario);
+    let limits = BotLimits {
+        messages_per_second: app.config.bot_messages_per_second,
+        burst: app.config.bot_burst,
+    };
+    let driver = MatchDriver::new(session, &scenario, limits);
     let creation_error = Mutex::new(None);
     let replay = Arc::new(Mutex::new(None));
     let started = app
@@ -120,7 +117,6 @@ pub fn spawn(
         tick: AtomicU64::new(0),
         ended: AtomicBool::new(false),
         ended_at: std::sync::OnceLock::new(),
-        controlled: Mutex::new(controlled),
         replay,
         replay_error: creation_error,
         fanout: Default::default(),
@@ -135,7 +131,7 @@ pub fn spawn(
         control: control_rx,
         metrics: app.metrics.clone(),
         shutdown: app.shutdown.clone(),
-        bots: (0..agent_ids.len()).map(|_| None).collect(),
+        mailboxes: HashMap::new(),
         seq: 0,
         stamp_frames: app.config.stamp_frames,
     };
@@ -159,6 +155,13 @@ fn unix_seconds() -> u64 {
     crate::wall::since_epoch().as_secs()
 }
 
+/// Where to reach a bot connection: its messages' queue, and the close that ends it.
+/// (Who sits at which agent is the driver's to know.)
+struct Mailbox {
+    out: mpsc::Sender<Utf8Bytes>,
+    close: oneshot::Sender<Close>,
+}
+
 struct Ticker {
     /// The match's place among `max_matches`, given back when the task is dropped.
     _slot: Slot,
@@ -169,7 +172,7 @@ struct Ticker {
     control: mpsc::Receiver<Control>,
     metrics: Arc<Metrics>,
     shutdown: watch::Receiver<bool>,
-    bots: Vec<Option<Bot>>,
+    mailboxes: HashMap<Conn, Mailbox>,
     seq: u64,
     stamp_frames: bool,
 }
@@ -180,7 +183,7 @@ impl Ticker {
     /// leaving it listed as running for ever with its place taken.
     async fn run(mut self) {
         let played = AssertUnwindSafe(self.play()).catch_unwind().await;
-        let reason = played.unwrap_or_else(|panic| {
+        let ending = played.unwrap_or_else(|panic| {
             self.metrics.match_panics.fetch_add(1, Relaxed);
             tracing::error!(
                 id = %self.entry.info.id,
@@ -188,33 +191,34 @@ impl Ticker {
                 panic = panic_message(panic.as_ref()),
                 "the match task panicked; ending the match"
             );
-            "error"
+            self.driver.stop(EndReason::Error);
+            self.carry_out(Instant::now())
+                .expect("a stopped driver says how the match ended")
         });
-        self.end(reason).await;
+        self.end(ending).await;
     }
 
-    /// Plays the match until it ends; returns why it ended. The driver is told the
+    /// Plays the match until it ends; returns how it ended. The driver is told the
     /// time as it is since this started.
-    async fn play(&mut self) -> &'static str {
+    async fn play(&mut self) -> Ending {
         let start = Instant::now();
         loop {
             let wake = match self.driver.poll_timeout() {
-                Wake::Never => return "finished", // not reached: the end came as output
                 Wake::Now => {
                     // Fast: no timer at all (even a zero sleep costs a timer tick):
                     // take whatever the sockets and the API said, then tick.
                     if *self.shutdown.borrow() {
-                        return "shutdown";
+                        return self.stop(EndReason::Shutdown);
                     }
-                    if let Some(reason) = self.drain_controls(start) {
-                        return reason;
+                    if let Some(ending) = self.drain_controls(start) {
+                        return ending;
                     }
-                    let ticked = std::time::Instant::now();
-                    self.driver.handle_timeout(start.elapsed());
-                    if let Some(reason) = self.carry_out(ticked) {
-                        return reason;
+                    let ticked = Instant::now();
+                    self.driver.handle_timeout(ticked - start);
+                    if let Some(ending) = self.carry_out(ticked) {
+                        return ending;
                     }
-                    if self.driver.session().world.tick().is_multiple_of(256) {
+                    if self.driver.tick().is_multiple_of(256) {
                         tokio::task::yield_now().await;
                     }
                     continue;
@@ -223,69 +227,83 @@ impl Ticker {
             };
             tokio::select! {
                 biased;
-                _ = self.shutdown.changed() => return "shutdown",
+                _ = self.shutdown.changed() => return self.stop(EndReason::Shutdown),
                 message = self.control.recv() => {
-                    if let Some(reason) = self.forward(message, start) {
-                        return reason;
+                    if let Some(ending) = self.forward(message, start) {
+                        return ending;
                     }
                 }
                 _ = tokio::time::sleep_until(wake) => {
-                    let ticked = std::time::Instant::now();
-                    self.driver.handle_timeout(start.elapsed());
-                    if let Some(reason) = self.carry_out(ticked) {
-                        return reason;
+                    let ticked = Instant::now();
+                    self.driver.handle_timeout(ticked - start);
+                    if let Some(ending) = self.carry_out(ticked) {
+                        return ending;
                     }
                 }
             }
         }
     }
 
-    /// Handles every control message waiting; the reason to stop, if one says so.
-    fn drain_controls(&mut self, start: Instant) -> Option<&'static str> {
+    /// Ends the match for `reason`; how it ended.
+    fn stop(&mut self, reason: EndReason) -> Ending {
+        self.driver.stop(reason);
+        self.carry_out(Instant::now())
+            .expect("a stopped driver says how the match ended")
+    }
+
+    /// Handles every control message waiting; how the match ended, if one ended it.
+    fn drain_controls(&mut self, start: Instant) -> Option<Ending> {
         loop {
             let message = match self.control.try_recv() {
                 Ok(message) => Some(message),
                 Err(mpsc::error::TryRecvError::Disconnected) => None,
                 Err(mpsc::error::TryRecvError::Empty) => return None,
             };
-            if let Some(reason) = self.forward(message, start) {
-                return Some(reason);
+            if let Some(ending) = self.forward(message, start) {
+                return Some(ending);
             }
         }
     }
 
     /// Tells the driver what a socket or the API said (`None`: no one is left to say
-    /// anything, a stop), and carries out what follows; the reason, if the match ended.
-    fn forward(&mut self, message: Option<Control>, start: Instant) -> Option<&'static str> {
-        let now = start.elapsed();
-        let handled = std::time::Instant::now();
-        let joined = match message {
-            None => {
-                self.driver.handle(Event::Stop, now);
-                None
-            }
-            Some(Control::BotJoin { agent, conn, out }) => {
+    /// anything, a stop), and carries out what follows; how the match ended, if it did.
+    fn forward(&mut self, message: Option<Control>, start: Instant) -> Option<Ending> {
+        let handled = Instant::now();
+        let now = handled - start;
+        match message {
+            None | Some(Control::Stop) => return Some(self.stop(EndReason::Deleted)),
+            Some(Control::BotJoin {
+                agent,
+                conn,
+                out,
+                close,
+            }) => {
+                self.mailboxes.insert(conn, Mailbox { out, close });
                 self.driver.handle(Event::BotJoin { agent, conn }, now);
-                Some((agent, Bot { conn, out }))
             }
             Some(Control::Driver(event)) => {
+                let left = match &event {
+                    Event::BotLeave { conn, .. } => Some(*conn),
+                    _ => None,
+                };
                 self.driver.handle(event, now);
-                None
+                if let Some(conn) = left {
+                    self.mailboxes.remove(&conn);
+                }
             }
             #[cfg(test)]
             Some(Control::Panic) => panic!("a test asked this match task to panic"),
-        };
-        // The connection replaced hears so before the new one takes its place.
-        let ended = self.carry_out(handled);
-        if let Some((agent, bot)) = joined {
-            self.bots[agent] = Some(bot);
         }
-        ended
+        self.carry_out(handled)
     }
 
-    /// Does what the driver asked, in order; the reason, if the match ended. A tick's
+    /// Does what the driver asked, in order: first what goes to bots, then what is
+    /// published, recorded and counted; how the match ended, if it did. A tick's
     /// duration is reported as the time since `since`, when the driver was called.
-    fn carry_out(&mut self, since: std::time::Instant) -> Option<&'static str> {
+    fn carry_out(&mut self, since: Instant) -> Option<Ending> {
+        while let Some(transmit) = self.driver.poll_transmit() {
+            self.transmit(transmit);
+        }
         while let Some(output) = self.driver.poll_output() {
             match output {
                 Output::Ticked { tick } => {
@@ -293,58 +311,45 @@ impl Ticker {
                     self.entry.tick.store(tick, Relaxed);
                 }
                 Output::Frame { tick, frame } => self.publish_frame(tick, frame),
-                Output::Perception {
-                    agent,
-                    conn,
-                    tick,
-                    text,
-                } => {
-                    // A bot that is not reading misses perceptions rather than holding
-                    // a tick.
-                    self.send(agent, conn, ToBot::perception(tick, text));
-                }
-                Output::Error {
-                    agent,
-                    conn,
-                    text,
-                    replaced,
-                } => {
-                    self.metrics.client_errors.fetch_add(1, Relaxed);
-                    let to_bot = if replaced {
-                        ToBot::replaced
-                    } else {
-                        ToBot::message
-                    };
-                    self.send(agent, conn, to_bot(text));
-                }
                 Output::Log(record) => self.record(|r| r.log(record)),
-                Output::Controlled { agent, by_bot } => {
-                    if !by_bot {
-                        self.bots[agent] = None;
-                    }
-                    self.entry.controlled.lock().expect("not poisoned")[agent] = by_bot;
-                }
                 Output::Overrun => {
                     self.metrics.tick_overruns.fetch_add(1, Relaxed);
                 }
-                Output::End { reason } => return Some(reason),
+                Output::End(ending) => return Some(ending),
             }
         }
         None
     }
 
-    /// Hands `message` to the bot on connection `conn` of `agent`, if its queue has
-    /// room.
-    fn send(&self, agent: usize, conn: u64, message: ToBot) {
-        if let Some(bot) = self.bots[agent].as_ref().filter(|b| b.conn == conn) {
-            let _ = bot.out.try_send(message);
+    /// Hands a message to a bot connection, if its queue has room: a bot that is not
+    /// reading misses perceptions rather than holding a tick. A close always arrives.
+    fn transmit(&mut self, transmit: Transmit) {
+        let (conn, text) = match transmit {
+            Transmit::Perception { conn, text, .. } => (conn, text),
+            Transmit::Error { conn, text, .. } => {
+                self.metrics.client_errors.fetch_add(1, Relaxed);
+                (conn, text)
+            }
+            Transmit::Close { conn, why } => {
+                if why == Close::Flooding {
+                    self.metrics.closed_for_rate.fetch_add(1, Relaxed);
+                }
+                if let Some(mailbox) = self.mailboxes.remove(&conn) {
+                    let _ = mailbox.close.send(why);
+                }
+                return;
+            }
+        };
+        if let Some(mailbox) = self.mailboxes.get(&conn) {
+            let _ = mailbox.out.try_send(Utf8Bytes::from(text));
         }
     }
 
     fn publish_frame(&mut self, tick: u64, frame: String) {
         let bytes = if self.stamp_frames {
             let recorded = Utf8Bytes::from(frame);
-            let stamped = stamped(recorded.as_str());
+            let sent_us = crate::wall::since_epoch().as_micros() as u64;
+            let stamped = session::stamped(recorded.as_str(), sent_us);
             self.record(|r| r.frame(tick, recorded));
             Utf8Bytes::from(stamped)
         } else {
@@ -377,43 +382,29 @@ impl Ticker {
         *self.entry.replay_error.lock().expect("not poisoned") = Some(why);
     }
 
-    async fn end(mut self, reason: &str) {
-        // After a panic the world may be half-stepped: reading it may panic again, so
-        // the last frame and the result are read under a guard, and left out if so.
-        let last = std::panic::catch_unwind(AssertUnwindSafe(|| {
-            let world = &self.driver.session().world;
-            (world.tick(), world.result())
-        }));
-        let (tick, result) = match last {
-            Ok((tick, result)) => (tick, Some(result)),
-            Err(_) => (self.entry.tick.load(Relaxed), None),
-        };
-        let frame = std::panic::catch_unwind(AssertUnwindSafe(|| {
-            let session = self.driver.session_mut();
-            session.last_frame().map(|f| (session.world.tick(), f))
-        }));
-        if let Ok(Some((tick, frame))) = frame {
-            self.publish_frame(tick, frame);
-        }
-        let end = Utf8Bytes::from(encode(&End {
-            kind: tags::End,
-            match_id: &self.entry.info.id,
+    /// Tells everyone the match ended: its replay is finished first, then the `end` is
+    /// published (spectators and bots close after it).
+    async fn end(mut self, ending: Ending) {
+        let Ending {
             tick,
             reason,
-            result: result.as_ref(),
-        }));
+            result,
+            message,
+        } = ending;
         // The replay is complete on disk before anyone hears the match ended. Its
         // writer thread syncs it; this task waits without holding the thread that
         // ticks the other matches.
         if let Some(r) = self.recorder.take() {
             let result = serde_json::to_value(result).expect("scores serialise");
-            if let Err(e) = r.finish(tick, reason, &result).await {
+            if let Err(e) = r.finish(tick, reason.as_str(), &result).await {
                 self.recording_stopped(format!("cannot finish the replay: {e}"));
             }
         }
         self.entry.ended.store(true, Relaxed);
-        self.entry.ended_at.get_or_init(std::time::Instant::now);
+        self.entry.ended_at.get_or_init(Instant::now);
+        let end = Utf8Bytes::from(message);
         self.publish.send_modify(|p| p.end = Some(end));
+        let reason = reason.as_str();
         tracing::info!(id = %self.entry.info.id, reason, tick, "match ended");
     }
 }
@@ -427,20 +418,9 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> &str {
         .unwrap_or("(no message)")
 }
 
-/// `frame` with `"sent_us"` (now, µs since the Unix epoch) as its second field, right
-/// after `"type":"frame"`, where a load generator finds it without parsing the frame.
-fn stamped(frame: &str) -> String {
-    const HEAD: &str = r#"{"type":"frame","#;
-    let sent_us = crate::wall::since_epoch().as_micros();
-    match frame.strip_prefix(HEAD) {
-        Some(rest) => format!(r#"{HEAD}"sent_us":{sent_us},{rest}"#),
-        None => frame.to_owned(),
-    }
-}
-
 #[cfg(test)]
 mod tests {
-    use super::{spawn, stamped};
+    use super::spawn;
     use crate::slot::Slot;
     use crate::state::{AppState, Control};
     use crate::ServerConfig;
@@ -504,14 +484,5 @@ mod tests {
             .await
             .expect("the gauge goes back to 0");
         assert!(Slot::reserve(&app.metrics, 1).is_some());
-    }
-
-    #[test]
-    fn a_stamp_is_the_second_field_and_keeps_the_frame_valid() {
-        let frame = r#"{"type":"frame","match":"m","tick":2}"#;
-        let out: serde_json::Value = serde_json::from_str(&stamped(frame)).unwrap();
-        assert!(out["sent_us"].as_u64().unwrap() > 1_700_000_000_000_000);
-        assert_eq!(out["tick"], 2);
-        assert!(stamped(frame).starts_with(r#"{"type":"frame","sent_us":"#));
     }
 }

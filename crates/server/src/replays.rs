@@ -9,7 +9,6 @@
 //! by `send_timeout_ms`, like a spectator's.
 
 use super::admission::AdmittedSpectator;
-use super::budget::{Bucket, Verdict};
 use super::error::ApiError;
 use super::range::{self, Wanted};
 use super::replay_dir;
@@ -26,6 +25,7 @@ use axum::http::header::{
 use axum::http::{HeaderMap, HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::Json;
+use fieldhouse_core::budget::{Bucket, Verdict};
 use fieldhouse_core::protocol::{
     decode_control, encode, Control, End, ErrorMessage, Hello, ReplayInfo, Role, ViewerMessage,
     MAX_LEAD_IN_S,
@@ -470,7 +470,9 @@ async fn view(
     }
     let mut stopping = app.shutdown.clone();
     let mut inbound = budget(app);
-    let mut lead_ins = Bucket::new(LEAD_IN_FRAMES_PER_S, LEAD_IN_FRAMES_BURST);
+    // The budgets' time: this socket's age.
+    let opened = Instant::now();
+    let mut lead_ins = Bucket::new(LEAD_IN_FRAMES_PER_S, LEAD_IN_FRAMES_BURST, Duration::ZERO);
     let (mut playing, mut speed) = (true, 1.0f64);
     // Frames from `next` on are read ahead into `ahead`: a batch at a time, never the
     // whole file.
@@ -524,7 +526,7 @@ async fn view(
                     }
                     _ => continue,
                 };
-                match inbound.charge() {
+                match inbound.charge(opened.elapsed()) {
                     Verdict::Take => {}
                     Verdict::Refuse { warn } => {
                         if warn {
@@ -566,7 +568,7 @@ async fn view(
                         // to what the viewer's lead-in budget has: a seek is one
                         // message, its lead-in many frames.
                         let lead_in = (lead_in_s.unwrap_or(0.0) * tick_hz) as u64;
-                        let most = lead_ins.available();
+                        let most = lead_ins.available(opened.elapsed());
                         let found = viewed.blocking(move |index, file, cache| {
                             let Some(at) = index.seek(file, cache, tick)? else {
                                 return Ok(None);
@@ -577,7 +579,7 @@ async fn view(
                         }).await;
                         match found {
                             Ok(Some((first, lead))) => {
-                                lead_ins.take_up_to(lead);
+                                lead_ins.take_up_to(lead, opened.elapsed());
                                 (next, ended) = (first, false);
                                 ahead.clear();
                                 for _ in 0..=lead {

@@ -8,9 +8,9 @@
 //!
 //! On shutdown every match ends: its sockets get `end` and close with 1001 (`ending`).
 
-use super::budget::MessageBudget;
 use super::state::AppState;
 use super::upgrade::{FrameFlood, Socket};
+use fieldhouse_core::budget::MessageBudget;
 use fieldhouse_core::protocol::Limits;
 use futures_util::stream::{SplitSink, SplitStream};
 use futures_util::{SinkExt, StreamExt};
@@ -37,9 +37,14 @@ pub(super) fn limits(app: &AppState) -> Limits {
     }
 }
 
-/// The message budget every socket starts with.
+/// The message budget every spectator and replay viewer starts with, charged at the
+/// socket's age (time since `budget` was called). A bot's is its seat's, in the driver.
 pub(super) fn budget(app: &AppState) -> MessageBudget {
-    MessageBudget::new(app.config.bot_messages_per_second, app.config.bot_burst)
+    MessageBudget::new(
+        app.config.bot_messages_per_second,
+        app.config.bot_burst,
+        std::time::Duration::ZERO,
+    )
 }
 
 /// How a socket closes after its match's `end`: 1001 when the server is shutting down

@@ -10,7 +10,6 @@
 
 use super::admission::AdmittedSpectator;
 use super::api::ApiError;
-use super::budget::{MessageBudget, Verdict};
 use super::fanout::{Member, Out, Wire, WireIo};
 use super::socket::{
     answer_close, budget, classify, ending, limits, refusal, send_close, Read, NORMAL, POLICY,
@@ -19,6 +18,7 @@ use super::state::{AppState, MatchEntry};
 use super::upgrade::{FrameMeter, RawSocket, Upgrade};
 use axum::extract::{Path, State};
 use axum::response::{IntoResponse, Response};
+use fieldhouse_core::budget::{MessageBudget, Verdict};
 use fieldhouse_core::protocol::{encode, Hello, Role};
 use futures_util::StreamExt;
 use std::sync::atomic::Ordering::Relaxed;
@@ -136,6 +136,8 @@ async fn listen(
 ) {
     let mut said = Some(said);
     let mut closing = false;
+    // The budget's time: this socket's age.
+    let opened = tokio::time::Instant::now();
     loop {
         let incoming = tokio::select! {
             order = &mut close_rx, if !closing => {
@@ -153,7 +155,7 @@ async fn listen(
         };
         let read = classify(incoming);
         let verdict = match &read {
-            Read::Text(_) | Read::Binary => budget.charge(),
+            Read::Text(_) | Read::Binary => budget.charge(opened.elapsed()),
             _ => Verdict::Take,
         };
         let ends = match (&read, verdict) {

@@ -4,59 +4,35 @@
 use super::config::ServerConfig;
 use super::metrics::Metrics;
 use fieldhouse_core::basketball::Capabilities;
-use fieldhouse_core::driver::Event;
+use fieldhouse_core::driver::{Close, Conn, Event};
 use fieldhouse_core::protocol::MatchInfo;
 use fieldhouse_core::sim::{Mode, Scenario};
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicU64};
 use std::sync::{Arc, Mutex, OnceLock, RwLock};
-use std::time::Instant;
-use tokio::sync::{mpsc, watch};
+use tokio::sync::{mpsc, oneshot, watch};
+use tokio::time::Instant;
 use tokio_tungstenite::tungstenite::Utf8Bytes;
 
-/// What a match task sends a bot's socket. A perception carries its tick: the bot owes
-/// one answer to it, and that answer is never charged to its rate limit. The last
-/// message of a connection another one took over says so, and the socket closes after it.
-#[derive(Debug)]
-pub struct ToBot {
-    pub text: Utf8Bytes,
-    pub perception: Option<u64>,
-    pub replaced: bool,
-}
-
-impl ToBot {
-    pub fn message(text: String) -> ToBot {
-        ToBot {
-            text: Utf8Bytes::from(text),
-            perception: None,
-            replaced: false,
-        }
-    }
-    pub fn perception(tick: u64, text: String) -> ToBot {
-        ToBot {
-            perception: Some(tick),
-            ..ToBot::message(text)
-        }
-    }
-    pub fn replaced(text: String) -> ToBot {
-        ToBot {
-            replaced: true,
-            ..ToBot::message(text)
-        }
-    }
-}
-
-/// What sockets and the API tell a match task: what its driver is to handle, and a
-/// bot's arrival, which also brings the queue the task sends that bot's messages to.
+/// What sockets and the API tell a match task: what its driver is to handle, a bot's
+/// arrival, which also brings where the task reaches that connection, and a stop.
 pub enum Control {
-    /// A bot connected to agent `agent` on connection `conn`; its messages go to `out`.
+    /// A bot connected to agent `agent` on connection `conn`; its messages go to `out`,
+    /// and `close` closes it.
     BotJoin {
+        /// The agent's index, in the world's order of agents.
         agent: usize,
-        conn: u64,
-        out: mpsc::Sender<ToBot>,
+        /// The connection.
+        conn: Conn,
+        /// The socket's queue of messages to send.
+        out: mpsc::Sender<Utf8Bytes>,
+        /// Closes the socket, after what is queued.
+        close: oneshot::Sender<Close>,
     },
-    /// Anything else, passed to the match's driver as it is.
+    /// Anything else a bot connection did, passed to the match's driver as it is.
     Driver(Event),
+    /// The API deleted the match.
+    Stop,
     /// Makes the match task panic, standing for a bug, to test that a panic ends the
     /// match cleanly.
     #[cfg(test)]
@@ -77,8 +53,6 @@ pub struct MatchEntry {
     /// When it ended: an ended match is listed for `ended_match_ttl_s` after this,
     /// then swept from the table.
     pub ended_at: OnceLock<Instant>,
-    /// Who controls each agent now (`true`: a bot).
-    pub controlled: Mutex<Vec<bool>>,
     /// The id of the replay file it is recording into now, if the server records
     /// matches: a match that rotates its replay into segments names the newest, which
     /// retention keeps while it is written (the first may be long gone).

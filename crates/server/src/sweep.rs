@@ -8,7 +8,8 @@
 use super::state::AppState;
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use tokio::time::Instant;
 
 /// How often expired matches are looked for: an ended match is listed at most this
 /// much longer than its time to live.

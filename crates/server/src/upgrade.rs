@@ -6,18 +6,19 @@
 //! never reach a rate limit that counts messages.
 
 use super::api::ApiError;
-use super::budget::Bucket;
 use super::config::ServerConfig;
 use axum::extract::FromRequestParts;
 use axum::http::request::Parts;
 use axum::http::{header, HeaderValue, Method, StatusCode};
 use axum::response::{IntoResponse, Response};
+use fieldhouse_core::budget::Bucket;
 use hyper::upgrade::OnUpgrade;
 use hyper_util::rt::TokioIo;
 use std::future::Future;
 use std::io;
 use std::pin::Pin;
 use std::task::{Context, Poll};
+use std::time::Duration;
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio_tungstenite::tungstenite::handshake::derive_accept_key;
 use tokio_tungstenite::tungstenite::protocol::{Role, WebSocketConfig};
@@ -195,6 +196,8 @@ pub struct FrameMeter<S> {
     inner: S,
     parser: FrameParser,
     budget: Bucket,
+    /// When the budget started: it is charged at the socket's age.
+    opened: tokio::time::Instant,
 }
 
 impl<S> FrameMeter<S> {
@@ -202,7 +205,12 @@ impl<S> FrameMeter<S> {
         FrameMeter {
             inner,
             parser: FrameParser::default(),
-            budget: Bucket::new(CONTROL_FRAMES_PER_SECOND, CONTROL_FRAME_BURST),
+            budget: Bucket::new(
+                CONTROL_FRAMES_PER_SECOND,
+                CONTROL_FRAME_BURST,
+                Duration::ZERO,
+            ),
+            opened: tokio::time::Instant::now(),
         }
     }
 }
@@ -217,10 +225,11 @@ impl<S: AsyncRead + Unpin> AsyncRead for FrameMeter<S> {
         let polled = Pin::new(&mut self.inner).poll_read(cx, buf);
         if let Poll::Ready(Ok(())) = polled {
             let this = &mut *self;
+            let now = this.opened.elapsed();
             let metered = this
                 .parser
                 .feed(&buf.filled()[before..])
-                .all(|_| this.budget.take());
+                .all(|_| this.budget.take(now));
             if !metered {
                 return Poll::Ready(Err(io::Error::other(FrameFlood)));
             }
