@@ -41,8 +41,8 @@
 //!    ([`driver::Output::End`]); the task finishes the replay, then publishes it.
 
 pub use fieldhouse_core::{
-    basketball, budget, costmap, driver, fielding, motion, names, perception, physics, protocol, replay,
-    session, sim, strict_json, words,
+    basketball, budget, costmap, driver, fielding, motion, names, perception, physics, protocol,
+    replay, session, sim, strict_json, words,
 };
 pub use fieldhouse_loadgen as loadgen;
 pub use fieldhouse_server as server;

@@ -422,11 +422,18 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> &str {
 mod tests {
     use super::spawn;
     use crate::slot::Slot;
-    use crate::state::{AppState, Control};
+    use crate::state::{AppState, Control, MatchEntry};
     use crate::ServerConfig;
-    use fieldhouse_core::sim::Scenario;
+    use fieldhouse_core::driver::{Close, Conn, Event};
+    use fieldhouse_core::protocol::ClientMessage;
+    use fieldhouse_core::sim::{Action, Scenario};
+    use serde_json::{json, Value};
     use std::sync::atomic::Ordering::Relaxed;
     use std::sync::Arc;
+    use std::time::Duration;
+    use tokio::sync::{mpsc, oneshot};
+    use tokio::time::Instant;
+    use tokio_tungstenite::tungstenite::Utf8Bytes;
 
     /// A server's shared state with no sockets, whose matches tick on this test's
     /// runtime; the stop sender keeps matches from seeing a shutdown.
@@ -484,5 +491,212 @@ mod tests {
             .await
             .expect("the gauge goes back to 0");
         assert!(Slot::reserve(&app.metrics, 1).is_some());
+    }
+
+    const MS: Duration = Duration::from_millis(1);
+
+    /// A baseball match in `mode` at 100 Hz (perceptions every 10 ms tick) whose `cf`
+    /// (agent 0) is a bot slot, with a 250 ms lock-step deadline, spawned on this test's
+    /// runtime.
+    fn baseball(app: &Arc<AppState>, mode: &str) -> Arc<MatchEntry> {
+        let scenario = Scenario::from_value(json!({
+            "sport": "baseball",
+            "mode": mode,
+            "tick_hz": 100.0,
+            "frame_hz": 50.0,
+            "lockstep_deadline_ms": 250,
+            "agents": [
+                {"id": "cf", "strategy": "chapman", "position": [60.0, 60.0], "bot": true},
+                {"id": "rf", "strategy": "chapman", "position": [20.0, 80.0]}
+            ],
+            "options": {"pause_s": 30.0}
+        }))
+        .unwrap();
+        let slot = Slot::reserve(&app.metrics, 4).unwrap();
+        spawn(app, "m".into(), scenario, slot, false).unwrap()
+    }
+
+    /// A bot connection as the match task sees one: its queue and its close.
+    struct FakeBot {
+        conn: Conn,
+        out: mpsc::Receiver<Utf8Bytes>,
+        close: oneshot::Receiver<Close>,
+    }
+
+    impl FakeBot {
+        async fn join(entry: &MatchEntry, conn: u64) -> FakeBot {
+            let (out_tx, out) = mpsc::channel(16);
+            let (close_tx, close) = oneshot::channel();
+            let conn = Conn(conn);
+            let join = Control::BotJoin {
+                agent: 0,
+                conn,
+                out: out_tx,
+                close: close_tx,
+            };
+            entry.control.send(join).await.unwrap();
+            FakeBot { conn, out, close }
+        }
+
+        /// The next message, and the (paused) time it came at.
+        async fn next(&mut self) -> (Value, Instant) {
+            let text = self
+                .out
+                .recv()
+                .await
+                .expect("the match task keeps the queue");
+            (serde_json::from_str(text.as_str()).unwrap(), Instant::now())
+        }
+
+        async fn next_perception(&mut self) -> (u64, Instant) {
+            loop {
+                let (message, at) = self.next().await;
+                if message["type"] == "perception" {
+                    return (message["tick"].as_u64().unwrap(), at);
+                }
+            }
+        }
+
+        async fn say(
+            &self,
+            entry: &MatchEntry,
+            said: Result<ClientMessage, (&'static str, String)>,
+        ) {
+            let event = Event::BotSaid {
+                agent: 0,
+                conn: self.conn,
+                said,
+            };
+            entry.control.send(Control::Driver(event)).await.unwrap();
+        }
+
+        async fn stand(&self, entry: &MatchEntry, tick: u64) {
+            let action = Action::Stand {};
+            self.say(entry, Ok(ClientMessage::Command { tick, action }))
+                .await;
+        }
+    }
+
+    /// The `end` the match published, once it has.
+    async fn end_of(entry: &MatchEntry) -> Value {
+        let mut published = entry.published.clone();
+        let ended = published.wait_for(|p| p.end.is_some()).await.unwrap();
+        serde_json::from_str(ended.end.as_ref().unwrap().as_str()).unwrap()
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn realtime_perceives_on_the_tick_cadence_of_the_match_time() {
+        let (app, _stop) = app();
+        let entry = baseball(&app, "realtime");
+        let mut bot = FakeBot::join(&entry, 1).await;
+        let (mut tick, mut at) = bot.next_perception().await;
+        for _ in 0..50 {
+            let (next, next_at) = bot.next_perception().await;
+            assert_eq!(
+                (next, next_at - at),
+                (tick + 1, 10 * MS),
+                "one tick a period"
+            );
+            (tick, at) = (next, next_at);
+        }
+        assert_eq!(entry.tick.load(Relaxed), tick);
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn lockstep_waits_for_the_answer_or_the_deadline_and_no_longer() {
+        let (app, _stop) = app();
+        let entry = baseball(&app, "lockstep");
+        let mut bot = FakeBot::join(&entry, 1).await;
+        let (tick, at) = bot.next_perception().await;
+        // Silent: the next tick comes at the deadline, to the millisecond of match time.
+        let (next, next_at) = bot.next_perception().await;
+        assert_eq!((next, next_at - at), (tick + 1, 250 * MS));
+        // Answered: at once, however long the deadline.
+        for k in 0..20 {
+            bot.stand(&entry, next + k).await;
+            let (answered, answered_at) = bot.next_perception().await;
+            assert_eq!(
+                (answered, answered_at),
+                (next + k + 1, next_at),
+                "no time passes"
+            );
+        }
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_second_bot_replaces_the_first_and_a_flooding_bot_is_closed() {
+        let (app, _stop) = app();
+        let entry = baseball(&app, "realtime");
+        let mut first = FakeBot::join(&entry, 1).await;
+        first.next_perception().await;
+        let mut second = FakeBot::join(&entry, 2).await;
+        // The first hears why, then is closed; the second plays on.
+        let told = loop {
+            let (message, _) = first.next().await;
+            if message["type"] == "error" {
+                break message;
+            }
+        };
+        assert_eq!(told["code"], "replaced");
+        assert_eq!((&mut first.close).await, Ok(Close::Replaced));
+        second.next_perception().await;
+        // Unreadable messages pay; past the budget a burst more is a flood (the default
+        // budget: 200 a second, 400 at once).
+        let limits = (app.config.bot_messages_per_second, app.config.bot_burst);
+        assert_eq!(limits, (200, 400));
+        let mut codes = Vec::new();
+        for _ in 0..1000 {
+            second
+                .say(&entry, Err(("bad_json", "not JSON".into())))
+                .await;
+            // The match task handles it; the socket would write what it says meanwhile.
+            tokio::task::yield_now().await;
+            while let Ok(text) = second.out.try_recv() {
+                let message: Value = serde_json::from_str(text.as_str()).unwrap();
+                if message["type"] == "error" {
+                    codes.push(message["code"].as_str().unwrap().to_owned());
+                }
+            }
+        }
+        let rate_limited = codes.iter().filter(|c| *c == "rate_limited").count();
+        assert_eq!(
+            (codes.len(), rate_limited),
+            (401, 1),
+            "400 answered, then one warning"
+        );
+        assert_eq!((&mut second.close).await, Ok(Close::Flooding));
+        assert_eq!(app.metrics.closed_for_rate.load(Relaxed), 1);
+        // The match is unharmed.
+        let before = entry.tick.load(Relaxed);
+        tokio::time::sleep(105 * MS).await;
+        let played = entry.tick.load(Relaxed) - before;
+        assert!(
+            (10..=11).contains(&played),
+            "{played} ticks in 105 ms at 100 Hz"
+        );
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_delete_and_a_shutdown_end_the_match_with_their_reasons() {
+        let (app, stop) = app();
+        let deleted = baseball(&app, "realtime");
+        // Lock-step without a bot ticks in real time, for its spectators.
+        let stopped = baseball(&app, "lockstep");
+        // Between the ticks of 500 and 510 ms.
+        tokio::time::sleep(505 * MS).await;
+        deleted.control.send(Control::Stop).await.unwrap();
+        let end = end_of(&deleted).await;
+        assert_eq!(
+            (&end["type"], &end["reason"]),
+            (&json!("end"), &json!("deleted"))
+        );
+        assert_eq!(end["tick"], 50, "500 ms at 100 Hz");
+        assert!(end["result"].is_object(), "{end}");
+        // The last frame is published before the end, showing the last tick.
+        let frame: Value = serde_json::from_str(deleted.published.borrow().frame.as_str()).unwrap();
+        assert_eq!(frame["tick"], 50);
+        stop.send(true).unwrap();
+        assert_eq!(end_of(&stopped).await["reason"], "shutdown");
+        assert!(deleted.ended.load(Relaxed) && stopped.ended.load(Relaxed));
     }
 }
