@@ -377,6 +377,8 @@ impl MatchDriver {
             return;
         }
         match event {
+            // The shell joins each connection once; a second join changes nothing.
+            Event::BotJoin { agent, conn } if self.seated_at(agent, conn) => {}
             Event::BotJoin { agent, conn } => {
                 if let Some(old) = self.seats[agent].take() {
                     self.tell(old.conn, "replaced", Close::Replaced.reason());
@@ -1198,5 +1200,226 @@ mod tests {
                 Output::End(_)
             ]
         ));
+    }
+
+    /// What a property test does to a driver: wait, or a bot connection does something.
+    #[derive(Debug, Clone)]
+    enum Step {
+        Wait {
+            ms: u64,
+        },
+        Join {
+            agent: usize,
+            conn: u64,
+        },
+        Leave {
+            agent: usize,
+            conn: u64,
+        },
+        /// A command for the world's tick plus `lag` (−2 to 1: stale-ish to future, all
+        /// in the window at one perception a tick).
+        Answer {
+            agent: usize,
+            conn: u64,
+            lag: i64,
+        },
+        Garbage {
+            agent: usize,
+            conn: u64,
+        },
+        Stop,
+    }
+
+    fn step() -> impl proptest::strategy::Strategy<Value = Step> {
+        use proptest::prelude::*;
+        let who = (0..2usize, 1..4u64);
+        prop_oneof![
+            4 => (0..600u64).prop_map(|ms| Step::Wait { ms }),
+            2 => who.clone().prop_map(|(agent, conn)| Step::Join { agent, conn }),
+            1 => who.clone().prop_map(|(agent, conn)| Step::Leave { agent, conn }),
+            6 => (who.clone(), -2..2i64).prop_map(|((agent, conn), lag)| Step::Answer { agent, conn, lag }),
+            2 => who.prop_map(|(agent, conn)| Step::Garbage { agent, conn }),
+            1 => Just(Step::Stop),
+        ]
+    }
+
+    /// What the test knows of the match from outside: who sits where (by what it told
+    /// the driver and what the driver closed), and the perception each seated
+    /// connection was last sent and has not answered, with when.
+    #[derive(Default)]
+    struct Model {
+        seats: [Option<u64>; 2],
+        owed: std::collections::HashMap<u64, (u64, Duration)>,
+        closed: std::collections::HashSet<u64>,
+        ticks: u64,
+        ended: bool,
+    }
+
+    impl Model {
+        fn seated(&self, conn: u64) -> bool {
+            self.seats.contains(&Some(conn))
+        }
+
+        /// Checks what the driver did at `now` against the invariants, and follows it.
+        fn follow(
+            &mut self,
+            d: &mut MatchDriver,
+            now: Duration,
+            lockstep: bool,
+            replaced: Option<u64>,
+        ) {
+            let (out, sent) = (outputs(d), sent(d));
+            if let Some(old) = replaced.filter(|_| !self.ended) {
+                let why = Close::Replaced;
+                assert!(
+                    sent.contains(&Transmit::Close {
+                        conn: Conn(old),
+                        why
+                    }),
+                    "{old} not closed"
+                );
+            }
+            if self.ended {
+                assert_eq!((out.len(), sent.len()), (0, 0), "nothing after the end");
+                return;
+            }
+            // Closes first: a seat a flood vacated is waited for no more on this step.
+            for t in &sent {
+                let (Transmit::Perception { conn, .. }
+                | Transmit::Error { conn, .. }
+                | Transmit::Close { conn, .. }) = t;
+                assert!(!self.closed.contains(&conn.0), "{t:?} after its close");
+                assert!(
+                    self.seated(conn.0) || replaced == Some(conn.0),
+                    "{t:?} to no seat"
+                );
+                if let Transmit::Close { conn, why } = t {
+                    self.closed.insert(conn.0);
+                    self.owed.remove(&conn.0);
+                    if *why == Close::Flooding {
+                        let seat = self.seats.iter_mut().find(|s| **s == Some(conn.0));
+                        *seat.expect("a flooding bot is seated") = None;
+                    }
+                }
+            }
+            for o in &out {
+                match o {
+                    Output::Ticked { tick } => {
+                        assert_eq!(*tick, self.ticks + 1, "ticks go one by one");
+                        self.ticks = *tick;
+                        if lockstep {
+                            // A tick after a perception waited for every seated bot's
+                            // answer or for the deadline.
+                            for (conn, (owed, at)) in &self.owed {
+                                if *owed == tick - 1 && self.seated(*conn) {
+                                    assert!(now >= *at + 400 * MS, "tick {tick} at {now:?} without {conn}'s answer to {owed} (sent {at:?})");
+                                }
+                            }
+                        }
+                    }
+                    Output::End(_) => {
+                        assert!(
+                            matches!(out.last(), Some(Output::End(_))),
+                            "the end is last"
+                        );
+                        self.ended = true;
+                    }
+                    _ => {}
+                }
+            }
+            // Then the perceptions of the tick just played.
+            for t in &sent {
+                if let Transmit::Perception { conn, tick, .. } = t {
+                    self.owed.insert(conn.0, (*tick, now));
+                }
+            }
+            if lockstep && !self.ended {
+                // A wait is only ever for a seated bot that owes the perception of now.
+                let owes = self
+                    .owed
+                    .iter()
+                    .any(|(c, (t, _))| *t == d.tick() && self.seated(*c));
+                if let Wake::At(_) = d.poll_timeout() {
+                    assert!(
+                        owes || self.seats.iter().all(Option::is_none),
+                        "waits for no one"
+                    );
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+        #[test]
+        fn any_sequence_keeps_ticks_seats_answers_and_the_end_in_order(
+            lockstep in proptest::bool::ANY,
+            steps in proptest::collection::vec(step(), 1..80),
+        ) {
+            let mut d = driver(if lockstep { "lockstep" } else { "realtime" }, json!({}));
+            let mut model = Model::default();
+            let mut now = Duration::ZERO;
+            for step in steps {
+                let mut replaced = None;
+                match step {
+                    Step::Wait { ms } => {
+                        // A shell woken every 7 ms, early or late, and at once while
+                        // the driver says a tick is due.
+                        let until = now + Duration::from_millis(ms);
+                        while now < until && !model.ended {
+                            now = (now + 7 * MS).min(until);
+                            d.handle_timeout(now);
+                            model.follow(&mut d, now, lockstep, None);
+                            let due = |d: &MatchDriver| match d.poll_timeout() {
+                                Wake::Now => true,
+                                Wake::At(at) => at <= now,
+                            };
+                            while !model.ended && due(&d) {
+                                d.handle_timeout(now);
+                                model.follow(&mut d, now, lockstep, None);
+                            }
+                        }
+                    }
+                    Step::Join { agent, conn } => {
+                        if model.closed.contains(&conn) || model.seats.iter().enumerate().any(|(k, s)| k != agent && *s == Some(conn)) {
+                            continue; // the shell numbers each connection once
+                        }
+                        replaced = model.seats[agent].filter(|&old| old != conn);
+                        d.handle(join(agent, conn), now);
+                        if !model.ended {
+                            if let Some(old) = replaced {
+                                model.owed.remove(&old);
+                            }
+                            model.seats[agent] = Some(conn);
+                        }
+                    }
+                    Step::Leave { agent, conn } => {
+                        d.handle(leave(agent, conn), now);
+                        if model.seats[agent] == Some(conn) && !model.ended {
+                            model.seats[agent] = None;
+                            model.owed.remove(&conn);
+                        }
+                    }
+                    Step::Answer { agent, conn, lag } => {
+                        let tick = d.tick().saturating_add_signed(lag);
+                        d.handle(stand(agent, conn, tick), now);
+                        if model.seats[agent] == Some(conn) {
+                            if let Some((owed, _)) = model.owed.get(&conn) {
+                                if *owed <= tick {
+                                    model.owed.remove(&conn);
+                                }
+                            }
+                        }
+                    }
+                    Step::Garbage { agent, conn } => {
+                        let said = Err(("bad_json", "not JSON".to_owned()));
+                        d.handle(Event::BotSaid { agent, conn: Conn(conn), said }, now);
+                    }
+                    Step::Stop => d.stop(EndReason::Deleted),
+                }
+                model.follow(&mut d, now, lockstep, replaced);
+            }
+        }
     }
 }
