@@ -21,9 +21,9 @@
 //!
 //! 1. A bot's command arrives on its socket (`server::bot`, the bot socket loop), is
 //!    checked for size and WebSocket framing, decoded by [`protocol::decode`] (strict
-//!    JSON), and sent to its match's task as a `server::state::Control::Driver`.
-//! 2. The match task (`server::match_task`, `Ticker::forward`) hands it to the match's
-//!    [`driver::MatchDriver::handle`] as a [`driver::Event::BotSaid`] with `now`; the
+//!    JSON), and sent to its match's task as a `server::state::ToMatch::Driver`.
+//! 2. The match task (`server::match_task`, `MatchTask::forward`) hands it to the match's
+//!    [`driver::MatchDriver::handle`] as a [`driver::BotEvent::Said`] with `now`; the
 //!    driver decides what it costs (an answer to a perception is free, anything else
 //!    pays the seat's [`budget`]), checks its tick window and passes it to
 //!    [`sim::World::command`].
@@ -33,7 +33,7 @@
 //!    once ([`session::Session::step`]).
 //! 4. The task drains [`driver::MatchDriver::poll_transmit`] (perceptions, errors and
 //!    closes for bot connections, each to its connection's queue) and
-//!    [`driver::MatchDriver::poll_output`] (`Ticker::carry_out`): an
+//!    [`driver::MatchDriver::poll_output`] (`MatchTask::carry_out`): an
 //!    [`driver::Output::Frame`] is published on the match's watch channel, whose bytes
 //!    a few fan-out tasks (`server::fanout`) write unchanged to every spectator's socket,
 //!    and handed to the replay's writer thread (`server::recording`). When the match

@@ -72,16 +72,16 @@ pub type Unreadable = (&'static str, String);
 
 /// What the shell forwards to the driver.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Event {
+pub enum BotEvent {
     /// A bot connection `conn` takes agent `agent`.
-    BotJoin {
+    Join {
         /// The agent's index, in the world's order of agents.
         agent: usize,
         /// The connection.
         conn: Conn,
     },
     /// Connection `conn` of agent `agent` is gone.
-    BotLeave {
+    Leave {
         /// The agent's index, in the world's order of agents.
         agent: usize,
         /// The connection.
@@ -89,7 +89,7 @@ pub enum Event {
     },
     /// Connection `conn` of agent `agent` sent a message, read as the protocol says, or
     /// something that is not one.
-    BotSaid {
+    Said {
         /// The agent's index, in the world's order of agents.
         agent: usize,
         /// The connection it came on.
@@ -372,14 +372,14 @@ impl MatchDriver {
 
     /// Something a bot connection did, at `now`. In lockstep, the answer (or departure)
     /// that a waiting tick lacked plays it at once.
-    pub fn handle(&mut self, event: Event, now: Duration) {
+    pub fn handle(&mut self, event: BotEvent, now: Duration) {
         if self.ended {
             return;
         }
         match event {
             // The shell joins each connection once; a second join changes nothing.
-            Event::BotJoin { agent, conn } if self.seated_at(agent, conn) => {}
-            Event::BotJoin { agent, conn } => {
+            BotEvent::Join { agent, conn } if self.seated_at(agent, conn) => {}
+            BotEvent::Join { agent, conn } => {
                 if let Some(old) = self.seats[agent].take() {
                     self.tell(old.conn, "replaced", Close::Replaced.reason());
                     self.transmits.push_back(Transmit::Close {
@@ -395,12 +395,12 @@ impl MatchDriver {
                 });
                 self.set_controlled(agent, true);
             }
-            Event::BotLeave { agent, conn } => {
+            BotEvent::Leave { agent, conn } => {
                 if self.seated_at(agent, conn) {
                     self.vacate(agent);
                 }
             }
-            Event::BotSaid { agent, conn, said } => self.said(agent, conn, said, now),
+            BotEvent::Said { agent, conn, said } => self.said(agent, conn, said, now),
         }
         if self.waiting_until.is_some() && self.all_answered() {
             self.next_tick = now + self.period;
@@ -611,7 +611,7 @@ fn in_window(tick: u64, now: u64, every: u64) -> Result<(), (&'static str, Strin
 #[cfg(test)]
 mod tests {
     use super::{
-        in_window, BotLimits, Close, Conn, EndReason, Event, MatchDriver, Output, Transmit, Wake,
+        in_window, BotEvent, BotLimits, Close, Conn, EndReason, MatchDriver, Output, Transmit, Wake,
     };
     use crate::protocol::ClientMessage;
     use crate::session::Session;
@@ -690,29 +690,29 @@ mod tests {
         d.tick()
     }
 
-    fn join(agent: usize, conn: u64) -> Event {
-        Event::BotJoin {
+    fn join(agent: usize, conn: u64) -> BotEvent {
+        BotEvent::Join {
             agent,
             conn: Conn(conn),
         }
     }
 
-    fn leave(agent: usize, conn: u64) -> Event {
-        Event::BotLeave {
+    fn leave(agent: usize, conn: u64) -> BotEvent {
+        BotEvent::Leave {
             agent,
             conn: Conn(conn),
         }
     }
 
-    fn command(agent: usize, conn: u64, tick: u64, action: Action) -> Event {
-        Event::BotSaid {
+    fn command(agent: usize, conn: u64, tick: u64, action: Action) -> BotEvent {
+        BotEvent::Said {
             agent,
             conn: Conn(conn),
             said: Ok(ClientMessage::Command { tick, action }),
         }
     }
 
-    fn stand(agent: usize, conn: u64, tick: u64) -> Event {
+    fn stand(agent: usize, conn: u64, tick: u64) -> BotEvent {
         command(agent, conn, tick, Action::Stand {})
     }
 
@@ -1111,7 +1111,7 @@ mod tests {
         // What is not an answer pays: a second command for the same tick, an unreadable
         // message. The burst of 10 is taken, the 11th refused with a warning, once.
         let at = 3010 * MS;
-        let garbage = || Event::BotSaid {
+        let garbage = || BotEvent::Said {
             agent: 0,
             conn: Conn(1),
             said: Err(("bad_json", "expected value at line 1 column 1".into())),
@@ -1414,7 +1414,7 @@ mod tests {
                     }
                     Step::Garbage { agent, conn } => {
                         let said = Err(("bad_json", "not JSON".to_owned()));
-                        d.handle(Event::BotSaid { agent, conn: Conn(conn), said }, now);
+                        d.handle(BotEvent::Said { agent, conn: Conn(conn), said }, now);
                     }
                     Step::Stop => d.stop(EndReason::Deleted),
                 }

@@ -5,7 +5,7 @@ use super::auth;
 pub use super::error::ApiError;
 use super::match_task;
 use super::slot::Slot;
-use super::state::{AppState, Control, MatchEntry};
+use super::state::{AppState, MatchEntry, ToMatch};
 use super::sweep;
 use axum::body::Bytes;
 use axum::extract::{FromRequestParts, Path, Query, State};
@@ -198,7 +198,7 @@ pub async fn delete(
         .expect("not poisoned")
         .remove(&id)
         .ok_or_else(|| ApiError::not_found(&id))?;
-    let _ = entry.control.send(Control::Stop).await;
+    let _ = entry.control.send(ToMatch::Stop).await;
     tracing::info!(%id, "match deleted");
     Ok(Json(json!({"id": id, "status": "deleted"})))
 }

@@ -14,12 +14,12 @@ use super::error::ApiError;
 use super::socket::{
     answer_close, classify, ending, limits, refusal, shut, Read, Sender, Sent, POLICY,
 };
-use super::state::{AppState, Control, MatchEntry};
+use super::state::{AppState, MatchEntry, ToMatch};
 use super::upgrade::{Socket, Upgrade};
 use axum::extract::{Path, Query, State};
 use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
-use fieldhouse_core::driver::{Close, Conn, Event};
+use fieldhouse_core::driver::{BotEvent, Close, Conn};
 use fieldhouse_core::protocol::{decode, encode, Hello, Role};
 use futures_util::StreamExt;
 use std::collections::HashMap;
@@ -100,7 +100,7 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
     let joined = send.text(hello.into()).await == Sent::Ok
         && entry
             .control
-            .send(Control::BotJoin {
+            .send(ToMatch::Join {
                 agent: k,
                 conn,
                 out: out_tx,
@@ -173,8 +173,8 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
                         Read::Text(text) => decode(&text),
                         _ => Err(("binary", "binary frames are not part of the protocol; send JSON text".to_owned())),
                     };
-                    let event = Event::BotSaid { agent: k, conn, said };
-                    if entry.control.send(Control::Driver(event)).await.is_err() {
+                    let event = BotEvent::Said { agent: k, conn, said };
+                    if entry.control.send(ToMatch::Driver(event)).await.is_err() {
                         break None;
                     }
                 }
@@ -188,7 +188,7 @@ async fn bot(socket: Socket, entry: Arc<MatchEntry>, app: Arc<AppState>, k: usiz
     }
     let _ = entry
         .control
-        .send(Control::Driver(Event::BotLeave { agent: k, conn }))
+        .send(ToMatch::Driver(BotEvent::Leave { agent: k, conn }))
         .await;
     metrics.bots.fetch_sub(1, Relaxed);
 }

@@ -13,11 +13,11 @@ use super::auth::new_token;
 use super::config::ServerConfig;
 use super::fanout::Published;
 use super::metrics::Metrics;
-use super::recording::{self, InDir, Limit, Recording};
+use super::recording::{self, Limit, Recording, SegmentFiles};
 use super::slot::Slot;
-use super::state::{AppState, Control, MatchEntry};
+use super::state::{AppState, MatchEntry, ToMatch};
 use fieldhouse_core::driver::{
-    BotLimits, Close, Conn, EndReason, Ending, Event, MatchDriver, Output, Transmit, Wake,
+    BotEvent, BotLimits, Close, Conn, EndReason, Ending, MatchDriver, Output, Transmit, Wake,
 };
 use fieldhouse_core::replay;
 use fieldhouse_core::session::{self, Session};
@@ -81,7 +81,7 @@ pub fn spawn(
                 app.caps.source.fingerprint(),
                 crate::wall::since_epoch(),
             );
-            let files = InDir {
+            let files = SegmentFiles {
                 app: app.clone(),
                 dir: dir.to_path_buf(),
                 stem: format!("{id}-{}", unix_seconds()),
@@ -122,7 +122,7 @@ pub fn spawn(
         fanout: Default::default(),
     });
     app.metrics.matches_created.fetch_add(1, Relaxed);
-    let task = Ticker {
+    let task = MatchTask {
         _slot: slot,
         driver,
         recorder,
@@ -162,14 +162,14 @@ struct Mailbox {
     close: oneshot::Sender<Close>,
 }
 
-struct Ticker {
+struct MatchTask {
     /// The match's place among `max_matches`, given back when the task is dropped.
     _slot: Slot,
     driver: MatchDriver,
     recorder: Option<Recording>,
     entry: Arc<MatchEntry>,
     publish: watch::Sender<Published>,
-    control: mpsc::Receiver<Control>,
+    control: mpsc::Receiver<ToMatch>,
     metrics: Arc<Metrics>,
     shutdown: watch::Receiver<bool>,
     mailboxes: HashMap<Conn, Mailbox>,
@@ -177,7 +177,7 @@ struct Ticker {
     stamp_frames: bool,
 }
 
-impl Ticker {
+impl MatchTask {
     /// Plays the match, then ends it. A panic while playing (a bug) ends this match
     /// with reason `error`, told to its spectators and bots and logged, instead of
     /// leaving it listed as running for ever with its place taken.
@@ -267,23 +267,23 @@ impl Ticker {
 
     /// Tells the driver what a socket or the API said (`None`: no one is left to say
     /// anything, a stop), and carries out what follows; how the match ended, if it did.
-    fn forward(&mut self, message: Option<Control>, start: Instant) -> Option<Ending> {
+    fn forward(&mut self, message: Option<ToMatch>, start: Instant) -> Option<Ending> {
         let handled = Instant::now();
         let now = handled - start;
         match message {
-            None | Some(Control::Stop) => return Some(self.stop(EndReason::Deleted)),
-            Some(Control::BotJoin {
+            None | Some(ToMatch::Stop) => return Some(self.stop(EndReason::Deleted)),
+            Some(ToMatch::Join {
                 agent,
                 conn,
                 out,
                 close,
             }) => {
                 self.mailboxes.insert(conn, Mailbox { out, close });
-                self.driver.handle(Event::BotJoin { agent, conn }, now);
+                self.driver.handle(BotEvent::Join { agent, conn }, now);
             }
-            Some(Control::Driver(event)) => {
+            Some(ToMatch::Driver(event)) => {
                 let left = match &event {
-                    Event::BotLeave { conn, .. } => Some(*conn),
+                    BotEvent::Leave { conn, .. } => Some(*conn),
                     _ => None,
                 };
                 self.driver.handle(event, now);
@@ -292,7 +292,7 @@ impl Ticker {
                 }
             }
             #[cfg(test)]
-            Some(Control::Panic) => panic!("a test asked this match task to panic"),
+            Some(ToMatch::Panic) => panic!("a test asked this match task to panic"),
         }
         self.carry_out(handled)
     }
@@ -422,9 +422,9 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> &str {
 mod tests {
     use super::spawn;
     use crate::slot::Slot;
-    use crate::state::{AppState, Control, MatchEntry};
+    use crate::state::{AppState, MatchEntry, ToMatch};
     use crate::ServerConfig;
-    use fieldhouse_core::driver::{Close, Conn, Event};
+    use fieldhouse_core::driver::{BotEvent, Close, Conn};
     use fieldhouse_core::protocol::ClientMessage;
     use fieldhouse_core::sim::{Action, Scenario};
     use serde_json::{json, Value};
@@ -467,7 +467,7 @@ mod tests {
             "the match holds the place"
         );
         let mut published = entry.published.clone();
-        entry.control.send(Control::Panic).await.unwrap();
+        entry.control.send(ToMatch::Panic).await.unwrap();
         let ended = tokio::time::timeout(
             std::time::Duration::from_secs(10),
             published.wait_for(|p| p.end.is_some()),
@@ -528,7 +528,7 @@ mod tests {
             let (out_tx, out) = mpsc::channel(16);
             let (close_tx, close) = oneshot::channel();
             let conn = Conn(conn);
-            let join = Control::BotJoin {
+            let join = ToMatch::Join {
                 agent: 0,
                 conn,
                 out: out_tx,
@@ -562,12 +562,12 @@ mod tests {
             entry: &MatchEntry,
             said: Result<ClientMessage, (&'static str, String)>,
         ) {
-            let event = Event::BotSaid {
+            let event = BotEvent::Said {
                 agent: 0,
                 conn: self.conn,
                 said,
             };
-            entry.control.send(Control::Driver(event)).await.unwrap();
+            entry.control.send(ToMatch::Driver(event)).await.unwrap();
         }
 
         async fn stand(&self, entry: &MatchEntry, tick: u64) {
@@ -684,7 +684,7 @@ mod tests {
         let stopped = baseball(&app, "lockstep");
         // Between the ticks of 500 and 510 ms.
         tokio::time::sleep(505 * MS).await;
-        deleted.control.send(Control::Stop).await.unwrap();
+        deleted.control.send(ToMatch::Stop).await.unwrap();
         let end = end_of(&deleted).await;
         assert_eq!(
             (&end["type"], &end["reason"]),

@@ -407,7 +407,7 @@ impl<F: Files> Writer<F> {
 /// `STEM-s1.jsonl.zst`, `STEM-s2.jsonl.zst`, ... for later segments. Each is marked as being
 /// written while it is, so retention leaves it alone, and retention is told when one is
 /// done.
-pub struct InDir {
+pub struct SegmentFiles {
     pub app: Arc<AppState>,
     pub dir: PathBuf,
     pub stem: String,
@@ -415,7 +415,7 @@ pub struct InDir {
     pub current: Arc<std::sync::Mutex<Option<String>>>,
 }
 
-impl InDir {
+impl SegmentFiles {
     fn id(&self, segment: u32) -> String {
         match segment {
             0 => self.stem.clone(),
@@ -424,7 +424,7 @@ impl InDir {
     }
 }
 
-impl Files for InDir {
+impl Files for SegmentFiles {
     type Out = io::BufWriter<std::fs::File>;
 
     fn create(&mut self, segment: u32) -> io::Result<(Self::Out, String)> {

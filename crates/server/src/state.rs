@@ -4,7 +4,7 @@
 use super::config::ServerConfig;
 use super::metrics::Metrics;
 use fieldhouse_core::basketball::Capabilities;
-use fieldhouse_core::driver::{Close, Conn, Event};
+use fieldhouse_core::driver::{BotEvent, Close, Conn};
 use fieldhouse_core::protocol::MatchInfo;
 use fieldhouse_core::sim::{Mode, Scenario};
 use std::collections::BTreeMap;
@@ -16,10 +16,10 @@ use tokio_tungstenite::tungstenite::Utf8Bytes;
 
 /// What sockets and the API tell a match task: what its driver is to handle, a bot's
 /// arrival, which also brings where the task reaches that connection, and a stop.
-pub enum Control {
+pub enum ToMatch {
     /// A bot connected to agent `agent` on connection `conn`; its messages go to `out`,
     /// and `close` closes it.
-    BotJoin {
+    Join {
         /// The agent's index, in the world's order of agents.
         agent: usize,
         /// The connection.
@@ -30,7 +30,7 @@ pub enum Control {
         close: oneshot::Sender<Close>,
     },
     /// Anything else a bot connection did, passed to the match's driver as it is.
-    Driver(Event),
+    Driver(BotEvent),
     /// The API deleted the match.
     Stop,
     /// Makes the match task panic, standing for a bug, to test that a panic ends the
@@ -44,7 +44,7 @@ pub struct MatchEntry {
     pub mode: Mode,
     pub scenario: Scenario,
     pub published: watch::Receiver<super::fanout::Published>,
-    pub control: mpsc::Sender<Control>,
+    pub control: mpsc::Sender<ToMatch>,
     /// Bot tokens: (agent index, agent id, token).
     pub tokens: Vec<(usize, String, String)>,
     pub spectators: AtomicU64,
