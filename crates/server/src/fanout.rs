@@ -31,6 +31,8 @@ use std::time::{Duration, Instant};
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio::net::TcpStream;
 use tokio::sync::{oneshot, watch};
+use tokio_tungstenite::tungstenite::protocol::frame::coding::{Data, OpCode};
+use tokio_tungstenite::tungstenite::protocol::frame::FrameHeader;
 use tokio_tungstenite::tungstenite::Utf8Bytes;
 
 /// The newest frame of a match (encoded once; every spectator gets the same bytes), and
@@ -150,21 +152,18 @@ impl Wire {
     }
 }
 
-/// An unmasked server text frame (RFC 6455 §5.2) of `payload`.
+/// An unmasked server text frame (RFC 6455 §5.2) of `payload`: the header as the
+/// WebSocket library writes it, then the payload, in one buffer.
 pub fn text_frame(payload: &[u8]) -> Vec<u8> {
-    let mut frame = Vec::with_capacity(payload.len() + 10);
-    frame.push(0x81);
-    match payload.len() {
-        n if n < 126 => frame.push(n as u8),
-        n if n <= 0xffff => {
-            frame.push(126);
-            frame.extend_from_slice(&(n as u16).to_be_bytes());
-        }
-        n => {
-            frame.push(127);
-            frame.extend_from_slice(&(n as u64).to_be_bytes());
-        }
-    }
+    let header = FrameHeader {
+        opcode: OpCode::Data(Data::Text),
+        ..FrameHeader::default()
+    };
+    let length = payload.len() as u64;
+    let mut frame = Vec::with_capacity(header.len(length) + payload.len());
+    header
+        .format(length, &mut frame)
+        .expect("writing to a Vec does not fail");
     frame.extend_from_slice(payload);
     frame
 }
