@@ -32,11 +32,12 @@
 //! written frame's tail. It is not a server anyone should run; it is what writing the
 //! bytes costs on this machine.
 
+use crate::client::now_us;
 use anyhow::Context;
 use std::io::{ErrorKind, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::sync::mpsc;
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::handshake::derive_accept_key;
 use tokio_tungstenite::tungstenite::protocol::frame::coding::{Data, OpCode};
 
@@ -187,12 +188,6 @@ fn put(slot: &mut [u8], mut n: u64) {
 /// An unmasked server frame's header: FIN, text, the payload's length (RFC 6455 §5.2).
 fn frame_header(len: usize) -> Vec<u8> {
     crate::client::frame_header(OpCode::Data(Data::Text), None, len)
-}
-
-fn now_us() -> u64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map_or(0, |d| d.as_micros() as u64)
 }
 
 /// Serves on `listener` until the process is killed: accepts on this thread, sends on
