@@ -392,7 +392,7 @@ impl<W: Durable> Recorder<W> {
     /// Writes the footer (in format 2 in a chunk of its own, then the trailer), flushes
     /// and syncs: after this the file is complete on disk.
     pub fn finish(mut self, tick: u64, reason: &str, result: &impl Serialize) -> io::Result<()> {
-        let hash = hex(&self.hasher.clone().finalize());
+        let hash = hex::encode(self.hasher.clone().finalize());
         let footer = crate::protocol::encode(&records::Footer {
             frames: self.frames,
             hash: &hash,
@@ -431,10 +431,6 @@ pub fn control_record(tick: u64, agent: &str, bot: bool) -> String {
         record: crate::tags::Control,
         tick,
     })
-}
-
-fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 /// A bot's log entry, as read back.
@@ -504,7 +500,7 @@ impl Replay {
             hasher.update(line.as_bytes());
             hasher.update(b"\n");
         }
-        hex(&hasher.finalize())
+        hex::encode(hasher.finalize())
     }
 
     /// The id of the match recorded.
