@@ -10,7 +10,8 @@
 //! * [`sweep`]: ended matches leave the table after a while.
 //! * [`spectator`]: the spectator WebSocket: a match's frames, newest first.
 //! * [`fanout`]: a match's frames written straight to its spectators' sockets, by a few
-//!   tasks, one write per socket per frame.
+//!   tasks, one write per socket per frame; its [`fanout::Wire`] is a spectator's socket,
+//!   written whole frames at a time by the fan-out and everyone else.
 //! * [`bot`]: the bot WebSocket: an agent's perceptions out, commands in.
 //! * [`socket`]: what every WebSocket shares: close codes, reading, writing under a
 //!   timeout, closing.
