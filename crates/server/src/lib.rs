@@ -37,11 +37,20 @@
 //! * [`agones`]: running as an Agones game server (Ready, Health, Shutdown).
 //! * [`web`]: the spectator page from `web/`, embedded in the binary.
 
+// Every public item of the server is documented: the binary, the load generator and the
+// tests build on it, and its documentation is where limits, timeouts and who may do
+// what are stated.
+#![warn(missing_docs)]
+
+// `bot`, `budget` and `state` are allowed missing docs: the match driver's modules are
+// being reworked, and their public items are documented as they settle.
 pub mod admission;
 pub mod agones;
 pub mod api;
 pub mod auth;
+#[allow(missing_docs)]
 pub mod bot;
+#[allow(missing_docs)]
 pub mod budget;
 pub mod config;
 pub mod demo;
@@ -60,6 +69,7 @@ pub mod retention;
 pub mod slot;
 pub mod socket;
 pub mod spectator;
+#[allow(missing_docs)]
 pub mod state;
 pub mod sweep;
 pub mod upgrade;
@@ -189,6 +199,8 @@ pub async fn serve(
     Ok(())
 }
 
+/// The server's routes (REST API, WebSockets, health, metrics, the page) with the layers
+/// every request goes through: limits, timeouts, load shedding and security headers.
 pub fn router(app: Arc<AppState>) -> Router {
     let config = &app.config;
     let metrics = app.metrics.clone();

@@ -30,9 +30,13 @@ pub type Socket = WebSocketStream<FrameMeter<TokioIo<hyper::upgrade::Upgraded>>>
 /// [`super::fanout`]): its TCP stream, what the HTTP server had read past the request,
 /// its place among the connections, and the WebSocket settings its reader uses.
 pub struct RawSocket {
+    /// The connection, upgraded.
     pub stream: tokio::net::TcpStream,
+    /// Bytes the HTTP server had read past the request: the first of the WebSocket's.
     pub read_first: Vec<u8>,
+    /// Its place among the connections, held while it is open.
     pub place: std::sync::Arc<super::listener::Conn>,
+    /// The reader's WebSocket limits (message and frame sizes).
     pub settings: WebSocketConfig,
 }
 
@@ -44,6 +48,7 @@ const SOCKET_BUFFER_BYTES: usize = 8 * 1024;
 /// then and fragment nothing this small; the data messages themselves are counted by
 /// each socket's message budget.
 pub const CONTROL_FRAMES_PER_SECOND: f64 = 20.0;
+/// How many such frames may come at once before the rate applies.
 pub const CONTROL_FRAME_BURST: f64 = 100.0;
 
 /// A request to open a WebSocket, checked: `GET`, `Upgrade: websocket`, version 13.
@@ -198,6 +203,7 @@ pub struct FrameMeter<S> {
 }
 
 impl<S> FrameMeter<S> {
+    /// `inner`, metered from a full budget.
     pub fn new(inner: S) -> FrameMeter<S> {
         FrameMeter {
             inner,

@@ -38,7 +38,9 @@ use wire::Offered;
 pub struct Published {
     /// Frames published so far: a spectator that sees a gap skipped frames.
     pub seq: u64,
+    /// The newest frame's JSON text.
     pub frame: Utf8Bytes,
+    /// The match's `end` message's JSON text, once it has ended.
     pub end: Option<Utf8Bytes>,
 }
 

@@ -38,6 +38,7 @@ pub(super) enum Offered {
 }
 
 impl Wire {
+    /// A spectator's upgraded `stream`, holding its `place` among the connections.
     pub fn new(stream: TcpStream, place: Arc<Conn>) -> Wire {
         Wire {
             stream,
@@ -155,6 +156,8 @@ pub struct WireIo {
 }
 
 impl WireIo {
+    /// The reader's view of `wire`, starting with `read_first` (what the HTTP server had
+    /// read past the handshake).
     pub fn new(wire: Arc<Wire>, read_first: Vec<u8>) -> WireIo {
         WireIo { wire, read_first }
     }
