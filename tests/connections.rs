@@ -15,6 +15,8 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio_tungstenite::tungstenite::client::IntoClientRequest;
+use tokio_tungstenite::tungstenite::protocol::frame::coding::OpCode;
+use tokio_tungstenite::tungstenite::protocol::frame::FrameHeader;
 use tokio_tungstenite::tungstenite::Message;
 
 /// A settings file with `toml` in it.
@@ -238,11 +240,7 @@ async fn raw_socket(server: &Server, path: &str) -> tokio::net::TcpStream {
 
 /// A masked client frame.
 fn frame(fin: bool, opcode: u8, payload: &[u8]) -> Vec<u8> {
-    assert!(payload.len() < 126);
-    let mut out = vec![(u8::from(fin) << 7) | opcode, 0x80 | payload.len() as u8];
-    out.extend([7, 7, 7, 7]);
-    out.extend(payload.iter().map(|b| b ^ 7));
-    out
+    raw_frame((u8::from(fin) << 7) | opcode, true, payload)
 }
 
 /// Reads server frames until a close; its code (None: the connection ended without one).
@@ -762,27 +760,23 @@ async fn slow_downloads_hold_their_places_and_the_caps_hold() {
     );
 }
 
-/// A client frame written by hand: its first byte (FIN, reserved bits, opcode), masked
-/// or not, any length.
+/// A client frame of any first byte (FIN, reserved bits, opcode), masked or not, any
+/// length: the header as the WebSocket library writes it, however wrong the frame is.
 fn raw_frame(first: u8, masked: bool, payload: &[u8]) -> Vec<u8> {
-    let mask_bit = if masked { 0x80 } else { 0 };
-    let mut out = vec![first];
-    match payload.len() {
-        n if n < 126 => out.push(mask_bit | n as u8),
-        n if n <= 0xffff => {
-            out.push(mask_bit | 126);
-            out.extend((n as u16).to_be_bytes());
-        }
-        n => {
-            out.push(mask_bit | 127);
-            out.extend((n as u64).to_be_bytes());
-        }
-    }
-    if masked {
-        out.extend([7, 7, 7, 7]);
-        out.extend(payload.iter().map(|b| b ^ 7));
-    } else {
-        out.extend(payload);
+    let mask = masked.then_some([7, 7, 7, 7]);
+    let header = FrameHeader {
+        is_final: first & 0x80 != 0,
+        rsv1: first & 0x40 != 0,
+        rsv2: first & 0x20 != 0,
+        rsv3: first & 0x10 != 0,
+        opcode: OpCode::from(first & 0x0f),
+        mask,
+    };
+    let mut out = Vec::new();
+    header.format(payload.len() as u64, &mut out).unwrap();
+    match mask {
+        Some(mask) => out.extend(payload.iter().enumerate().map(|(k, b)| b ^ mask[k % 4])),
+        None => out.extend(payload),
     }
     out
 }

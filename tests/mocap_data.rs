@@ -43,10 +43,7 @@ fn files() -> BTreeMap<String, String> {
                 continue;
             }
             let bytes = std::fs::read(file.path()).unwrap();
-            let sum: String = Sha256::digest(&bytes)
-                .iter()
-                .map(|b| format!("{b:02x}"))
-                .collect();
+            let sum = hex::encode(Sha256::digest(&bytes));
             found.insert(
                 format!("{}/{name}", behaviour.file_name().to_string_lossy()),
                 sum,

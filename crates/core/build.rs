@@ -104,10 +104,7 @@ fn embedded_source(records: &[(String, Vec<u8>)]) {
             hash.update((bytes.len() as u64).to_le_bytes());
             hash.update(bytes);
         }
-        let hex: String = hash.finalize()[..8]
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect();
+        let hex = hex::encode(&hash.finalize()[..8]);
         println!("cargo:rustc-env=FIELDHOUSE_EMBEDDED_FINGERPRINT_{var}={hex}");
     }
 }
@@ -169,10 +166,7 @@ fn source_digest(root: &Path) {
         }
         hash.update([0]);
     }
-    let hex: String = hash.finalize()[..8]
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect();
+    let hex = hex::encode(&hash.finalize()[..8]);
     println!("cargo:rustc-env=FIELDHOUSE_CAPABILITY_SOURCE_DIGEST={hex}");
 }
 

@@ -32,12 +32,14 @@
 //! written frame's tail. It is not a server anyone should run; it is what writing the
 //! bytes costs on this machine.
 
+use crate::client::now_us;
 use anyhow::Context;
 use std::io::{ErrorKind, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::sync::mpsc;
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::handshake::derive_accept_key;
+use tokio_tungstenite::tungstenite::protocol::frame::coding::{Data, OpCode};
 
 /// The match id in the bare sender's frames: as long as a fieldhouse match id (12 hex
 /// digits), so the frame is the same size.
@@ -185,24 +187,7 @@ fn put(slot: &mut [u8], mut n: u64) {
 
 /// An unmasked server frame's header: FIN, text, the payload's length (RFC 6455 §5.2).
 fn frame_header(len: usize) -> Vec<u8> {
-    match len {
-        n if n < 126 => vec![0x81, n as u8],
-        n if n <= 0xffff => {
-            let [a, b] = (n as u16).to_be_bytes();
-            vec![0x81, 126, a, b]
-        }
-        n => {
-            let mut h = vec![0x81, 127];
-            h.extend((n as u64).to_be_bytes());
-            h
-        }
-    }
-}
-
-fn now_us() -> u64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map_or(0, |d| d.as_micros() as u64)
+    crate::client::frame_header(OpCode::Data(Data::Text), None, len)
 }
 
 /// Serves on `listener` until the process is killed: accepts on this thread, sends on

@@ -16,6 +16,8 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio_tungstenite::tungstenite::protocol::frame::coding::OpCode;
+use tokio_tungstenite::tungstenite::protocol::frame::FrameHeader;
 
 /// Where spectators connect.
 #[derive(Debug, Clone)]
@@ -461,10 +463,25 @@ fn frame_at(bytes: &[u8]) -> Option<(usize, usize)> {
 /// A client's frame (masked, as a client's must be; the zero mask leaves the payload as
 /// it is) of a short payload: a pong or Colyseus's JOIN_ROOM echo.
 fn client_frame(opcode: u8, payload: &[u8]) -> Vec<u8> {
-    let len = payload.len().min(125);
-    let mut frame = vec![0x80 | opcode, 0x80 | len as u8, 0, 0, 0, 0];
-    frame.extend_from_slice(&payload[..len]);
+    let payload = &payload[..payload.len().min(125)];
+    let mut frame = frame_header(OpCode::from(opcode), Some([0; 4]), payload.len());
+    frame.extend_from_slice(payload);
     frame
+}
+
+/// A final frame's header, as the WebSocket library writes it (RFC 6455 §5.2), with room
+/// for its payload of `len` bytes.
+pub(crate) fn frame_header(opcode: OpCode, mask: Option<[u8; 4]>, len: usize) -> Vec<u8> {
+    let header = FrameHeader {
+        opcode,
+        mask,
+        ..FrameHeader::default()
+    };
+    let mut out = Vec::with_capacity(header.len(len as u64) + len);
+    header
+        .format(len as u64, &mut out)
+        .expect("writing to a Vec does not fail");
+    out
 }
 
 /// The whole number right after the first `label` in `text` (`"tick":` → 42), read
@@ -527,7 +544,8 @@ pub(super) type Socket =
 
 #[cfg(test)]
 mod tests {
-    use super::{fieldhouse_frame, frame_at, Kind, Spectator};
+    use super::{fieldhouse_frame, frame_at, frame_header, Kind, Spectator};
+    use tokio_tungstenite::tungstenite::protocol::frame::coding::OpCode;
 
     #[test]
     fn a_stamped_frame_gives_its_tick_and_send_time() {
@@ -544,18 +562,7 @@ mod tests {
 
     /// A server frame (unmasked) of `payload`.
     fn server_frame(opcode: u8, payload: &[u8]) -> Vec<u8> {
-        let mut out = vec![0x80 | opcode];
-        match payload.len() {
-            n if n < 126 => out.push(n as u8),
-            n if n <= 0xffff => {
-                out.push(126);
-                out.extend((n as u16).to_be_bytes());
-            }
-            n => {
-                out.push(127);
-                out.extend((n as u64).to_be_bytes());
-            }
-        }
+        let mut out = frame_header(OpCode::from(opcode), None, payload.len());
         out.extend_from_slice(payload);
         out
     }

@@ -2,7 +2,7 @@
 
 use super::client::Target;
 use anyhow::{bail, Context};
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
@@ -111,6 +111,9 @@ pub(crate) struct Running {
     /// The bare sender's standard input: it exits when this closes, so it never
     /// outlives the load generator, however that ends.
     _stdin: Option<std::process::ChildStdin>,
+    /// fieldhouse's config file, a temporary file of its own: removed when this is
+    /// dropped (after the server is killed), however the run ends.
+    _config: Option<tempfile::NamedTempFile>,
 }
 
 impl Running {
@@ -140,24 +143,29 @@ impl Running {
         binary: &std::path::Path,
         room: usize,
     ) -> anyhow::Result<Running> {
-        let config =
-            std::env::temp_dir().join(format!("fieldhouse-loadgen-{}.toml", std::process::id()));
-        std::fs::write(
-            &config,
-            format!(
-                "demo = false\nstamp_frames = true\nmax_matches = {}\n\
+        let mut config = tempfile::Builder::new()
+            .prefix("fieldhouse-loadgen-")
+            .suffix(".toml")
+            .tempfile()
+            .context("creating the server's config file")?;
+        config
+            .write_all(
+                format!(
+                    "demo = false\nstamp_frames = true\nmax_matches = {}\n\
                  # Every simulated spectator comes from 127.0.0.1.\n\
                  max_connections_per_ip = 100000\n\
                  # Lock-step bots answer as fast as the match goes; the default 200\n\
                  # messages a second would pace the match instead of the server.\n\
                  bot_messages_per_second = 1000000\nbot_burst = 1000000\n",
-                room
-            ),
-        )
-        .with_context(|| format!("writing {}", config.display()))?;
+                    room
+                )
+                .as_bytes(),
+            )
+            .and_then(|()| config.flush())
+            .with_context(|| format!("writing {}", config.path().display()))?;
         let mut child = Command::new(binary)
             .args(["serve", "--addr", "127.0.0.1:0", "--config"])
-            .arg(&config)
+            .arg(config.path())
             .env("FIELDHOUSE_ADMIN_TOKEN", ADMIN)
             .env("FIELDHOUSE_LOG", "info")
             .env_remove("FIELDHOUSE_ADDR")
@@ -169,13 +177,13 @@ impl Running {
         let line = first_line_with(&mut child, "http://", Stream::Stderr)?;
         let at = line.find("http://").expect("found") + 7;
         let addr: String = line[at..].chars().take_while(|c| *c != '/').collect();
-        let _ = std::fs::remove_file(&config);
         Ok(Running {
             name: FIELDHOUSE,
             targets: Vec::new(),
             child,
             http: Some(format!("http://{addr}")),
             _stdin: None,
+            _config: Some(config),
         })
     }
 
@@ -202,6 +210,7 @@ impl Running {
             child,
             http: None,
             _stdin: None,
+            _config: None,
         })
     }
 
@@ -245,6 +254,7 @@ impl Running {
             child,
             http: None,
             _stdin: stdin,
+            _config: None,
         })
     }
 

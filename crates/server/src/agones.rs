@@ -26,6 +26,7 @@ pub struct Sdk {
 }
 
 impl Sdk {
+    /// The SDK sidecar's HTTP API on loopback at `port` (Agones sets `AGONES_SDK_HTTP_PORT`).
     pub fn on_port(port: u16) -> Sdk {
         Sdk {
             base: format!("http://127.0.0.1:{port}"),
@@ -86,6 +87,8 @@ impl Sdk {
         }
     }
 
+    /// Asks Agones to shut this game server down; a failure is logged, not returned, since
+    /// the server is stopping either way.
     pub async fn shutdown(&self) {
         match self.call("shutdown").await {
             Ok(()) => tracing::info!("agones: shutdown requested"),

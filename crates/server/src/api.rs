@@ -94,11 +94,13 @@ pub fn summary(entry: &MatchEntry) -> Value {
     })
 }
 
+/// `GET /api/matches`: every match in the table, summarised.
 pub async fn list(State(app): State<Arc<AppState>>) -> Json<Value> {
     let matches = app.matches.read().expect("not poisoned");
     Json(json!({"matches": matches.values().map(|m| summary(m)).collect::<Vec<_>>()}))
 }
 
+/// `GET /api/matches/{id}`: one match's summary with its match info and scenario.
 pub async fn show(
     Path(id): Path<String>,
     State(app): State<Arc<AppState>>,
@@ -110,6 +112,7 @@ pub async fn show(
     Ok(Json(doc))
 }
 
+/// `POST /api/matches`: starts a match from a scenario body (admin token required).
 pub async fn create(
     State(app): State<Arc<AppState>>,
     _: Admin,
@@ -187,6 +190,7 @@ pub fn start(
     Ok((id, entry))
 }
 
+/// `DELETE /api/matches/{id}`: ends a match (admin token required).
 pub async fn delete(
     Path(id): Path<String>,
     State(app): State<Arc<AppState>>,
@@ -284,15 +288,18 @@ fn map_json(app: &AppState, behaviour: &str) -> Result<Value, ApiError> {
     }))
 }
 
+/// `GET /healthz`: the process answers (liveness).
 pub async fn healthz() -> &'static str {
     "ok"
 }
 
+/// `GET /readyz`: ready to serve, with the matches running and the motion source.
 pub async fn readyz(State(app): State<Arc<AppState>>) -> Json<Value> {
     let matches = app.matches.read().expect("not poisoned").len();
     Json(json!({"ready": true, "matches": matches, "motion_source": app.caps.source.to_string()}))
 }
 
+/// `GET /metrics`: the counters in Prometheus' text format.
 pub async fn metrics(State(app): State<Arc<AppState>>) -> impl IntoResponse {
     (
         [("content-type", "text/plain; version=0.0.4")],
@@ -330,6 +337,7 @@ pub async fn json_errors(response: Response) -> Response {
     ApiError::new(status, code, message).into_response()
 }
 
+/// Any other path: a JSON 404, as every endpoint answers errors.
 pub async fn fallback() -> ApiError {
     ApiError::new(
         StatusCode::NOT_FOUND,

@@ -8,7 +8,7 @@ use subtle::ConstantTimeEq;
 pub fn new_token() -> String {
     let mut bytes = [0u8; 16];
     rand::rngs::OsRng.fill_bytes(&mut bytes);
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
+    hex::encode(bytes)
 }
 
 /// Whether `given` equals `expected`, taking the same time wherever they differ (`subtle`:

@@ -45,6 +45,9 @@ fn token_of<'a>(query: &'a HashMap<String, String>, headers: &'a HeaderMap) -> O
     })
 }
 
+/// `GET /ws/matches/{id}/play`: upgrades a bot whose token controls an agent of the
+/// match to its socket; the token is checked first (401 without one, 403 for a wrong
+/// one, 410 once the match has ended).
 pub async fn play(
     ws: Upgrade,
     Path(id): Path<String>,

@@ -15,6 +15,9 @@ pub const DEFAULT_PORT: u16 = 7878;
 const ADDR_FORM: &str = "expected HOST:PORT, e.g. 127.0.0.1:7878, where HOST is an IP address \
     or a host name (localhost); a HOST alone listens on port 7878";
 
+/// How `serve` runs: its address, limits, timeouts, replay directory and demos, from the
+/// command line, the environment and the TOML file (unknown keys refused); every field
+/// has a default.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ServerConfig {

@@ -7,6 +7,7 @@ use super::state::AppState;
 use fieldhouse_core::sim::{Mode, Options, Scenario, Sport};
 use std::sync::Arc;
 
+/// The demo matches, each with the fixed id it is listed under.
 pub fn scenarios() -> Vec<(&'static str, Scenario)> {
     let demo = |sport: Sport, name: &str| Scenario {
         name: Some(name.to_string()),
@@ -39,6 +40,7 @@ pub fn scenarios() -> Vec<(&'static str, Scenario)> {
     ]
 }
 
+/// Starts every demo match in `app` (a failure is logged: the server serves without it).
 pub fn start_all(app: &Arc<AppState>) {
     for (id, scenario) in scenarios() {
         match api::start(app, scenario, Some(id.to_string()), true) {

@@ -7,6 +7,8 @@ use axum::response::{IntoResponse, Response};
 use axum::Json;
 use serde_json::json;
 
+/// An HTTP error answer: its status, a stable machine-readable `code` and a message for
+/// people.
 #[derive(Debug)]
 pub struct ApiError {
     status: StatusCode,
@@ -15,6 +17,7 @@ pub struct ApiError {
 }
 
 impl ApiError {
+    /// An error of `status` with its `code` and `message`.
     pub fn new(status: StatusCode, code: &'static str, message: impl Into<String>) -> Self {
         ApiError {
             status,
@@ -22,6 +25,7 @@ impl ApiError {
             message: message.into(),
         }
     }
+    /// 404 `not_found`: no match `id`.
     pub fn not_found(id: &str) -> Self {
         Self::new(
             StatusCode::NOT_FOUND,
@@ -29,6 +33,7 @@ impl ApiError {
             format!("no match \"{id}\""),
         )
     }
+    /// 410 `ended`: match `id` has ended.
     pub fn gone(id: &str) -> Self {
         Self::new(
             StatusCode::GONE,
@@ -36,9 +41,12 @@ impl ApiError {
             format!("match \"{id}\" has ended"),
         )
     }
+    /// 401 `unauthorized`: the request needs a token it did not bring.
     pub fn unauthorized(message: &str) -> Self {
         Self::new(StatusCode::UNAUTHORIZED, "unauthorized", message)
     }
+    /// 403 `forbidden`: the caller is known but may not do this (a wrong token, an origin
+    /// not allowed).
     pub fn forbidden(message: &str) -> Self {
         Self::new(StatusCode::FORBIDDEN, "forbidden", message)
     }

@@ -10,7 +10,8 @@
 //! * [`sweep`]: ended matches leave the table after a while.
 //! * [`spectator`]: the spectator WebSocket: a match's frames, newest first.
 //! * [`fanout`]: a match's frames written straight to its spectators' sockets, by a few
-//!   tasks, one write per socket per frame.
+//!   tasks, one write per socket per frame; its [`fanout::Wire`] is a spectator's socket,
+//!   written whole frames at a time by the fan-out and everyone else.
 //! * [`bot`]: the bot WebSocket: an agent's perceptions out, commands in.
 //! * [`socket`]: what every WebSocket shares: close codes, reading, writing under a
 //!   timeout, closing.
@@ -34,6 +35,11 @@
 //! * [`demo`]: the built-in demo matches.
 //! * [`agones`]: running as an Agones game server (Ready, Health, Shutdown).
 //! * [`web`]: the spectator page from `web/`, embedded in the binary.
+
+// Every public item of the server is documented: the binary, the load generator and the
+// tests build on it, and its documentation is where limits, timeouts and who may do
+// what are stated.
+#![warn(missing_docs)]
 
 pub mod admission;
 pub mod agones;
@@ -186,6 +192,8 @@ pub async fn serve(
     Ok(())
 }
 
+/// The server's routes (REST API, WebSockets, health, metrics, the page) with the layers
+/// every request goes through: limits, timeouts, load shedding and security headers.
 pub fn router(app: Arc<AppState>) -> Router {
     let config = &app.config;
     let metrics = app.metrics.clone();

@@ -113,7 +113,9 @@ impl State {
 /// Why a connection was not taken.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Refused {
+    /// The connection's address holds its share of places already.
     PerIp,
+    /// Every place is taken.
     Full,
 }
 
@@ -127,6 +129,7 @@ enum Opened {
 }
 
 impl Connections {
+    /// Room for `cap` connections in all and `per_ip_cap` from one address.
     pub fn new(per_ip_cap: usize, cap: usize) -> Connections {
         Connections {
             per_ip_cap,
@@ -492,10 +495,13 @@ fn raise_descriptor_limit() -> u64 {
 
 /// The accept loop's settings.
 pub struct Listening {
+    /// The places connections are counted in.
     pub connections: Arc<Connections>,
+    /// A request whose headers take longer than this is closed (slowloris).
     pub header_timeout: Duration,
     /// A write that makes no progress for this long fails (`send_timeout_ms`).
     pub write_timeout: Duration,
+    /// Where refusals and accept errors are counted.
     pub metrics: Arc<Metrics>,
 }
 

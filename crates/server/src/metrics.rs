@@ -9,42 +9,67 @@ const TICK_BUCKETS_S: [f64; 10] = [
     0.000_05, 0.000_1, 0.000_25, 0.000_5, 0.001, 0.002_5, 0.005, 0.01, 0.025, 0.05,
 ];
 
+/// The server's counters, shared by every task and bumped without locks; `/metrics`
+/// renders them for Prometheus.
 #[derive(Default)]
 pub struct Metrics {
+    /// Ticks simulated, all matches.
     pub ticks: AtomicU64,
+    /// Ticks that started more than a tick period late.
     pub tick_overruns: AtomicU64,
     tick_buckets: [AtomicU64; TICK_BUCKETS_S.len()],
     tick_count: AtomicU64,
     tick_sum_ns: AtomicU64,
+    /// Matches created, demos included.
     pub matches_created: AtomicU64,
+    /// Matches running now (a gauge).
     pub matches_running: AtomicU64,
     /// Match tasks that panicked (each ended its match with reason `error`).
     pub match_panics: AtomicU64,
+    /// Spectator sockets open now (a gauge).
     pub spectators: AtomicU64,
+    /// Bot sockets open now (a gauge).
     pub bots: AtomicU64,
+    /// Frames written to spectators.
     pub frames_sent: AtomicU64,
+    /// Frames a slow spectator skipped (it got a newer one).
     pub frames_dropped: AtomicU64,
+    /// Bytes of WebSocket messages written.
     pub bytes_out: AtomicU64,
+    /// Error messages sent to clients about their input.
     pub client_errors: AtomicU64,
+    /// Sockets closed for an oversized message (1009).
     pub closed_for_size: AtomicU64,
+    /// Sockets closed for flooding (1008).
     pub closed_for_rate: AtomicU64,
     /// Sockets closed for breaking the WebSocket protocol (1002) or sending text that is
     /// not UTF-8 (1007).
     pub closed_for_protocol: AtomicU64,
+    /// Clients dropped for not reading within the send timeout.
     pub slow_clients_dropped: AtomicU64,
+    /// Replay files that could not be written (the matches went on).
     pub replay_errors: AtomicU64,
+    /// Replay files deleted by retention.
     pub replays_deleted: AtomicU64,
     /// Retention sweeps of the replay directory run.
     pub replay_sweeps: AtomicU64,
+    /// WebSocket requests refused for their origin.
     pub refused_origin: AtomicU64,
+    /// Connections refused at accept: their address had its share.
     pub refused_per_ip: AtomicU64,
+    /// Connections refused at accept: every place was taken.
     pub refused_full: AtomicU64,
+    /// WebSocket requests refused before the upgrade: no room for another socket of
+    /// their kind.
     pub refused_busy: AtomicU64,
+    /// Failures to accept a connection (descriptors or memory ran out).
     pub accept_errors: AtomicU64,
+    /// REST requests answered 503 because too many were in flight.
     pub overloaded: AtomicU64,
 }
 
 impl Metrics {
+    /// Counts a tick that took `seconds` to simulate, in the tick-time histogram.
     pub fn observe_tick(&self, seconds: f64) {
         self.ticks.fetch_add(1, Relaxed);
         self.tick_count.fetch_add(1, Relaxed);
@@ -54,6 +79,7 @@ impl Metrics {
         }
     }
 
+    /// Every counter in Prometheus' text exposition format.
     pub fn render(&self) -> String {
         let mut out = String::new();
         let mut counter = |name: &str, help: &str, kind: &str, value: u64| {

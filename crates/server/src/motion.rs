@@ -32,6 +32,7 @@ pub struct PoseDocuments {
 }
 
 impl PoseDocuments {
+    /// The documents of `caps`' behaviours, each built when first asked for.
     pub fn new(caps: Arc<Capabilities>) -> PoseDocuments {
         PoseDocuments {
             caps,
@@ -40,6 +41,8 @@ impl PoseDocuments {
     }
 }
 
+/// `GET /api/motion/{behaviour}`: the behaviour's poses (gzipped if the client takes
+/// it; 304 for a matching ETag).
 pub async fn poses(
     Path(behaviour): Path<String>,
     docs: Arc<PoseDocuments>,

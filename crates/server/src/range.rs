@@ -8,7 +8,12 @@ pub enum Wanted {
     /// ranges or another unit: the RFC lets a server answer those with the whole).
     Whole,
     /// Bytes `start..=end`.
-    Part { start: u64, end: u64 },
+    Part {
+        /// The first byte's offset.
+        start: u64,
+        /// The last byte's offset (inclusive).
+        end: u64,
+    },
     /// A range entirely past the end: 416.
     Unsatisfiable,
 }

@@ -91,6 +91,7 @@ pub enum Limit {
 
 /// Where a recording's files come from: the replay directory, or a test's sinks.
 pub trait Files: Send + 'static {
+    /// A segment's file, as written.
     type Out: Durable + Send;
     /// Creates segment `n`'s file (0 is the first); returns it and its replay id.
     fn create(&mut self, segment: u32) -> io::Result<(Self::Out, String)>;
@@ -408,8 +409,11 @@ impl<F: Files> Writer<F> {
 /// written while it is, so retention leaves it alone, and retention is told when one is
 /// done.
 pub struct SegmentFiles {
+    /// The server, told when a segment starts and is done (listing, retention).
     pub app: Arc<AppState>,
+    /// The replay directory.
     pub dir: PathBuf,
+    /// The first segment's file name without its extension; later ones add `-sN`.
     pub stem: String,
     /// The segment being written, named for the match's listing (`MatchEntry::replay`).
     pub current: Arc<std::sync::Mutex<Option<String>>>,

@@ -105,11 +105,15 @@ fn open_path(path: &Path) -> io::Result<(File, Metadata)> {
 
 /// A replay found in the directory, opened.
 pub struct Found {
+    /// The replay's id: its file name without the extension.
     pub id: String,
+    /// Where it is.
     pub path: PathBuf,
     /// The encoding its name says; its first bytes say which it is.
     pub named: Encoding,
+    /// The file, opened without following links or blocking.
     pub file: File,
+    /// The opened file's metadata: a regular file with one name.
     pub meta: Metadata,
 }
 
@@ -123,7 +127,9 @@ impl Found {
 
 /// A replay in the directory as its entry says (`lstat`): nothing is opened.
 pub struct Entry {
+    /// The replay's id: its file name without the extension.
     pub id: String,
+    /// Where it is.
     pub path: PathBuf,
     /// The encoding its name says.
     pub named: Encoding,

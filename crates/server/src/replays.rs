@@ -90,6 +90,7 @@ async fn open(app: &AppState, id: &str) -> Result<replay_dir::Found, ApiError> {
 
 /// Replays a listing page holds unless `limit` says otherwise, and the most it may ask.
 pub const PAGE: usize = 100;
+/// The largest `limit` a listing page may ask for.
 pub const MAX_PAGE: usize = 1000;
 
 /// `GET /api/replays?limit=N&after=CURSOR`: a page of the replay directory, newest
@@ -324,6 +325,8 @@ pub async fn download(
 /// What one download reads from the file at a time.
 const DOWNLOAD_BUFFER_BYTES: usize = 64 * 1024;
 
+/// `GET /ws/replays/{id}`: a replay played to a viewer at the recorded pace, with
+/// playback controls (pause, speed, seek).
 pub async fn watch(
     ws: Upgrade,
     Path(id): Path<String>,

@@ -34,6 +34,7 @@ pub const MIN_GAP: Duration = Duration::from_secs(1);
 /// The limits a sweep keeps.
 #[derive(Debug, Clone, Copy)]
 pub struct Keep {
+    /// The most bytes the finished replays may take together.
     pub bytes: u64,
     /// None: no age limit.
     pub age: Option<Duration>,

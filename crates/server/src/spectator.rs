@@ -33,6 +33,9 @@ type Reader = WebSocketStream<FrameMeter<WireIo>>;
 /// How long a closing spectator waits for its client's answer to the close.
 const CLOSE_WITHIN: Duration = Duration::from_secs(2);
 
+/// `GET /ws/matches/{id}`: a spectator's socket: the `hello`, then the match's newest
+/// frame and every frame after it (skipping to the newest when it falls behind), then
+/// the `end`.
 pub async fn spectate(
     ws: Upgrade,
     Path(id): Path<String>,

@@ -39,16 +39,27 @@ pub enum ToMatch {
     Panic,
 }
 
+/// A match as the rest of the server sees it: what it is, how to reach its task, and
+/// what its task publishes. The match itself (world, seats, end) is its task's driver's.
 pub struct MatchEntry {
+    /// Its id, name, sport, agents and rates, as `hello` and the API give them.
     pub info: MatchInfo,
+    /// How it is paced.
     pub mode: Mode,
+    /// The scenario it was made from, as the API shows it.
     pub scenario: Scenario,
+    /// Its newest frame and, once it has ended, its `end`, for spectators, bots and the
+    /// API.
     pub published: watch::Receiver<super::fanout::Published>,
+    /// Where bot sockets and the API reach its task.
     pub control: mpsc::Sender<ToMatch>,
     /// Bot tokens: (agent index, agent id, token).
     pub tokens: Vec<(usize, String, String)>,
+    /// How many spectators watch it now.
     pub spectators: AtomicU64,
+    /// The tick it is at, as its task last said.
     pub tick: AtomicU64,
+    /// Whether it has ended (its `end` is published).
     pub ended: AtomicBool,
     /// When it ended: an ended match is listed for `ended_match_ttl_s` after this,
     /// then swept from the table.
@@ -63,15 +74,23 @@ pub struct MatchEntry {
     pub fanout: super::fanout::Fanout,
 }
 
+/// What every request handler, socket and match task of one server shares.
 pub struct AppState {
     /// Where match tasks run: a runtime apart from the sockets' (see `serve`).
     pub ticking: tokio::runtime::Handle,
+    /// The server's settings.
     pub config: ServerConfig,
+    /// The token the API's writes need.
     pub admin_token: crate::auth::AdminToken,
+    /// The motion capabilities basketball matches are built with.
     pub caps: Arc<Capabilities>,
+    /// The counters and histograms `/metrics` shows.
     pub metrics: Arc<Metrics>,
+    /// The matches, running and recently ended, by id.
     pub matches: RwLock<BTreeMap<String, Arc<MatchEntry>>>,
+    /// Becomes true when the server starts shutting down.
     pub shutdown: watch::Receiver<bool>,
+    /// The next bot connection's number ([`fieldhouse_core::driver::Conn`]).
     pub next_conn: AtomicU64,
     /// Where matches are recorded, if anywhere.
     pub replay_dir: Option<std::path::PathBuf>,
@@ -84,6 +103,7 @@ pub struct AppState {
 }
 
 impl AppState {
+    /// The match with id `id`, if the table has it.
     pub fn get(&self, id: &str) -> Option<Arc<MatchEntry>> {
         self.matches.read().expect("not poisoned").get(id).cloned()
     }

@@ -31,9 +31,13 @@ pub type Socket = WebSocketStream<FrameMeter<TokioIo<hyper::upgrade::Upgraded>>>
 /// [`super::fanout`]): its TCP stream, what the HTTP server had read past the request,
 /// its place among the connections, and the WebSocket settings its reader uses.
 pub struct RawSocket {
+    /// The connection, upgraded.
     pub stream: tokio::net::TcpStream,
+    /// Bytes the HTTP server had read past the request: the first of the WebSocket's.
     pub read_first: Vec<u8>,
+    /// Its place among the connections, held while it is open.
     pub place: std::sync::Arc<super::listener::Conn>,
+    /// The reader's WebSocket limits (message and frame sizes).
     pub settings: WebSocketConfig,
 }
 
@@ -45,6 +49,7 @@ const SOCKET_BUFFER_BYTES: usize = 8 * 1024;
 /// then and fragment nothing this small; the data messages themselves are counted by
 /// each socket's message budget.
 pub const CONTROL_FRAMES_PER_SECOND: f64 = 20.0;
+/// How many such frames may come at once before the rate applies.
 pub const CONTROL_FRAME_BURST: f64 = 100.0;
 
 /// A request to open a WebSocket, checked: `GET`, `Upgrade: websocket`, version 13.
@@ -201,6 +206,7 @@ pub struct FrameMeter<S> {
 }
 
 impl<S> FrameMeter<S> {
+    /// `inner`, metered from a full budget.
     pub fn new(inner: S) -> FrameMeter<S> {
         FrameMeter {
             inner,
@@ -323,23 +329,20 @@ impl FrameParser {
 #[cfg(test)]
 mod tests {
     use super::FrameParser;
+    use tokio_tungstenite::tungstenite::protocol::frame::coding::OpCode;
+    use tokio_tungstenite::tungstenite::protocol::frame::FrameHeader;
 
     /// A masked client frame: FIN flag, opcode, payload.
     fn frame(fin: bool, opcode: u8, payload: &[u8]) -> Vec<u8> {
-        let mut out = vec![(u8::from(fin) << 7) | opcode];
-        match payload.len() {
-            n if n < 126 => out.push(0x80 | n as u8),
-            n if n <= 0xffff => {
-                out.push(0x80 | 126);
-                out.extend((n as u16).to_be_bytes());
-            }
-            n => {
-                out.push(0x80 | 127);
-                out.extend((n as u64).to_be_bytes());
-            }
-        }
         let mask = [1, 2, 3, 4];
-        out.extend(mask);
+        let header = FrameHeader {
+            is_final: fin,
+            opcode: OpCode::from(opcode),
+            mask: Some(mask),
+            ..FrameHeader::default()
+        };
+        let mut out = Vec::new();
+        header.format(payload.len() as u64, &mut out).unwrap();
         out.extend(payload.iter().enumerate().map(|(k, b)| b ^ mask[k % 4]));
         out
     }

@@ -70,10 +70,12 @@ pub async fn security_headers(mut response: Response) -> Response {
     response
 }
 
+/// `GET /`: the spectator page.
 pub async fn index() -> Response {
     asset("index.html")
 }
 
+/// `GET /web/{file}`: a file beside the page (scripts, styles, vendored three.js).
 pub async fn file(Path(name): Path<String>) -> Response {
     asset(&name)
 }

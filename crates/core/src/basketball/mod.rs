@@ -4,7 +4,8 @@
 //! * [`court`]: the FIBA half court and its squares.
 //! * [`shot`]: shot success against distance.
 //! * [`capability`]: each behaviour's motion graph and cost map (the physical
-//!   capability model), embedded at an agent's pose; moves play a map's stored path.
+//!   capability model, a [`Mover`]), embedded at an agent's pose (a [`Reach`]); moves
+//!   play a map's stored path.
 //!   [`human`]: what people do, the targets the capability model is held to.
 //!   `footprint`: the ground a stored path covers, to keep moves on the court.
 //! * [`decision`]: opponent modelling, `C_o > C_d + T_s + ε`; [`parametric`]: the

@@ -20,18 +20,17 @@
 //!   pongs, the close handshake); their writes go through the same [`Wire`], whole
 //!   frames at a time, so they never land inside a frame.
 
-use super::listener::Conn;
+mod wire;
+
+pub use wire::{text_frame, Wire, WireIo};
+
 use super::metrics::Metrics;
-use std::io;
-use std::pin::Pin;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering::Relaxed};
+use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 use std::sync::{Arc, Mutex, OnceLock};
-use std::task::{ready, Context, Poll};
 use std::time::{Duration, Instant};
-use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
-use tokio::net::TcpStream;
 use tokio::sync::{oneshot, watch};
 use tokio_tungstenite::tungstenite::Utf8Bytes;
+use wire::Offered;
 
 /// The newest frame of a match (encoded once; every spectator gets the same bytes), and
 /// its `end` once it has ended.
@@ -39,210 +38,14 @@ use tokio_tungstenite::tungstenite::Utf8Bytes;
 pub struct Published {
     /// Frames published so far: a spectator that sees a gap skipped frames.
     pub seq: u64,
+    /// The newest frame's JSON text.
     pub frame: Utf8Bytes,
+    /// The match's `end` message's JSON text, once it has ended.
     pub end: Option<Utf8Bytes>,
 }
 
 /// Members a shard writes to before letting other tasks on its worker run.
 const WRITES_BETWEEN_YIELDS: usize = 256;
-
-/// A spectator's connection after the handshake: written by the fan-out, its spectator
-/// task and its reader, whole WebSocket frames at a time.
-pub struct Wire {
-    stream: TcpStream,
-    /// Bytes of whole frames the socket has not taken yet; they go before anything else.
-    pending: Mutex<Vec<u8>>,
-    /// Set when its spectator task ends: the fan-out lets it go at the next frame. (A
-    /// flag beside what the fan-out touches anyway: asking the member's channel whether
-    /// its receiver is gone was a cache miss per spectator per frame, 3 % of the CPU.)
-    left: AtomicBool,
-    /// The connection's place among the server's connections, held while it is open.
-    _place: Arc<Conn>,
-}
-
-/// What offering a frame to a socket did.
-enum Offered {
-    /// Nothing: its spectator has left.
-    Left,
-    /// Written (perhaps partly: its tail is pending and goes first next time).
-    Sent,
-    /// Not written: the socket is full. `progress`: it took some pending bytes.
-    Skipped { progress: bool },
-}
-
-impl Wire {
-    pub fn new(stream: TcpStream, place: Arc<Conn>) -> Wire {
-        Wire {
-            stream,
-            pending: Mutex::new(Vec::new()),
-            left: AtomicBool::new(false),
-            _place: place,
-        }
-    }
-
-    /// Its spectator is done with it: the fan-out writes it no more frames (set under
-    /// the lock the fan-out writes under, so a close written after this is the last
-    /// thing on the wire) and lets it go at the next frame.
-    pub fn leave(&self) {
-        let _writing = self.pending.lock().expect("not poisoned");
-        self.left.store(true, Relaxed);
-    }
-
-    /// Writes what is pending as far as the socket takes it; whether it took any.
-    fn drain(&self, pending: &mut Vec<u8>) -> io::Result<bool> {
-        match self.stream.try_write(pending) {
-            Ok(n) => {
-                pending.drain(..n);
-                Ok(n > 0)
-            }
-            Err(e) if e.kind() == io::ErrorKind::WouldBlock => Ok(false),
-            Err(e) => Err(e),
-        }
-    }
-
-    /// Writes `bytes` (whole frames) after what is pending: what the socket does not
-    /// take now is kept and goes first at the next write.
-    pub fn write_whole(&self, bytes: &[u8]) -> io::Result<()> {
-        let mut pending = self.pending.lock().expect("not poisoned");
-        if !pending.is_empty() {
-            self.drain(&mut pending)?;
-        }
-        if !pending.is_empty() {
-            pending.extend_from_slice(bytes);
-            return Ok(());
-        }
-        let written = match self.stream.try_write(bytes) {
-            Ok(n) => n,
-            Err(e) if e.kind() == io::ErrorKind::WouldBlock => 0,
-            Err(e) => return Err(e),
-        };
-        pending.extend_from_slice(&bytes[written..]);
-        Ok(())
-    }
-
-    /// A text message, framed and written as [`Wire::write_whole`] does.
-    pub fn write_text(&self, text: &str) -> io::Result<()> {
-        self.write_whole(&text_frame(text.as_bytes()))
-    }
-
-    /// Offers a frame: written if the socket takes what is pending and then at least
-    /// part of the frame; else skipped.
-    fn offer(&self, frame: &[u8]) -> io::Result<Offered> {
-        let mut pending = self.pending.lock().expect("not poisoned");
-        if self.left.load(Relaxed) {
-            return Ok(Offered::Left);
-        }
-        let mut progress = false;
-        if !pending.is_empty() {
-            progress = self.drain(&mut pending)?;
-            if !pending.is_empty() {
-                return Ok(Offered::Skipped { progress });
-            }
-        }
-        match self.stream.try_write(frame) {
-            Ok(n) => {
-                pending.extend_from_slice(&frame[n..]);
-                Ok(Offered::Sent)
-            }
-            Err(e) if e.kind() == io::ErrorKind::WouldBlock => Ok(Offered::Skipped { progress }),
-            Err(e) => Err(e),
-        }
-    }
-}
-
-/// An unmasked server text frame (RFC 6455 §5.2) of `payload`.
-pub fn text_frame(payload: &[u8]) -> Vec<u8> {
-    let mut frame = Vec::with_capacity(payload.len() + 10);
-    frame.push(0x81);
-    match payload.len() {
-        n if n < 126 => frame.push(n as u8),
-        n if n <= 0xffff => {
-            frame.push(126);
-            frame.extend_from_slice(&(n as u16).to_be_bytes());
-        }
-        n => {
-            frame.push(127);
-            frame.extend_from_slice(&(n as u64).to_be_bytes());
-        }
-    }
-    frame.extend_from_slice(payload);
-    frame
-}
-
-/// The socket as its reader sees it (under the frame meter and the WebSocket library):
-/// reads come from the socket, after whatever the HTTP server had read past the
-/// handshake; writes (pongs, the close handshake) go through the [`Wire`] whole, and
-/// flushing waits until nothing is pending. Only the reader waits for the socket to be
-/// writable; the fan-out only tries.
-pub struct WireIo {
-    wire: Arc<Wire>,
-    read_first: Vec<u8>,
-}
-
-impl WireIo {
-    pub fn new(wire: Arc<Wire>, read_first: Vec<u8>) -> WireIo {
-        WireIo { wire, read_first }
-    }
-}
-
-impl AsyncRead for WireIo {
-    fn poll_read(
-        mut self: Pin<&mut Self>,
-        cx: &mut Context<'_>,
-        buf: &mut ReadBuf<'_>,
-    ) -> Poll<io::Result<()>> {
-        if !self.read_first.is_empty() {
-            let n = self.read_first.len().min(buf.remaining());
-            buf.put_slice(&self.read_first[..n]);
-            self.read_first.drain(..n);
-            return Poll::Ready(Ok(()));
-        }
-        loop {
-            ready!(self.wire.stream.poll_read_ready(cx))?;
-            let unfilled = buf.initialize_unfilled();
-            match self.wire.stream.try_read(unfilled) {
-                Ok(n) => {
-                    buf.advance(n);
-                    return Poll::Ready(Ok(()));
-                }
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => continue,
-                Err(e) => return Poll::Ready(Err(e)),
-            }
-        }
-    }
-}
-
-impl AsyncWrite for WireIo {
-    fn poll_write(
-        self: Pin<&mut Self>,
-        _: &mut Context<'_>,
-        buf: &[u8],
-    ) -> Poll<io::Result<usize>> {
-        // The library writes whole frames: all of them are taken, so no frame is ever
-        // left half written for another writer to cut into.
-        Poll::Ready(self.wire.write_whole(buf).map(|()| buf.len()))
-    }
-
-    fn poll_flush(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
-        loop {
-            {
-                let mut pending = self.wire.pending.lock().expect("not poisoned");
-                if pending.is_empty() {
-                    return Poll::Ready(Ok(()));
-                }
-                self.wire.drain(&mut pending)?;
-                if pending.is_empty() {
-                    return Poll::Ready(Ok(()));
-                }
-            }
-            ready!(self.wire.stream.poll_write_ready(cx))?;
-        }
-    }
-
-    fn poll_shutdown(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
-        self.poll_flush(cx)
-    }
-}
 
 /// Why the fan-out let a spectator go.
 #[derive(Debug)]
@@ -412,7 +215,7 @@ fn offer(
     send_timeout: Duration,
     tally: &mut Tally,
 ) -> Fate {
-    if m.wire.left.load(Relaxed) {
+    if m.wire.has_left() {
         // Its spectator task has gone (the client closed, or broke the rules).
         return Fate::Out(Out::Gone);
     }
@@ -451,17 +254,6 @@ mod tests {
     use crate::listener::Connections;
     use std::sync::Arc;
     use std::time::{Duration, Instant};
-
-    #[test]
-    fn text_frames_have_the_length_in_the_header_the_rfc_gives_it() {
-        assert_eq!(text_frame(b"hi"), [0x81, 2, b'h', b'i']);
-        let mid = text_frame(&[b'x'; 300]);
-        assert_eq!(&mid[..4], &[0x81, 126, 1, 44]);
-        assert_eq!(mid.len(), 304);
-        let big = text_frame(&vec![b'x'; 70_000]);
-        assert_eq!(&big[..2], &[0x81, 127]);
-        assert_eq!(u64::from_be_bytes(big[2..10].try_into().unwrap()), 70_000);
-    }
 
     /// A server-side socket whose client reads nothing (a small receive buffer, so it
     /// fills soon), as a wire, and the client.
@@ -507,7 +299,7 @@ mod tests {
         }
         assert_eq!(tally.sent, seq - 1);
         // At most the tail of one frame waits: nothing queues behind a full socket.
-        assert!(wire.pending.lock().unwrap().len() < frame.len());
+        assert!(wire.pending_len() < frame.len());
         // Skipping until the timeout, then let go, counted as slow.
         let later = Instant::now() + timeout;
         let fate = offer(
