@@ -72,7 +72,9 @@ fn made_frame(k: u64, bytes: usize) -> String {
 /// Writes a format 2 replay (as the server records) of `frames` frames as
 /// [`write_replay`] makes them, with a footer.
 fn write_compressed_replay(path: &Path, frames: u64, frame_bytes: usize) {
-    let mut recorder = Recorder::create(path, &made_header(), Encoding::Zstd).unwrap();
+    let file = std::fs::File::create_new(path).unwrap();
+    let out = std::io::BufWriter::new(file);
+    let mut recorder = Recorder::new(out, &made_header(), Encoding::Zstd).unwrap();
     for k in 0..frames {
         recorder.frame(&made_frame(k, frame_bytes)).unwrap();
     }

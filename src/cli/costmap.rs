@@ -14,7 +14,7 @@ use glam::DVec2;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(Args, Debug)]
@@ -97,20 +97,45 @@ fn default_cache_dir() -> Option<PathBuf> {
 
 impl CacheArgs {
     /// The cache directory to use, if any.
-    pub(super) fn dir(&self) -> Option<PathBuf> {
+    pub(super) fn dir(&self) -> Option<CacheDir> {
         (!self.no_cache)
             .then(|| self.cache_dir.clone().or_else(default_cache_dir))
             .flatten()
+            .map(CacheDir)
     }
 
     /// Where graphs and maps may be found before they are built, with `dir` (this
-    /// [`CacheArgs::dir`]) as the cache directory.
-    pub(super) fn reuse<'a>(&self, dir: Option<&'a Path>) -> cache::Reuse<'a> {
+    /// [`CacheArgs::dir`]) as the cache.
+    pub(super) fn reuse<'a>(&self, dir: Option<&'a CacheDir>) -> cache::Reuse<'a> {
         match (self.no_cache, dir) {
             (true, _) => cache::Reuse::Nothing,
-            (false, Some(dir)) => cache::Reuse::ShippedOrDir(dir),
+            (false, Some(dir)) => cache::Reuse::ShippedOrStore(dir),
             (false, None) => cache::Reuse::Shipped,
         }
+    }
+}
+
+/// The cost-map cache's directory: a file per graph and its maps, named by its key.
+pub(super) struct CacheDir(pub PathBuf);
+
+impl cache::Store for CacheDir {
+    fn load(&self, name: &str) -> std::io::Result<Option<Vec<u8>>> {
+        match std::fs::read(self.0.join(name)) {
+            Ok(bytes) => Ok(Some(bytes)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Written atomically (a temporary file, synced, renamed over the name), so a reader
+    /// never sees half a file and two writers leave one whole one.
+    fn keep(&self, name: &str, bytes: &[u8]) -> std::io::Result<()> {
+        std::fs::create_dir_all(&self.0)?;
+        let mut file = tempfile::NamedTempFile::new_in(&self.0)?;
+        file.write_all(bytes)?;
+        file.as_file().sync_all()?;
+        file.persist(self.0.join(name)).map_err(|e| e.error)?;
+        Ok(())
     }
 }
 
@@ -200,7 +225,7 @@ pub(super) fn run(args: CostmapArgs, out: &mut impl Write) -> anyhow::Result<()>
     // automatic one), so its digest keys the maps.
     let inputs = (graph.params, graph.digest(), &params, [start]);
     let (cache::Cached { mut maps, .. }, origin) = cache::build_or_load(
-        args.cache.reuse(cache_dir.as_deref()),
+        args.cache.reuse(cache_dir.as_ref()),
         library.source.fingerprint(),
         &graph.behaviour,
         &inputs,

@@ -2,13 +2,14 @@
 //! plays back identically, its positions for other tools, and its fielders' runs measured.
 
 use super::basketball::CapabilityArgs;
+use anyhow::Context;
 use clap::{Args, Subcommand, ValueEnum};
 use fieldhouse::replay::{self, Replay};
 use fieldhouse::sim::Sport;
 use fieldhouse::words::{figure, plural};
 use serde_json::{json, Value};
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub(super) struct ReplayArgs {
@@ -85,11 +86,20 @@ enum ExportFormat {
     Jsonl,
 }
 
+/// Reads a whole replay file (for a file of one's own: the server reads through an
+/// index). Only a missing or unreadable header is an error: anything after it that does
+/// not read is where the readable prefix ends.
+fn read(path: &Path) -> anyhow::Result<Replay> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    replay::parse(&bytes)
+        .map_err(|reason| anyhow::anyhow!("{}: not a fieldhouse replay: {reason}", path.display()))
+}
+
 pub(super) fn run(args: ReplayArgs, out: &mut impl Write) -> anyhow::Result<()> {
     match args.command {
-        ReplayCommand::Info { file, json } => info(&replay::read(&file)?, json, out),
+        ReplayCommand::Info { file, json } => info(&read(&file)?, json, out),
         ReplayCommand::Verify { file, capability } => {
-            let replay = replay::read(&file)?;
+            let replay = read(&file)?;
             if replay.damaged {
                 anyhow::bail!(
                     "{} is damaged: {} ({} before it read)",
@@ -151,15 +161,13 @@ pub(super) fn run(args: ReplayArgs, out: &mut impl Write) -> anyhow::Result<()> 
             .into())
         }
         ReplayCommand::Export { file, format, .. } => {
-            let replay = replay::read(&file)?;
+            let replay = read(&file)?;
             match format {
                 ExportFormat::Csv => export_csv(&replay, out),
                 ExportFormat::Jsonl => export_frames(&replay, out),
             }
         }
-        ReplayCommand::Paths { file, json } => {
-            super::paths::paths(&replay::read(&file)?, json, out)
-        }
+        ReplayCommand::Paths { file, json } => super::paths::paths(&read(&file)?, json, out),
     }
 }
 

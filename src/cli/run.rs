@@ -146,12 +146,17 @@ pub(super) fn run(args: RunArgs, out: &mut impl Write) -> anyhow::Result<()> {
         fieldhouse_server::wall::since_epoch(),
     );
     let encoding = Encoding::for_path(&path);
-    let recorder = Recorder::create(&path, &header, encoding).with_context(|| {
-        format!(
-            "cannot create {} (an existing file is never overwritten)",
-            path.display()
-        )
-    })?;
+    let recorder = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&path)
+        .and_then(|file| Recorder::new(std::io::BufWriter::new(file), &header, encoding))
+        .with_context(|| {
+            format!(
+                "cannot create {} (an existing file is never overwritten)",
+                path.display()
+            )
+        })?;
     let write_error = |e: std::io::Error| anyhow::anyhow!("writing {}: {e}", path.display());
     let mut recorder = Background::start(recorder).map_err(write_error)?;
     let mut session = Session::new(world, id, scenario.tick_hz, scenario.frame_hz);

@@ -5,13 +5,13 @@
 //! or a network crate (`scripts/check-architecture` fails if it does), so "the core does
 //! no I/O" is checked, not a convention.
 //!
-//! It reads no clock and no environment: times (when a recording started) and
-//! directories (the cost-map cache) are handed in by the edge, the server and the CLI.
-//! Its only file I/O is in named readers and writers, each given its path: motion capture
-//! (a user's `--mocap DIR`; the CMU clips are embedded), the cost-map cache file, and
-//! replay files. These stay here because each reader is also what validates the format
-//! (a BVH parser, a replay reader that stops at a torn record), and the fuzz targets
-//! exercise exactly those, on this crate alone. `clippy.toml` forbids clocks, the
+//! It reads no clock and no environment, and opens no file but motion capture: times
+//! (when a recording started) are handed in by the edge, the server and the CLI; the
+//! cost-map cache is a [`costmap::cache::Store`] the CLI implements over its directory;
+//! replays are written to a writer the edge opened and read from bytes (or, by the
+//! server's index, from a file it opened). The one named reader is the motion loader (a
+//! user's `--mocap DIR`; the CMU clips are embedded), which walks a directory of BVH and
+//! ASF/AMC files; the formats' parsers take bytes, as the fuzz targets do. `clippy.toml` forbids clocks, the
 //! environment and `std::fs` elsewhere in the crate (tests excepted), and
 //! `scripts/check-architecture` fails if a new place allows them.
 //!

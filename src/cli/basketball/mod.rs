@@ -68,7 +68,7 @@ impl CapabilityArgs {
                 "{stage}"
             );
         };
-        let reuse = self.cache.reuse(cache.as_deref());
+        let reuse = self.cache.reuse(cache.as_ref());
         let mut caps = Capabilities::build(library, reuse, &mut progress)
             .context("building the basketball behaviours (run, dribble, defense)")?;
         for name in captures {
@@ -78,7 +78,7 @@ impl CapabilityArgs {
         }
         tracing::info!(
             elapsed_s = %figure(started.elapsed().as_secs_f64(), 2),
-            cache = %cache.map_or_else(|| "none".to_string(), |d| d.display().to_string()),
+            cache = %cache.map_or_else(|| "none".to_string(), |d| d.0.display().to_string()),
             "motion graphs and cost maps of run, dribble and defense ready"
         );
         Ok(caps)

@@ -1,4 +1,4 @@
-//! A behaviour's motion graph and its cost maps, cached on disk together, keyed by
+//! A behaviour's motion graph and its cost maps, cached together, keyed by
 //! everything that decides them: the motion data's fingerprint, the behaviour, the
 //! windows the automatic graph choice tries, the build parameters, the crate version and
 //! a digest of the source that builds graphs and maps (`build.rs`), so that no change to
@@ -8,8 +8,10 @@
 //! payload's length (u64) and its SHA-256, then the payload ([`postcard`]: the graph,
 //! then the maps). A file that is not a cache, is of another format, is cut short, fails
 //! its checksum or does not decode is refused with a message saying which, logged, and
-//! rebuilt. It is written to a temporary file, synced, then renamed into place, so an
-//! interrupted build never leaves half a file behind.
+//! rebuilt. Where files are kept is the edge's [`Store`] (the CLI's cache directory
+//! writes each to a temporary file, synced, then renamed into place, so an interrupted
+//! build never leaves half a file behind); this module only names, encodes and checks
+//! them.
 //!
 //! **Shipped files.** The graphs and maps of the embedded motion's basketball behaviours
 //! are a pure function of the capture and the code, so the repository carries them
@@ -24,8 +26,6 @@ use super::CostMap;
 use crate::motion::{Jump, MotionGraph, TurnAround};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
-use std::io::Write;
-use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 /// Bump when the file's layout or the meaning of what it holds changes in a way the
@@ -69,16 +69,25 @@ pub struct ClipJump {
 /// The graphs and maps the repository ships, by file name (see `build.rs`).
 static SHIPPED: &[(&str, &[u8])] = include!(concat!(env!("OUT_DIR"), "/shipped.rs"));
 
+/// Where cache files are kept between runs, by file name. The core has no file system:
+/// the edge hands one in (the CLI's cache directory, written atomically).
+pub trait Store {
+    /// The bytes kept as `name`, or `None` if there are none.
+    fn load(&self, name: &str) -> std::io::Result<Option<Vec<u8>>>;
+    /// Keeps `bytes` as `name`, whole or not at all.
+    fn keep(&self, name: &str, bytes: &[u8]) -> std::io::Result<()>;
+}
+
 /// Where [`build_or_load`] may find a behaviour's graph and maps before it builds them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Clone, Copy)]
 pub enum Reuse<'a> {
     /// Nowhere: build, and store nothing (to measure a build, or to check one).
     Nothing,
-    /// The files shipped in the binary; no cache directory (none was found).
+    /// The files shipped in the binary; no cache (none was found).
     Shipped,
-    /// The files shipped in the binary, else the cache under this directory, where
-    /// whatever is built is stored.
-    ShippedOrDir(&'a Path),
+    /// The files shipped in the binary, else this cache, where whatever is built is
+    /// kept.
+    ShippedOrStore(&'a dyn Store),
 }
 
 /// Where a graph and its maps came from.
@@ -147,18 +156,6 @@ struct Key<'a, I> {
     inputs: &'a I,
 }
 
-/// The file the graph and maps of `behaviour` live in under `dir`, for the motion data
-/// `motion_fingerprint` and `inputs`: whatever else decides them (the graph's windows or
-/// parameters, the maps' [`BuildParams`](super::BuildParams), start states a caller chose).
-pub fn path_for(
-    dir: &Path,
-    motion_fingerprint: &str,
-    behaviour: &str,
-    inputs: &impl Serialize,
-) -> PathBuf {
-    dir.join(file_name(motion_fingerprint, behaviour, inputs))
-}
-
 /// The name of the file that holds the graph and maps of `behaviour` for the motion data
 /// `motion_fingerprint` and `inputs`: `capability-<behaviour>-<16 hex digits of the key>.bin`.
 pub fn file_name(motion_fingerprint: &str, behaviour: &str, inputs: &impl Serialize) -> String {
@@ -180,13 +177,9 @@ pub fn file_name(motion_fingerprint: &str, behaviour: &str, inputs: &impl Serial
 }
 
 /// The graph and maps of `behaviour`: shipped in the binary or read from the cache, as
-/// `reuse` allows, if either holds them; else made by `build` and stored in the cache
-/// directory. A cache that cannot be read or written is logged and otherwise ignored:
-/// what `build` makes is still good. Returns them and where they came from.
-#[allow(
-    clippy::disallowed_methods,
-    reason = "a named reader: the cost-map cache file, given its directory"
-)]
+/// `reuse` allows, if either holds them; else made by `build` and kept in the cache. A
+/// cache that cannot be read or written is logged and otherwise ignored: what `build`
+/// makes is still good. Returns them and where they came from.
 pub fn build_or_load<E>(
     reuse: Reuse<'_>,
     motion_fingerprint: &str,
@@ -195,33 +188,36 @@ pub fn build_or_load<E>(
     build: impl FnOnce() -> Result<Cached, E>,
 ) -> Result<(Cached, Origin), E> {
     let name = file_name(motion_fingerprint, behaviour, inputs);
-    if reuse != Reuse::Nothing {
-        if let Some(cached) = shipped(&name) {
-            return Ok((cached, Origin::Shipped));
+    let store = match reuse {
+        Reuse::Nothing => None,
+        Reuse::Shipped | Reuse::ShippedOrStore(_) => {
+            if let Some(cached) = shipped(&name) {
+                return Ok((cached, Origin::Shipped));
+            }
+            match reuse {
+                Reuse::ShippedOrStore(store) => Some(store),
+                _ => None,
+            }
         }
-    }
-    let file = match reuse {
-        Reuse::ShippedOrDir(dir) => Some(dir.join(&name)),
-        Reuse::Nothing | Reuse::Shipped => None,
     };
-    if let Some(file) = &file {
-        match std::fs::read(file) {
-            Ok(bytes) => match decode(&bytes) {
+    if let Some(store) = store {
+        match store.load(&name) {
+            Ok(Some(bytes)) => match decode(&bytes) {
                 Ok(cached) => return Ok((cached, Origin::Cache)),
                 Err(e) => tracing::warn!(
-                    file = %file.display(),
+                    file = name,
                     error = %e,
                     "ignoring a cached motion graph and its cost maps, and rebuilding them"
                 ),
             },
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-            Err(e) => tracing::warn!(file = %file.display(), error = %e, "cannot read the cache"),
+            Ok(None) => {}
+            Err(e) => tracing::warn!(file = name, error = %e, "cannot read the cache"),
         }
     }
     let cached = build()?;
-    if let Some(file) = &file {
-        if let Err(e) = store(file, &cached) {
-            tracing::warn!(file = %file.display(), error = %e, "could not cache the cost maps");
+    if let Some(store) = store {
+        if let Err(e) = store.keep(&name, &encode(&cached)) {
+            tracing::warn!(file = name, error = %e, "could not cache the cost maps");
         }
     }
     Ok((cached, Origin::Built))
@@ -315,28 +311,6 @@ pub fn decode_payload(payload: &[u8]) -> Result<Cached, CacheError> {
     Ok(cached)
 }
 
-/// Writes `cached` to `path` atomically (temporary file, sync, rename).
-#[allow(
-    clippy::disallowed_methods,
-    reason = "a named writer: the cost-map cache file, given its path"
-)]
-pub fn store(path: &Path, cached: &Cached) -> std::io::Result<()> {
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir)?;
-    }
-    let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
-    let result = (|| {
-        let mut file = std::fs::File::create(&tmp)?;
-        file.write_all(&encode(cached))?;
-        file.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -365,11 +339,9 @@ mod tests {
 
     #[test]
     fn the_graph_and_its_maps_round_trip_and_the_key_follows_every_input() {
-        let dir = tempfile::tempdir().unwrap();
         let (cached, params) = cached();
-        let path = path_for(dir.path(), "abc", "run", &([10, 8], &params));
-        store(&path, &cached).unwrap();
-        let back = decode(&std::fs::read(&path).unwrap()).unwrap();
+        let name = file_name("abc", "run", &([10, 8], &params));
+        let back = decode(&encode(&cached)).unwrap();
         assert_eq!(back.graph.digest(), cached.graph.digest());
         assert_eq!(back.maps[0].costs, cached.maps[0].costs);
         assert_eq!(back.maps[0].paths, cached.maps[0].paths);
@@ -379,12 +351,12 @@ mod tests {
             ..params.clone()
         };
         for other in [
-            path_for(dir.path(), "abd", "run", &([10, 8], &params)),
-            path_for(dir.path(), "abc", "dribble", &([10, 8], &params)),
-            path_for(dir.path(), "abc", "run", &([10], &params)),
-            path_for(dir.path(), "abc", "run", &([10, 8], &deeper)),
+            file_name("abd", "run", &([10, 8], &params)),
+            file_name("abc", "dribble", &([10, 8], &params)),
+            file_name("abc", "run", &([10], &params)),
+            file_name("abc", "run", &([10, 8], &deeper)),
         ] {
-            assert_ne!(other, path);
+            assert_ne!(other, name);
         }
     }
 
@@ -421,12 +393,26 @@ mod tests {
         assert!(decode(&good).is_ok());
     }
 
+    /// A cache in memory.
+    #[derive(Default)]
+    struct Memory(std::cell::RefCell<std::collections::HashMap<String, Vec<u8>>>);
+
+    impl Store for Memory {
+        fn load(&self, name: &str) -> std::io::Result<Option<Vec<u8>>> {
+            Ok(self.0.borrow().get(name).cloned())
+        }
+        fn keep(&self, name: &str, bytes: &[u8]) -> std::io::Result<()> {
+            self.0.borrow_mut().insert(name.to_owned(), bytes.to_vec());
+            Ok(())
+        }
+    }
+
     #[test]
     fn a_refused_file_is_rebuilt_and_replaced() {
-        let dir = tempfile::tempdir().unwrap();
+        let store = Memory::default();
         let (cached, params) = cached();
-        let path = path_for(dir.path(), "abc", "run", &params);
-        std::fs::write(&path, b"fhcache\ngarbage").unwrap();
+        let name = file_name("abc", "run", &params);
+        store.keep(&name, b"fhcache\ngarbage").unwrap();
         let mut builds = 0;
         let mut build = || {
             builds += 1;
@@ -437,11 +423,18 @@ mod tests {
                 jumps: Vec::new(),
             })
         };
-        let reuse = Reuse::ShippedOrDir(dir.path());
+        let reuse = Reuse::ShippedOrStore(&store);
         let (_, origin) = build_or_load(reuse, "abc", "run", &params, &mut build).unwrap();
         assert_eq!(origin, Origin::Built);
+        assert!(
+            decode(&store.load(&name).unwrap().unwrap()).is_ok(),
+            "replaced"
+        );
         let (_, origin) = build_or_load(reuse, "abc", "run", &params, &mut build).unwrap();
         assert_eq!(origin, Origin::Cache);
-        assert_eq!(builds, 1);
+        // Nothing: neither read nor kept.
+        let (_, origin) = build_or_load(Reuse::Nothing, "abc", "run", &params, &mut build).unwrap();
+        assert_eq!(origin, Origin::Built);
+        assert_eq!(builds, 2);
     }
 }

@@ -55,14 +55,15 @@
 //! reading detects and ignores; a finished file is flushed and synced before the match
 //! is reported ended.
 //!
-//! **Reading.** [`read`] and [`parse`] take a whole file, for tools; the server reads
+//! **Reading.** [`parse`] takes a whole file's bytes, for tools; the server reads
 //! through an [`Index`] (an entry per block of the file, never per frame, so a file's
 //! index is bounded by its bytes) and [`peek`], which bound every line and chunk they
 //! read.
 //!
 //! **Files.** `format.rs`: the format numbers, [`Encoding`], what a header says;
-//! `writer.rs`: the [`Recorder`] and the records it writes; `reader.rs`: [`read`] and
-//! [`parse`]; `peek.rs`: [`peek`] and the bounded header reads the index starts from;
+//! `writer.rs`: the [`Recorder`] and the records it writes (to a writer the edge
+//! opens); `reader.rs`: [`parse`]; `peek.rs`: [`peek`] and the bounded header reads the
+//! index starts from;
 //! `index.rs`: the [`Index`]; [`chunks`]: format 2's chunks; `verify.rs`: [`verify`].
 
 pub mod chunks;
@@ -77,7 +78,7 @@ pub use format::{first_tick, protocol, simulation, Encoding, FORMAT};
 pub use index::{At, BlockCache, Frame, Index, MAX_LINE_BYTES};
 pub(crate) use peek::{chunked_header, parse_header};
 pub use peek::{peek, MAX_HEADER_BYTES};
-pub use reader::{decode, parse, read, Logged, Replay, ReplayError};
+pub use reader::{decode, parse, Logged, Replay};
 pub use verify::{verify, Mismatch, Verified};
 pub use writer::{command_record, control_record, header, Durable, Recorder};
 

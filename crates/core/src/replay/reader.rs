@@ -7,9 +7,6 @@ use super::peek::parse_header;
 use crate::sim::{Action, Scenario};
 use serde_json::Value;
 use sha2::{Digest, Sha256};
-use std::io;
-use std::path::{Path, PathBuf};
-use thiserror::Error;
 
 /// A bot's log entry, as read back.
 #[derive(Debug, Clone, PartialEq)]
@@ -93,47 +90,6 @@ impl Replay {
     }
 }
 
-/// Errors leave their source out of their message: it is the next link of the chain
-/// (`{e:#}` shows it), and a message that also showed it would say it twice.
-#[derive(Debug, Error)]
-pub enum ReplayError {
-    /// The file could not be read.
-    #[error("cannot read {path}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        source: io::Error,
-    },
-    /// The file has no readable replay header.
-    #[error("{path}: not a fieldhouse replay: {reason}")]
-    NotAReplay {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong with its first line.
-        reason: String,
-    },
-}
-
-/// Reads a replay file. Only a missing or unreadable header is an error: anything after
-/// it that does not read is where the readable prefix ends. It reads the whole file
-/// into memory: for tools run on a file of one's own, never for the server, which reads
-/// through an [`Index`](super::Index).
-#[allow(
-    clippy::disallowed_methods,
-    reason = "a named reader: a replay file, given its path"
-)]
-pub fn read(path: &Path) -> Result<Replay, ReplayError> {
-    let bytes = std::fs::read(path).map_err(|source| ReplayError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    parse(&bytes).map_err(|reason| ReplayError::NotAReplay {
-        path: path.to_path_buf(),
-        reason,
-    })
-}
-
 /// The JSON lines a replay file's bytes hold, and why they end before the file does, if
 /// they do: format 1's bytes as they are; format 2's whole chunks decompressed (what
 /// `zstdcat` prints) up to the first that does not read.
@@ -147,7 +103,10 @@ pub fn decode(bytes: &[u8]) -> Result<(Vec<u8>, Option<String>), String> {
     }
 }
 
-/// Reads a replay from its bytes, in either encoding (see [`read`]).
+/// Reads a replay from its bytes, in either encoding. Only a missing or unreadable
+/// header is an error: anything after it that does not read is where the readable
+/// prefix ends. It takes the whole file: for tools run on a file of one's own (the CLI
+/// reads it), never for the server, which reads through an [`Index`](super::Index).
 pub fn parse(bytes: &[u8]) -> Result<Replay, String> {
     match Encoding::of(bytes)? {
         Encoding::Plain => parse_lines(bytes),

@@ -8,7 +8,6 @@ use serde::Serialize;
 use serde_json::Value;
 use sha2::{Digest, Sha256};
 use std::io::{self, Write};
-use std::path::Path;
 
 /// Where a recorder's bytes go: written, and made durable when the replay is finished.
 /// A file syncs to disk; a test's sink may do anything (be slow, fail).
@@ -131,21 +130,6 @@ pub fn header(
         started_unix_ms,
     })
     .expect("headers serialise")
-}
-
-impl Recorder {
-    /// Creates `path` (never overwriting a file) and writes the header.
-    #[allow(
-        clippy::disallowed_methods,
-        reason = "a named writer: a new replay file, given its path"
-    )]
-    pub fn create(path: &Path, header: &Value, encoding: Encoding) -> io::Result<Recorder> {
-        let file = std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(path)?;
-        Recorder::new(io::BufWriter::new(file), header, encoding)
-    }
 }
 
 impl<W: Durable> Recorder<W> {
