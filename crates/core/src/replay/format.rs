@@ -5,11 +5,11 @@ use super::{chunks, read_at};
 use serde_json::Value;
 use std::path::Path;
 
-/// The format written by default (chunked zstd, see the module doc). Bump when a reader
-/// of the old format could not read the new one.
+/// The format written by default (chunked zstd, see [the replay module](super)). Bump
+/// when a reader of the old format could not read the new one.
 pub const FORMAT: u32 = 2;
 
-/// How a replay file is stored (see the module doc).
+/// How a replay file is stored (see [the replay module](super)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Encoding {
     /// Format 1: JSON lines, uncompressed.

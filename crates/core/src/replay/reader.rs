@@ -43,7 +43,7 @@ impl Logged {
 /// A replay read back: everything up to the first torn or unreadable record.
 #[derive(Debug, Clone)]
 pub struct Replay {
-    /// The header record (see the module doc).
+    /// The header record (see [the replay module](super)).
     pub header: Value,
     /// The scenario the header records, parsed.
     pub scenario: Scenario,
@@ -84,7 +84,7 @@ impl Replay {
     }
 
     /// The tick this file starts at: 0, or where its segment of a rotated recording
-    /// begins (see the module doc).
+    /// begins (see [the replay module](super)).
     pub fn first_tick(&self) -> u64 {
         first_tick(&self.header)
     }
