@@ -8,7 +8,7 @@
 //! `serde_json::Value`s, whose maps sort their keys, so `kind` came between the other
 //! keys of an event rather than first, which is where serde's `#[serde(tag)]` puts it.
 //! So an event is a struct with its `kind` among its fields, in alphabetical order, and
-//! the events of a sport are an untagged enum of those structs ([`one_of`] gives its
+//! the events of a sport are an untagged enum of those structs (`one_of` gives its
 //! schema): serde derives both their bytes and their schema from that one declaration.
 
 /// Declares unit types, each serialising as its string, with `{"const": ...}` as its
