@@ -31,6 +31,8 @@ pub enum Outcome {
 #[serde(untagged)]
 #[schemars(rename = "HoopsEvent", transform = tags::one_of)]
 pub enum Event {
+    // The variants' docs describe the events in the schema: their structs are inlined
+    // there, and their own docs only point back here.
     /// An agent chose a new action (or, with the ball, a new shooting square). `chosen`
     /// is that of `basketball-decide`; `safe` the squares that satisfied the rule, as a
     /// bitmap, so a spectator can outline them (`None` when none did, or for a play that

@@ -122,6 +122,8 @@ pub struct Score {
 #[serde(untagged)]
 #[schemars(rename = "FlyEvent", transform = tags::one_of)]
 pub enum Event {
+    // The variants' docs describe the events in the schema: their structs are inlined
+    // there, and their own docs only point back here.
     /// A ball is hit.
     Launch(Launched),
     /// A fielder caught the ball.
