@@ -7,6 +7,9 @@
 //! what keeps frames byte for byte as protocol 2 wrote them: they were built as
 //! `serde_json::Value`s, whose maps sort their keys, so `kind` came between the other
 //! keys of an event rather than first, which is where serde's `#[serde(tag)]` puts it.
+//! So an event is a struct with its `kind` among its fields, in alphabetical order, and
+//! the events of a sport are an untagged enum of those structs (`one_of` gives its
+//! schema): serde derives both their bytes and their schema from that one declaration.
 
 /// Declares unit types, each serialising as its string, with `{"const": ...}` as its
 /// schema.
@@ -71,9 +74,34 @@ tags! {
     Command = "command";
     /// A replay's `"record": "control"`.
     Control = "control";
+    /// A fly-ball event's `"kind": "launch"`.
+    Launch = "launch";
+    /// A fly-ball event's `"kind": "caught"`.
+    Caught = "caught";
+    /// A fly-ball event's `"kind": "landed"`.
+    Landed = "landed";
+    /// A basketball event's `"kind": "decision"`.
+    Decision = "decision";
+    /// A basketball event's `"kind": "pass"`.
+    Pass = "pass";
+    /// A basketball event's `"kind": "pass_caught"`.
+    PassCaught = "pass_caught";
+    /// A basketball event's `"kind": "shot"`.
+    Shot = "shot";
+    /// A basketball event's `"kind": "possession_ended"`.
+    PossessionEnded = "possession_ended";
 }
 
 /// `Some(Bot)` while a bot controls the agent.
 pub fn controller(by_bot: bool) -> Option<Bot> {
     by_bot.then_some(Bot)
+}
+
+/// The schema of an untagged enum whose variants carry different tags (events, each with
+/// its `kind`): exactly one variant matches any message, so it says `oneOf` where
+/// schemars, which cannot know the tags exclude each other, says `anyOf`.
+pub(crate) fn one_of(schema: &mut schemars::Schema) {
+    if let Some(variants) = schema.remove("anyOf") {
+        schema.insert("oneOf".into(), variants);
+    }
 }

@@ -7,11 +7,12 @@ use super::agent::{Action, Movement, Team};
 use super::capability::Capabilities;
 use super::capability::{Motion, Mover, Reach};
 use super::decision::{Chosen, Keep, Opponent, Situation};
-use super::event::Event;
+use super::event::{ChosenView, Decided, Event, Passed};
 use super::game::{Game, Order};
 use super::params::{Brain, DefenderAim, DefenderModel};
 use super::safe::SafeSquares;
 use crate::costmap::root_speed;
+use crate::tags;
 use glam::DVec2;
 
 /// What the ball handler does next, and why (in words a spectator reads).
@@ -159,10 +160,11 @@ impl Game {
             }
             Play::Pass { to, reason } => {
                 self.start_pass(k, to);
-                events.push(Event::Pass {
+                events.push(Event::Pass(Passed {
                     from: self.agents[k].id.clone(),
+                    kind: tags::Pass,
                     to: self.agents[to].id.clone(),
-                });
+                }));
                 (Action::Pass, reason, None)
             }
             Play::Move {
@@ -179,13 +181,14 @@ impl Game {
         let key = Some((action, chosen.map(|c| c.cell)));
         if self.last_decision[k] != key {
             self.last_decision[k] = key;
-            events.push(Event::Decision {
-                agent: self.agents[k].id.clone(),
+            events.push(Event::Decision(Decided {
                 action,
+                agent: self.agents[k].id.clone(),
+                chosen: chosen.as_ref().map(ChosenView::from),
+                kind: tags::Decision,
                 reason,
-                chosen,
                 safe: chosen.and_then(|_| SafeSquares::of(&self.params.court, &self.candidates)),
-            });
+            }));
         }
         if action == Action::Pass {
             self.agents[k].action = Action::ReadyForPass;

@@ -9,34 +9,30 @@ use serde::{Deserialize, Serialize};
 
 /// The half court's dimensions and the squares a shooter considers. Points are (x, z)
 /// on the floor, m: x from the baseline, z across, the basket on z = 0.
-///
-/// Its fields are in alphabetical order, as the `hello`'s `field.court` has always
-/// listed them ([`crate::tags`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Court {
+    /// Baseline to half-court line, m (FIBA: 14).
+    pub length_m: f64,
+    /// Sideline to sideline, m (FIBA: 15).
+    pub width_m: f64,
+    /// The centre of the ring above the floor, projected onto it, [x, z], m.
+    pub basket: DVec2,
     /// The backboard's face, m from the baseline (FIBA: 1.2, the ring's centre 0.375 m in
     /// front of it): no shot goes in from behind its plane.
     pub backboard_m: f64,
-    /// The centre of the ring above the floor, projected onto it, [x, z], m.
-    #[schemars(with = "[f64; 2]")]
-    pub basket: DVec2,
-    /// Baseline to half-court line, m (FIBA: 14).
-    pub length_m: f64,
-    /// Side of a square the shooter considers, m.
-    pub square_m: f64,
     /// Distance of the three-point line from the basket, m (FIBA: 6.75).
     pub three_point_m: f64,
-    /// Sideline to sideline, m (FIBA: 15).
-    pub width_m: f64,
+    /// Side of a square the shooter considers, m.
+    pub square_m: f64,
 }
 
 impl Default for Court {
     fn default() -> Self {
         Court {
-            backboard_m: 1.2,
             length_m: 14.0,
             width_m: 15.0,
             basket: DVec2::new(1.575, 0.0),
+            backboard_m: 1.2,
             three_point_m: 6.75,
             square_m: 0.5,
         }

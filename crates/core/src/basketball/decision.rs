@@ -16,24 +16,23 @@ use crate::costmap::{LocalFrame, LocalLattice};
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
-/// The parameters of the rule (fields in alphabetical order, as the `hello`'s
-/// `field.decision` has always listed them: [`crate::tags`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+/// The parameters of the rule.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DecisionParams {
-    /// What a square the defender's model does not reach within its horizon counts as.
-    pub beyond_horizon: BeyondHorizon,
-    /// ε: the margin the defender must be late by, s.
-    pub epsilon_s: f64,
     /// T_s: from the decision to shoot until the ball leaves the hands, s.
     pub shot_time_s: f64,
+    /// ε: the margin the defender must be late by, s.
+    pub epsilon_s: f64,
+    /// What a square the defender's model does not reach within its horizon counts as.
+    pub beyond_horizon: BeyondHorizon,
 }
 
 impl Default for DecisionParams {
     fn default() -> Self {
         DecisionParams {
-            beyond_horizon: BeyondHorizon::Horizon,
             shot_time_s: 0.4,
             epsilon_s: 0.2,
+            beyond_horizon: BeyondHorizon::Horizon,
         }
     }
 }

@@ -2,7 +2,7 @@
 //! and the statistics to compare offenses by.
 
 use super::capability::Capabilities;
-use super::event::{Event, Outcome};
+use super::event::{Decided, Event, Outcome, PossessionEnded, Shot};
 use super::game::Game;
 use super::params::GameParams;
 use serde::Serialize;
@@ -94,27 +94,27 @@ pub fn evaluate(caps: Arc<Capabilities>, params: GameParams, possessions: u64) -
         r.ticks += 1;
         for e in &events {
             match e {
-                Event::Decision {
+                Event::Decision(Decided {
                     chosen: Some(c), ..
-                } => {
+                }) => {
                     r.chosen_squares += 1;
                     r.chosen_beyond_horizon += u64::from(c.beyond_horizon);
                 }
-                Event::Shot {
+                Event::Shot(Shot {
                     distance_m, points, ..
-                } => {
+                }) => {
                     r.shots += 1;
                     shot_distance += distance_m;
                     last_shot_m = Some(*distance_m);
                     r.three_pointers += u64::from(*points == 3);
                 }
-                Event::PossessionEnded {
+                Event::PossessionEnded(PossessionEnded {
                     outcome,
                     points,
                     duration_s,
                     passes,
                     ..
-                } => {
+                }) => {
                     let p = f64::from(*points);
                     sum += p;
                     sum_sq += p * p;

@@ -5,7 +5,6 @@ use super::decision::Chosen;
 use super::safe::SafeSquares;
 use crate::tags;
 use schemars::JsonSchema;
-use serde::ser::{SerializeStruct, Serializer};
 use serde::Serialize;
 
 /// How a possession ended.
@@ -28,145 +27,105 @@ pub enum Outcome {
 
 /// Something that happened in a tick of [`Game::step`](super::Game::step), as frames
 /// carry it (`kind` names the variant). Agents are named by id.
-///
-/// It is serialised by hand, with its keys in alphabetical order and `kind` among them:
-/// frames keep protocol 2's key order byte for byte ([`crate::tags`]). Its schema is
-/// derived from the declaration below, which is the same set of keys.
-#[derive(Debug, Clone, PartialEq, JsonSchema)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-#[schemars(rename = "HoopsEvent")]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[serde(untagged)]
+#[schemars(rename = "HoopsEvent", transform = tags::one_of)]
 pub enum Event {
+    // The variants' docs describe the events in the schema: their structs are inlined
+    // there, and their own docs only point back here.
     /// An agent chose a new action (or, with the ball, a new shooting square). `chosen`
     /// is that of `basketball-decide`; `safe` the squares that satisfied the rule, as a
     /// bitmap, so a spectator can outline them (`None` when none did, or for a play that
     /// chose no square).
-    Decision {
-        /// The agent that decided.
-        agent: String,
-        /// What it does now.
-        action: Action,
-        /// Why, for people: the rule or threshold that decided it, or `bot order`.
-        reason: String,
-        /// The shooting square chosen, with C_o, C_d and the shot's chance.
-        #[schemars(with = "Option<ChosenView>")]
-        chosen: Option<Chosen>,
-        /// The squares that satisfied the rule.
-        safe: Option<SafeSquares>,
-    },
+    Decision(Decided),
     /// A pass is thrown.
-    Pass {
-        /// The passer.
-        from: String,
-        /// The teammate it is thrown to.
-        to: String,
-    },
+    Pass(Passed),
     /// A pass reached its receiver, who now has the ball.
-    PassCaught {
-        /// The receiver.
-        by: String,
-    },
+    PassCaught(PassCaught),
     /// The ball is away (or was blocked on the way up).
-    Shot {
-        /// The shooter.
-        by: String,
-        /// Where it shot from on the court, (x, z), m.
-        from: [f64; 2],
-        /// Distance from there to the basket, m.
-        distance_m: f64,
-        /// The chance the shot had of going in ([`ShotModel`](super::ShotModel)).
-        success: f64,
-        /// Whether it went in.
-        made: bool,
-        /// Whether a defender blocked it before the ball was away (then `made` is false).
-        blocked: bool,
-        /// Points scored: 2 or 3 if made, else 0.
-        points: u32,
-    },
+    Shot(Shot),
     /// A possession is over; the next one starts at once.
-    PossessionEnded {
-        /// Which possession, counted from 0.
-        possession: u64,
-        /// How it ended.
-        outcome: Outcome,
-        /// Points it scored.
-        points: u32,
-        /// From the start of the possession to the moment its outcome was settled.
-        duration_s: f64,
-        /// Passes thrown during it.
-        passes: u32,
-    },
+    PossessionEnded(PossessionEnded),
 }
 
-impl Serialize for Event {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        match self {
-            Event::Decision {
-                agent,
-                action,
-                reason,
-                chosen,
-                safe,
-            } => {
-                let mut o = s.serialize_struct("decision", 6)?;
-                o.serialize_field("action", action)?;
-                o.serialize_field("agent", agent)?;
-                o.serialize_field("chosen", &chosen.map(ChosenView::from))?;
-                o.serialize_field("kind", "decision")?;
-                o.serialize_field("reason", reason)?;
-                o.serialize_field("safe", safe)?;
-                o.end()
-            }
-            Event::Pass { from, to } => {
-                let mut o = s.serialize_struct("pass", 3)?;
-                o.serialize_field("from", from)?;
-                o.serialize_field("kind", "pass")?;
-                o.serialize_field("to", to)?;
-                o.end()
-            }
-            Event::PassCaught { by } => {
-                let mut o = s.serialize_struct("pass_caught", 2)?;
-                o.serialize_field("by", by)?;
-                o.serialize_field("kind", "pass_caught")?;
-                o.end()
-            }
-            Event::Shot {
-                by,
-                from,
-                distance_m,
-                success,
-                made,
-                blocked,
-                points,
-            } => {
-                let mut o = s.serialize_struct("shot", 8)?;
-                o.serialize_field("blocked", blocked)?;
-                o.serialize_field("by", by)?;
-                o.serialize_field("distance_m", distance_m)?;
-                o.serialize_field("from", from)?;
-                o.serialize_field("kind", "shot")?;
-                o.serialize_field("made", made)?;
-                o.serialize_field("points", points)?;
-                o.serialize_field("success", success)?;
-                o.end()
-            }
-            Event::PossessionEnded {
-                possession,
-                outcome,
-                points,
-                duration_s,
-                passes,
-            } => {
-                let mut o = s.serialize_struct("possession_ended", 6)?;
-                o.serialize_field("duration_s", duration_s)?;
-                o.serialize_field("kind", "possession_ended")?;
-                o.serialize_field("outcome", outcome)?;
-                o.serialize_field("passes", passes)?;
-                o.serialize_field("points", points)?;
-                o.serialize_field("possession", possession)?;
-                o.end()
-            }
-        }
-    }
+/// What an [`Event::Decision`] says.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(inline)]
+pub struct Decided {
+    /// What it does now.
+    pub action: Action,
+    /// The agent that decided.
+    pub agent: String,
+    /// The shooting square chosen, with C_o, C_d and the shot's chance.
+    pub chosen: Option<ChosenView>,
+    /// Always `decision`.
+    pub kind: tags::Decision,
+    /// Why, for people: the rule or threshold that decided it, or `bot order`.
+    pub reason: String,
+    /// The squares that satisfied the rule.
+    pub safe: Option<SafeSquares>,
+}
+
+/// What an [`Event::Pass`] says.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(inline)]
+pub struct Passed {
+    /// The passer.
+    pub from: String,
+    /// Always `pass`.
+    pub kind: tags::Pass,
+    /// The teammate it is thrown to.
+    pub to: String,
+}
+
+/// What an [`Event::PassCaught`] says.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(inline)]
+pub struct PassCaught {
+    /// The receiver.
+    pub by: String,
+    /// Always `pass_caught`.
+    pub kind: tags::PassCaught,
+}
+
+/// What an [`Event::Shot`] says.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(inline)]
+pub struct Shot {
+    /// Whether a defender blocked it before the ball was away (then `made` is false).
+    pub blocked: bool,
+    /// The shooter.
+    pub by: String,
+    /// Distance from there to the basket, m.
+    pub distance_m: f64,
+    /// Where it shot from on the court, (x, z), m.
+    pub from: [f64; 2],
+    /// Always `shot`.
+    pub kind: tags::Shot,
+    /// Whether it went in.
+    pub made: bool,
+    /// Points scored: 2 or 3 if made, else 0.
+    pub points: u32,
+    /// The chance the shot had of going in ([`ShotModel`](super::ShotModel)).
+    pub success: f64,
+}
+
+/// What an [`Event::PossessionEnded`] says.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(inline)]
+pub struct PossessionEnded {
+    /// From the start of the possession to the moment its outcome was settled.
+    pub duration_s: f64,
+    /// Always `possession_ended`.
+    pub kind: tags::PossessionEnded,
+    /// How it ended.
+    pub outcome: Outcome,
+    /// Passes thrown during it.
+    pub passes: u32,
+    /// Points it scored.
+    pub points: u32,
+    /// Which possession, counted from 0.
+    pub possession: u64,
 }
 
 /// A decision's `chosen` as frames carry it: without T_s and ε, which are the match's
@@ -189,8 +148,8 @@ pub struct ChosenView {
     pub success: f64,
 }
 
-impl From<Chosen> for ChosenView {
-    fn from(c: Chosen) -> ChosenView {
+impl From<&Chosen> for ChosenView {
+    fn from(c: &Chosen) -> ChosenView {
         ChosenView {
             beyond_horizon: c.beyond_horizon,
             c_d: c.c_d,

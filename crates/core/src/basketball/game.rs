@@ -16,8 +16,12 @@
 use super::agent::{Agent, Team};
 use super::capability::Capabilities;
 use super::decision::Candidate;
-use super::event::{BallState, BallView, Event, Outcome, PlayerView, PoseBlend, Snapshot};
+use super::event::{
+    BallState, BallView, Event, Outcome, PassCaught, PlayerView, PoseBlend, PossessionEnded, Shot,
+    Snapshot,
+};
 use super::params::GameParams;
+use crate::tags;
 use glam::DVec2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -331,14 +335,17 @@ impl Game {
         let court = self.params.court;
         let distance_m = court.distance_to_basket(at);
         let success = court.shot_success(&self.params.shot, at);
-        let shot_event = |made: bool, blocked: bool, points: u32, id: &str| Event::Shot {
-            by: id.to_string(),
-            from: at.to_array(),
-            distance_m,
-            success,
-            made,
-            blocked,
-            points,
+        let shot_event = |made: bool, blocked: bool, points: u32, id: &str| {
+            Event::Shot(Shot {
+                blocked,
+                by: id.to_string(),
+                distance_m,
+                from: at.to_array(),
+                kind: tags::Shot,
+                made,
+                points,
+                success,
+            })
         };
         for d in self.defenders() {
             let bit = 1u64 << d.min(63);
@@ -393,9 +400,10 @@ impl Game {
             let receiver = &mut self.agents[to];
             receiver.not_before_s = now + 1.0;
             receiver.next_plan_s = now;
-            events.push(Event::PassCaught {
+            events.push(Event::PassCaught(PassCaught {
                 by: receiver.id.clone(),
-            });
+                kind: tags::PassCaught,
+            }));
             return false;
         }
         let at = at + gap / gap.length() * travel;
@@ -477,13 +485,14 @@ impl Game {
         events: &mut Vec<Event>,
     ) {
         self.score += points;
-        events.push(Event::PossessionEnded {
-            possession: self.possession,
-            outcome,
-            points,
+        events.push(Event::PossessionEnded(PossessionEnded {
             duration_s,
+            kind: tags::PossessionEnded,
+            outcome,
             passes: self.passes,
-        });
+            points,
+            possession: self.possession,
+        }));
         self.possession += 1;
         self.start_possession();
     }

@@ -39,7 +39,10 @@ pub use decision::{
     BeyondHorizon, Candidate, Chosen, Decision, DecisionParams, Keep, Opponent, Situation,
 };
 pub use eval::{compare, evaluate, Comparison, EvalReport};
-pub use event::{BallState, BallView, ChosenView, Event, Outcome, PlayerView, PoseBlend};
+pub use event::{
+    BallState, BallView, ChosenView, Decided, Event, Outcome, PassCaught, Passed, PlayerView,
+    PoseBlend, PossessionEnded, Shot,
+};
 pub use game::{Game, Order};
 pub use params::{Brain, DefenderAim, DefenderModel, DefenderParams, GameParams, SimpleParams};
 pub use shot::ShotModel;

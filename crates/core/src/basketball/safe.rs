@@ -19,9 +19,6 @@ use serde::Serialize;
 /// [`Court::square_centre`] counts them); bit `r · columns + c` of `bits` (standard
 /// base64, least significant bit of each byte first) is set when square (first row + r,
 /// first column + c) is safe.
-///
-/// Its fields are in alphabetical order, as frames have always listed them
-/// ([`crate::tags`]).
 #[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct SafeSquares {
     /// The bitmap, standard base64.

@@ -238,16 +238,16 @@ fn every_possession_ends_in_a_shot_a_turnover_or_the_shot_clock() {
         let mut ended = 0;
         for e in &events {
             match e {
-                Event::Shot { made, blocked, .. } => {
+                Event::Shot(Shot { made, blocked, .. }) => {
                     assert!(!(made & blocked));
                     shot_pending = true;
                 }
-                Event::PossessionEnded {
+                Event::PossessionEnded(PossessionEnded {
                     outcome,
                     duration_s,
                     points,
                     ..
-                } => {
+                }) => {
                     ended += 1;
                     assert!(*duration_s > 0.0 && *duration_s <= params.shot_clock_s + 1e-9);
                     let by_shot =
@@ -258,7 +258,7 @@ fn every_possession_ends_in_a_shot_a_turnover_or_the_shot_clock() {
                 }
                 // The chosen square satisfied the rule, so the bitmap of safe squares
                 // (cut to their box) holds it.
-                Event::Decision { chosen, safe, .. } => {
+                Event::Decision(Decided { chosen, safe, .. }) => {
                     let court = &params.court;
                     match (chosen, safe) {
                         (Some(c), Some(safe)) => {
@@ -315,7 +315,7 @@ fn teams_of_any_size_play() {
     assert_eq!(
         events
             .iter()
-            .filter(|e| matches!(e, Event::PossessionEnded { .. }))
+            .filter(|e| matches!(e, Event::PossessionEnded(_)))
             .count(),
         5
     );
@@ -661,7 +661,7 @@ fn no_square_behind_the_backboard_is_chosen_and_no_shot_is_taken_from_there() {
             events.clear();
             game.step(&mut events);
             for e in &events {
-                if let Event::Shot { from, success, .. } = e {
+                if let Event::Shot(Shot { from, success, .. }) = e {
                     shots += 1;
                     let at = DVec2::from_array(*from);
                     assert!(court.contains(at), "a shot from off the court: {at}");
@@ -670,9 +670,9 @@ fn no_square_behind_the_backboard_is_chosen_and_no_shot_is_taken_from_there() {
                         "a shot from behind the backboard at {at} had {success}"
                     );
                 }
-                if let Event::Decision {
+                if let Event::Decision(Decided {
                     chosen: Some(c), ..
-                } = e
+                }) = e
                 {
                     assert!(c.cell[0] > court.backboard_m, "{c:?}");
                 }

@@ -2,24 +2,19 @@
 
 use super::{Air, AirModel, BallSpec, BallState};
 use glam::DVec3;
-use schemars::JsonSchema;
-use serde::Serialize;
 
 /// A batted ball's initial conditions, in the units people quote (degrees, rpm) so a
 /// launch reads like a broadcast graphic; converted to SI once, in [`Launch::initial_state`].
-///
-/// The fields are in alphabetical order because a frame's `launch` event carries a
-/// launch, and frames keep protocol 2's key order byte for byte ([`crate::tags`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Launch {
-    /// Horizontal direction in degrees, measured from +x toward +z.
-    pub azimuth_deg: f64,
-    /// Angle above the horizontal, degrees.
-    pub elevation_deg: f64,
-    /// Height the ball leaves the bat at, m (it starts above the origin).
-    pub height_m: f64,
     /// Speed off the bat, m/s.
     pub speed_m_s: f64,
+    /// Angle above the horizontal, degrees.
+    pub elevation_deg: f64,
+    /// Horizontal direction in degrees, measured from +x toward +z.
+    pub azimuth_deg: f64,
+    /// Height the ball leaves the bat at, m (it starts above the origin).
+    pub height_m: f64,
     /// Spin rate, revolutions per minute.
     pub spin_rpm: f64,
     /// Tilt of the lift direction about the velocity: 0° is pure backspin (lift up),

@@ -2,12 +2,14 @@
 //! ball, the score, the events, and what a bot's fielder perceives.
 //!
 //! Objects list their keys in alphabetical order, as protocol 2 always has (see
-//! [`crate::tags`]): frames are compared byte for byte when a replay is verified.
+//! [`crate::tags`]): frames are compared byte for byte when a replay is verified, and a
+//! test reads every object of a frame of each sport for it. The simulation's own types
+//! (such as [`physics::Launch`]) declare their fields as they read best and are converted
+//! to the types here.
 
-use crate::physics::Launch;
+use crate::physics;
 use crate::tags;
 use schemars::JsonSchema;
-use serde::ser::{SerializeStruct, Serializer};
 use serde::Serialize;
 
 /// A baseball field, as a client draws it: home plate at the origin, fair territory
@@ -116,87 +118,93 @@ pub struct Score {
 }
 
 /// Something that happened in a fly-ball match, as frames carry it (`kind` names it).
-#[derive(Debug, Clone, PartialEq, JsonSchema)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-#[schemars(rename = "FlyEvent")]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[serde(untagged)]
+#[schemars(rename = "FlyEvent", transform = tags::one_of)]
 pub enum Event {
+    // The variants' docs describe the events in the schema: their structs are inlined
+    // there, and their own docs only point back here.
     /// A ball is hit.
-    Launch {
-        /// Which ball, counted from 1.
-        ball: u64,
-        /// How it left the bat.
-        launch: Launch,
-        /// Where it will land if nobody catches it, [x, z], m.
-        landing: [f64; 2],
-    },
+    Launch(Launched),
     /// A fielder caught the ball.
-    Caught {
-        /// The fielder.
-        by: String,
-        /// Which ball.
-        ball: u64,
-        /// Where it was caught, [x, z], m.
-        at: [f64; 2],
-        /// From the hit to the catch, s.
-        flight_time_s: f64,
-    },
+    Caught(Caught),
     /// The ball landed uncaught.
-    Landed {
-        /// Which ball.
-        ball: u64,
-        /// Where it landed, [x, z], m.
-        at: [f64; 2],
-        /// The fielder nearest to it then.
-        nearest: Option<String>,
-        /// How far that fielder was from it, m.
-        miss_m: Option<f64>,
-    },
+    Landed(Landed),
 }
 
-impl Serialize for Event {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        // Keys in alphabetical order, `kind` among them (see the module doc).
-        match self {
-            Event::Launch {
-                ball,
-                launch,
-                landing,
-            } => {
-                let mut o = s.serialize_struct("launch", 4)?;
-                o.serialize_field("ball", ball)?;
-                o.serialize_field("kind", "launch")?;
-                o.serialize_field("landing", landing)?;
-                o.serialize_field("launch", launch)?;
-                o.end()
-            }
-            Event::Caught {
-                by,
-                ball,
-                at,
-                flight_time_s,
-            } => {
-                let mut o = s.serialize_struct("caught", 5)?;
-                o.serialize_field("at", at)?;
-                o.serialize_field("ball", ball)?;
-                o.serialize_field("by", by)?;
-                o.serialize_field("flight_time_s", flight_time_s)?;
-                o.serialize_field("kind", "caught")?;
-                o.end()
-            }
-            Event::Landed {
-                ball,
-                at,
-                nearest,
-                miss_m,
-            } => {
-                let mut o = s.serialize_struct("landed", 5)?;
-                o.serialize_field("at", at)?;
-                o.serialize_field("ball", ball)?;
-                o.serialize_field("kind", "landed")?;
-                o.serialize_field("miss_m", miss_m)?;
-                o.serialize_field("nearest", nearest)?;
-                o.end()
-            }
+/// What an [`Event::Launch`] says.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(inline)]
+pub struct Launched {
+    /// Which ball, counted from 1.
+    pub ball: u64,
+    /// Always `launch`.
+    pub kind: tags::Launch,
+    /// Where it will land if nobody catches it, [x, z], m.
+    pub landing: [f64; 2],
+    /// How it left the bat.
+    pub launch: Launch,
+}
+
+/// What an [`Event::Caught`] says.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(inline)]
+pub struct Caught {
+    /// Where it was caught, [x, z], m.
+    pub at: [f64; 2],
+    /// Which ball.
+    pub ball: u64,
+    /// The fielder.
+    pub by: String,
+    /// From the hit to the catch, s.
+    pub flight_time_s: f64,
+    /// Always `caught`.
+    pub kind: tags::Caught,
+}
+
+/// What an [`Event::Landed`] says.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[schemars(inline)]
+pub struct Landed {
+    /// Where it landed, [x, z], m.
+    pub at: [f64; 2],
+    /// Which ball.
+    pub ball: u64,
+    /// Always `landed`.
+    pub kind: tags::Landed,
+    /// How far that fielder was from it, m.
+    pub miss_m: Option<f64>,
+    /// The fielder nearest to it then.
+    pub nearest: Option<String>,
+}
+
+/// How a ball left the bat, in the units people quote (degrees, rpm).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
+pub struct Launch {
+    /// Horizontal direction in degrees, measured from +x toward +z.
+    pub azimuth_deg: f64,
+    /// Angle above the horizontal, degrees.
+    pub elevation_deg: f64,
+    /// Height the ball leaves the bat at, m (it starts above the origin).
+    pub height_m: f64,
+    /// Speed off the bat, m/s.
+    pub speed_m_s: f64,
+    /// Spin rate, revolutions per minute.
+    pub spin_rpm: f64,
+    /// Tilt of the lift direction about the velocity: 0° is pure backspin (lift up),
+    /// +90° is side spin that curves the ball toward increasing azimuth.
+    pub spin_tilt_deg: f64,
+}
+
+impl From<&physics::Launch> for Launch {
+    fn from(l: &physics::Launch) -> Launch {
+        Launch {
+            azimuth_deg: l.azimuth_deg,
+            elevation_deg: l.elevation_deg,
+            height_m: l.height_m,
+            speed_m_s: l.speed_m_s,
+            spin_rpm: l.spin_rpm,
+            spin_tilt_deg: l.spin_tilt_deg,
         }
     }
 }

@@ -2,14 +2,15 @@
 //! what a bot's player perceives.
 //!
 //! The game shows itself through views defined beside it ([`Player`], [`Ball`],
-//! [`Event`]), re-exported here; what only the protocol needs is defined
-//! here. Objects list their keys in alphabetical order, as protocol 2 always has
-//! ([`crate::tags`]).
+//! [`Event`]), re-exported here; what only the protocol needs is defined here, converted
+//! from the game's own types (the court, the decision rule's parameters). Objects list
+//! their keys in alphabetical order, as protocol 2 always has ([`crate::tags`]), and a
+//! test reads every object of a frame for it.
 
+use crate::basketball::{self, BeyondHorizon};
 pub use crate::basketball::{
     Action, BallState, BallView as Ball, ChosenView, Event, Outcome, PlayerView as Player, Team,
 };
-use crate::basketball::{Court, DecisionParams};
 use crate::tags;
 use schemars::JsonSchema;
 use serde::Serialize;
@@ -31,6 +32,59 @@ pub struct Field {
     pub offense: &'static str,
     /// The shot clock, s.
     pub shot_clock_s: f64,
+}
+
+/// The half court's dimensions and the squares a shooter considers. Points are (x, z)
+/// on the floor, m: x from the baseline, z across, the basket on z = 0.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
+pub struct Court {
+    /// The backboard's face, m from the baseline (FIBA: 1.2, the ring's centre 0.375 m in
+    /// front of it): no shot goes in from behind its plane.
+    pub backboard_m: f64,
+    /// The centre of the ring above the floor, projected onto it, [x, z], m.
+    pub basket: [f64; 2],
+    /// Baseline to half-court line, m (FIBA: 14).
+    pub length_m: f64,
+    /// Side of a square the shooter considers, m.
+    pub square_m: f64,
+    /// Distance of the three-point line from the basket, m (FIBA: 6.75).
+    pub three_point_m: f64,
+    /// Sideline to sideline, m (FIBA: 15).
+    pub width_m: f64,
+}
+
+impl From<&basketball::Court> for Court {
+    fn from(c: &basketball::Court) -> Court {
+        Court {
+            backboard_m: c.backboard_m,
+            basket: c.basket.to_array(),
+            length_m: c.length_m,
+            square_m: c.square_m,
+            three_point_m: c.three_point_m,
+            width_m: c.width_m,
+        }
+    }
+}
+
+/// The parameters of the decision rule `C_o > C_d + T_s + ε`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
+pub struct DecisionParams {
+    /// What a square the defender's model does not reach within its horizon counts as.
+    pub beyond_horizon: BeyondHorizon,
+    /// ε: the margin the defender must be late by, s.
+    pub epsilon_s: f64,
+    /// T_s: from the decision to shoot until the ball leaves the hands, s.
+    pub shot_time_s: f64,
+}
+
+impl From<&basketball::DecisionParams> for DecisionParams {
+    fn from(d: &basketball::DecisionParams) -> DecisionParams {
+        DecisionParams {
+            beyond_horizon: d.beyond_horizon,
+            epsilon_s: d.epsilon_s,
+            shot_time_s: d.shot_time_s,
+        }
+    }
 }
 
 /// A player as `hello` lists it.

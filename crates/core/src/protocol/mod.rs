@@ -17,6 +17,8 @@
 
 pub mod fly;
 pub mod hoops;
+#[cfg(test)]
+mod key_order_tests;
 mod quantise;
 
 use crate::strict_json::{self, Refused};

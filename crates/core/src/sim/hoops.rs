@@ -151,8 +151,8 @@ impl HoopsWorld {
     pub(crate) fn field(&self) -> Field {
         let p = self.game.params();
         Field::Basketball(hoops::Field {
-            court: p.court,
-            decision: p.decision,
+            court: (&p.court).into(),
+            decision: (&p.decision).into(),
             defender_motion: p.defender.motion.name(),
             kind: tags::Basketball,
             offense: p.offense.name(),

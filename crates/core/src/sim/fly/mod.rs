@@ -15,9 +15,10 @@ mod wire;
 use crate::fielding::{forecast, Body, CatchZone, Fielder, FielderConfig, Limits, StrategyKind};
 use crate::perception::Sighting;
 use crate::physics::{AirModel, BallSpec, BallState, Flight, Launch, NATHAN_AIR_DENSITY};
-use crate::protocol::fly::{Event, Score};
+use crate::protocol::fly::{Caught, Event, Landed, Launched, Score};
 use crate::protocol::Event as AnyEvent;
 use crate::sim::scenario::{LaunchSpec, Scenario, ScenarioError, Sport};
+use crate::tags;
 use glam::DVec2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -237,11 +238,12 @@ impl FlyWorld {
             f.order = None;
         }
         self.score.balls += 1;
-        events.push(AnyEvent::Fly(Event::Launch {
+        events.push(AnyEvent::Fly(Event::Launch(Launched {
             ball: self.score.balls,
-            launch,
+            kind: tags::Launch,
             landing: [flight.landing.pos.x, flight.landing.pos.z],
-        }));
+            launch: (&launch).into(),
+        })));
         self.play = Play::InPlay { flight, sample: 0 };
     }
 
@@ -296,12 +298,13 @@ impl FlyWorld {
                         if pass.caught_s.is_some() {
                             self.score.caught += 1;
                             f.caught += 1;
-                            events.push(AnyEvent::Fly(Event::Caught {
-                                by: f.id.clone(),
-                                ball: self.score.balls,
+                            events.push(AnyEvent::Fly(Event::Caught(Caught {
                                 at: f.fielder.body.pos.to_array(),
+                                ball: self.score.balls,
+                                by: f.id.clone(),
                                 flight_time_s: ball.t,
-                            }));
+                                kind: tags::Caught,
+                            })));
                             self.play = Play::Between {
                                 until_tick: self.tick + self.pause_ticks,
                             };
@@ -331,12 +334,13 @@ impl FlyWorld {
         if let Some((spot, nearest)) = flight_ended {
             self.score.dropped += 1;
             let (nearest, miss_m) = nearest.unzip();
-            events.push(AnyEvent::Fly(Event::Landed {
-                ball: self.score.balls,
+            events.push(AnyEvent::Fly(Event::Landed(Landed {
                 at: spot.to_array(),
-                nearest,
+                ball: self.score.balls,
+                kind: tags::Landed,
                 miss_m,
-            }));
+                nearest,
+            })));
             self.play = Play::Between {
                 until_tick: self.tick + self.pause_ticks,
             };
