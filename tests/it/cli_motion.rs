@@ -1,7 +1,7 @@
 //! `fieldhouse motion-graph` and `fieldhouse costmap` on the real CMU motion capture, as a
 //! user runs them, and their errors.
 
-mod common;
+use crate::common;
 
 use common::{failure, fieldhouse, json, repository_mocap};
 use serde_json::Value;

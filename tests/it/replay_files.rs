@@ -4,7 +4,7 @@
 //! directory is kept bounded (retention, rotation), and that writing replays never
 //! holds up a tick.
 
-mod common;
+use crate::common;
 
 use common::server::*;
 use fieldhouse::replay::{Encoding, Recorder};

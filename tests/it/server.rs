@@ -1,7 +1,7 @@
 //! The match server as users meet it: the real binary on a loopback port, real HTTP and
 //! real WebSockets, traffic checked against the JSON Schemas in proto/.
 
-mod common;
+use crate::common;
 
 use common::server::*;
 use common::until;

@@ -8,8 +8,6 @@
 //! Needs `node`, `/usr/bin/chromium` (or `CHROMIUM`) and `npm ci` in `tests/browser`;
 //! `scripts/prerequisites` (run by `scripts/test`) sees to them.
 
-mod common;
-
 /// The page's pure modules (optics, fits, interpolation) against analytic oracles, in
 /// Node: `node --test tests/browser/modules.test.mjs`.
 #[test]

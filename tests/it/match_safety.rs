@@ -3,7 +3,7 @@
 //! duplicate keys, wrapped ticks, a non-atomic match limit, ended matches listed for
 //! ever, an upper-case auth scheme, and a page without a content security policy.
 
-mod common;
+use crate::common;
 
 use common::server::{connect, next, next_of, Server, Socket, ADMIN};
 use futures_util::{SinkExt, StreamExt};

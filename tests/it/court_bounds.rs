@@ -4,7 +4,7 @@
 //! (`basketball::RUN_OFF_M`, 1 m beyond the lines) for everyone else. The replay's own frames are
 //! read back, so this checks what spectators see.
 
-mod common;
+use crate::common;
 
 use common::{json, repository_mocap};
 use fieldhouse::basketball::RUN_OFF_M;

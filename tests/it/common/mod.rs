@@ -1,8 +1,5 @@
 //! Running the real `fieldhouse` binary from integration tests.
 
-// Each test binary uses the part of this it needs.
-#![allow(dead_code)]
-
 pub(crate) mod server;
 
 use serde_json::Value;

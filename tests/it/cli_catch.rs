@@ -1,7 +1,7 @@
 //! The `fieldhouse` binary as a user runs it: `catch` and `catch-sweep`, their JSON, their
 //! plots and their errors.
 
-mod common;
+use crate::common;
 
 use common::{assert_reads_well, fieldhouse, json};
 use serde_json::Value;

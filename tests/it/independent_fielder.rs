@@ -32,7 +32,7 @@
 //! the test also compares the fielders' paths tick by tick, which such errors move by
 //! decimetres to metres.
 
-mod common;
+use crate::common;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -1,7 +1,7 @@
 //! `fieldhouse basketball-decide` and `basketball-eval` as a user runs them, on the CMU
 //! motion capture. Maps are cached in the test target directory, keyed by their inputs.
 
-mod common;
+use crate::common;
 
 use common::{assert_reads_well, failure, json, success};
 use serde_json::Value;

@@ -3,7 +3,7 @@
 //! /ready, /health, /shutdown), and the container files in docker/ against the binary
 //! they run. (No Docker engine runs here, so the images themselves are not built.)
 
-mod common;
+use crate::common;
 
 use common::server::*;
 use serde_json::json;

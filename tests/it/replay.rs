@@ -1,7 +1,7 @@
 //! Headless runs and replay files through the binary: determinism, verification,
 //! truncation, bad scenarios; and replays the server records, lists and plays.
 
-mod common;
+use crate::common;
 
 use common::{assert_reads_well, bad_input, exits, failure, fieldhouse, json};
 use serde_json::Value;

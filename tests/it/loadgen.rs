@@ -3,7 +3,7 @@
 //! checked (timings belong in BENCHMARKS.md): every spectator connects, frames arrive
 //! and the figures are consistent.
 
-mod common;
+use crate::common;
 
 use common::fieldhouse;
 

@@ -5,7 +5,7 @@
 //! requests than the server should run at once. Real binary, loopback only; each
 //! test is bounded in time and count.
 
-mod common;
+use crate::common;
 
 use common::server::{connect, next_of, Server, ADMIN};
 use futures_util::{SinkExt, StreamExt};

@@ -3,7 +3,7 @@
 //! directory that fills up or disappears under a running match. RELIABILITY.md lists
 //! each case with the test that covers it.
 
-mod common;
+use crate::common;
 
 use common::server::*;
 use futures_util::StreamExt;
