@@ -1,35 +1,14 @@
-//! A replay file, any bytes (truncated, corrupted, hostile), opened as the server opens
-//! one for its viewers: walked into a block index, then played through, sought and
-//! sought back with a lead-in. Never a panic, and reading stops (an error or the end).
+//! A replay file, any bytes (truncated, corrupted, hostile), read as the server reads
+//! one for its viewers (the index reads positions of its bytes, here in memory): walked
+//! into a block index, then played through, sought and sought back with a lead-in. Never
+//! a panic, and reading stops (an error or the end).
 #![no_main]
 
 use fieldhouse_core::replay::{At, BlockCache, Index};
 use libfuzzer_sys::fuzz_target;
-use std::fs::File;
-use std::os::unix::fs::FileExt;
-use std::sync::OnceLock;
-
-/// One file for every input, unlinked at once: the index reads a file, not bytes.
-fn file() -> &'static File {
-    static FILE: OnceLock<File> = OnceLock::new();
-    FILE.get_or_init(|| {
-        let path = std::env::temp_dir().join(format!("fuzz-replay-index-{}", std::process::id()));
-        let file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(&path)
-            .unwrap();
-        std::fs::remove_file(&path).unwrap();
-        file
-    })
-}
 
 fuzz_target!(|data: &[u8]| {
-    let file = file();
-    file.set_len(0).unwrap();
-    file.write_all_at(data, 0).unwrap();
+    let file = data;
     let Ok(index) = Index::build(file) else {
         return;
     };

@@ -8,12 +8,13 @@
 //! It reads no clock and no environment, and opens no file but motion capture: times
 //! (when a recording started) are handed in by the edge, the server and the CLI; the
 //! cost-map cache is a [`costmap::cache::Store`] the CLI implements over its directory;
-//! replays are written to a writer the edge opened and read from bytes (or, by the
-//! server's index, from a file it opened). The one named reader is the motion loader (a
-//! user's `--mocap DIR`; the CMU clips are embedded), which walks a directory of BVH and
-//! ASF/AMC files; the formats' parsers take bytes, as the fuzz targets do. `clippy.toml` forbids clocks, the
-//! environment and `std::fs` elsewhere in the crate (tests excepted), and
-//! `scripts/check-architecture` fails if a new place allows them.
+//! replays are written to a writer the edge opened and read from bytes, or at positions
+//! from a [`replay::Source`] (the server's open file). The one named reader is the
+//! motion loader (a user's `--mocap DIR`; the CMU clips are embedded), which walks a
+//! directory of BVH and ASF/AMC files; the formats' parsers take bytes, as the fuzz
+//! targets do. `clippy.toml` forbids clocks, the environment and `std::fs` elsewhere in
+//! the crate (tests excepted), and `scripts/check-architecture` fails if a new place
+//! allows them.
 //!
 //! # Layout
 //!

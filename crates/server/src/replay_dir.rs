@@ -23,13 +23,27 @@
 //! ([`Entry::remove`]): the name is looked at again just before, and `unlink` removes
 //! that name only (a link, not what it points to; one name of a file with others).
 
-use fieldhouse_core::replay::{Encoding, Index};
+use fieldhouse_core::replay::{self, Encoding, Index};
 use std::collections::{HashMap, HashSet};
 use std::fs::{File, Metadata};
 use std::io;
 use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, Weak};
+
+/// A replay file the server opened, as the core's readers read it: at positions, while
+/// it may still grow. (The core opens and reads no file itself.)
+pub struct OnDisk<'a>(pub &'a std::fs::File);
+
+impl replay::Source for OnDisk<'_> {
+    fn read_at(&self, buf: &mut [u8], at: u64) -> std::io::Result<usize> {
+        std::os::unix::fs::FileExt::read_at(self.0, buf, at)
+    }
+
+    fn size(&self) -> std::io::Result<u64> {
+        Ok(self.0.metadata()?.len())
+    }
+}
 
 /// Whether `id` can name a replay: letters, digits, `-` and `_` only, so no id reaches
 /// outside the directory.
@@ -121,7 +135,7 @@ impl Found {
     /// How the file is stored, told by its first bytes; by its name if they tell
     /// nothing (it is no replay, or is empty).
     pub fn encoding(&self) -> Encoding {
-        Encoding::of_file(&self.file).unwrap_or(self.named)
+        Encoding::of_file(&OnDisk(&self.file)).unwrap_or(self.named)
     }
 }
 
@@ -335,9 +349,9 @@ impl Replays {
                 .max_by_key(|index| index.walked())
         };
         let file = file.try_clone().map_err(|e| e.to_string())?;
-        let walk = move || match earlier.as_ref().and_then(|e| e.grown(&file)) {
+        let walk = move || match earlier.as_ref().and_then(|e| e.grown(&OnDisk(&file))) {
             Some(grown) => grown,
-            None => Index::build(&file),
+            None => Index::build(&OnDisk(&file)),
         };
         let _permit = self.walks.acquire().await.map_err(|e| e.to_string())?;
         let index = tokio::task::spawn_blocking(walk)

@@ -11,7 +11,7 @@
 use super::admission::AdmittedSpectator;
 use super::error::ApiError;
 use super::range::{self, Wanted};
-use super::replay_dir;
+use super::replay_dir::{self, OnDisk};
 use super::socket::{
     answer_close, budget, classify, limits, refusal, shut, Read, Sender, Sent, GOING_AWAY, POLICY,
 };
@@ -243,7 +243,7 @@ fn listed(replays: &replay_dir::Replays, entry: &replay_dir::Entry) -> Option<Va
 /// A replay's entry in the listing, from its header and footer (read with bounds).
 fn describe(found: &replay_dir::Found) -> Value {
     let (id, bytes) = (&found.id, found.meta.len());
-    match replay::peek(&found.file) {
+    match replay::peek(&OnDisk(&found.file)) {
         Ok((header, footer)) => json!({
             "id": id,
             "bytes": bytes,
@@ -348,7 +348,7 @@ pub async fn watch(
     };
     // The first and last ticks, for the hello: a block or two read from each end.
     let ends = viewed
-        .blocking(|index, file, cache| index.ends(file, cache))
+        .blocking(|index, file, cache| index.ends(&OnDisk(file), cache))
         .await;
     let ends = match ends {
         Ok(ends) => ends,
@@ -405,7 +405,7 @@ impl Viewed {
         let from = *next;
         let (frames, after) = self
             .blocking(move |index, file, cache| {
-                index.read(file, cache, from, BATCH_FRAMES, BATCH_BYTES)
+                index.read(&OnDisk(file), cache, from, BATCH_FRAMES, BATCH_BYTES)
             })
             .await?;
         ahead.extend(frames);
@@ -573,12 +573,12 @@ async fn view(
                         let lead_in = (lead_in_s.unwrap_or(0.0) * tick_hz) as u64;
                         let most = lead_ins.available(opened.elapsed());
                         let found = viewed.blocking(move |index, file, cache| {
-                            let Some(at) = index.seek(file, cache, tick)? else {
+                            let Some(at) = index.seek(&OnDisk(file), cache, tick)? else {
                                 return Ok(None);
                             };
-                            let floor = index.seek(file, cache, tick.saturating_sub(lead_in))?;
+                            let floor = index.seek(&OnDisk(file), cache, tick.saturating_sub(lead_in))?;
                             let floor = floor.unwrap_or(at).min(at);
-                            index.back(file, cache, at, floor, most).map(Some)
+                            index.back(&OnDisk(file), cache, at, floor, most).map(Some)
                         }).await;
                         match found {
                             Ok(Some((first, lead))) => {

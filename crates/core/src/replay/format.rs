@@ -1,7 +1,7 @@
 //! What a replay file is: its format numbers, how it is stored ([`Encoding`]), and what
 //! its header says about how it was made.
 
-use super::{chunks, read_at};
+use super::{chunks, read_at, Source};
 use serde_json::Value;
 use std::path::Path;
 
@@ -33,8 +33,8 @@ impl Encoding {
         }
     }
 
-    /// The encoding of an opened file, from its first bytes.
-    pub fn of_file(file: &std::fs::File) -> Result<Encoding, String> {
+    /// The encoding of a replay's bytes (an opened file's, say), from its first bytes.
+    pub fn of_file<S: Source + ?Sized>(file: &S) -> Result<Encoding, String> {
         let mut start = [0; 4];
         let got = read_at(file, &mut start, 0).map_err(|e| e.to_string())?;
         Encoding::of(&start[..got])

@@ -28,13 +28,14 @@
 //! [`Index::grown`] walks on from there.
 
 use super::chunks::{self, Measured, Piece, Unpacker, MAX_CHUNK_BYTES, TRAILER_BYTES};
-use super::{chunked_header, parse_header, read_at, Encoding, MAX_HEADER_BYTES};
+use super::{
+    chunked_header, parse_header, read_at, read_exact_at, Encoding, ReadFrom, Source,
+    MAX_HEADER_BYTES,
+};
 use crate::sim::Scenario;
 use serde::Deserialize;
 use serde_json::Value;
-use std::fs::File;
-use std::io::{self, BufRead, BufReader, Read, Seek, SeekFrom};
-use std::os::unix::fs::FileExt;
+use std::io::{self, BufRead, BufReader, Read};
 use std::sync::OnceLock;
 
 /// The longest record read after the header: frames are kilobytes (the longest line of
@@ -199,13 +200,12 @@ impl Index {
     /// missing or unreadable header is an error (the same cases as [`super::parse`]);
     /// anything later that does not read ends the walk, with the reason in `problem`.
     /// Memory: the index and one read buffer; no frame is parsed.
-    pub fn build(mut file: &File) -> Result<Index, String> {
+    pub fn build<S: Source + ?Sized>(file: &S) -> Result<Index, String> {
         let encoding = Encoding::of_file(file)?;
         let (header, scenario, offset, number) = match encoding {
             Encoding::Plain => {
-                file.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
                 let mut first = Vec::new();
-                BufReader::new(file.take(MAX_HEADER_BYTES))
+                BufReader::new(ReadFrom::new(file, 0).take(MAX_HEADER_BYTES))
                     .read_until(b'\n', &mut first)
                     .map_err(|e| e.to_string())?;
                 let (header, scenario) = parse_header(&first)?;
@@ -242,7 +242,7 @@ impl Index {
     /// of them, and only the bytes after them are read. None if there is nothing to
     /// read on from (the file is complete, or the walk ended at something that does
     /// not read).
-    pub fn grown(&self, file: &File) -> Option<Result<Index, String>> {
+    pub fn grown<S: Source + ?Sized>(&self, file: &S) -> Option<Result<Index, String>> {
         if !self.walk.at_end || self.complete() {
             return None;
         }
@@ -257,7 +257,7 @@ impl Index {
         self.walk.offset
     }
 
-    fn walk_on(&mut self, file: &File) -> Result<(), String> {
+    fn walk_on<S: Source + ?Sized>(&mut self, file: &S) -> Result<(), String> {
         match self.encoding {
             Encoding::Plain => self.walk_lines(file),
             Encoding::Zstd => self.walk_chunks(file),
@@ -292,10 +292,8 @@ impl Index {
 
     /// Walks whole lines from where the walk stopped, to the end or the first that does
     /// not read; a last line that is a footer is the footer.
-    fn walk_lines(&mut self, mut file: &File) -> Result<(), String> {
-        file.seek(SeekFrom::Start(self.walk.offset))
-            .map_err(|e| e.to_string())?;
-        let mut reader = BufReader::with_capacity(64 * 1024, file);
+    fn walk_lines<S: Source + ?Sized>(&mut self, file: &S) -> Result<(), String> {
+        let mut reader = BufReader::with_capacity(64 * 1024, ReadFrom::new(file, self.walk.offset));
         let mut line = Vec::new();
         // A walk starts a block of its own, so no block learned before it changes.
         let mut first = true;
@@ -343,8 +341,7 @@ impl Index {
         if self.walk.at_end && self.problem.is_none() {
             if let Some(last) = self.walk.last {
                 let mut text = vec![0; last.len as usize];
-                file.read_exact_at(&mut text, last.offset)
-                    .map_err(|e| e.to_string())?;
+                read_exact_at(file, &mut text, last.offset).map_err(|e| e.to_string())?;
                 if let Some(footer) = footer_of(&text) {
                     self.footer = Some(footer);
                     self.take_off_the_end(last.len + 1);
@@ -356,7 +353,7 @@ impl Index {
 
     /// Walks whole chunks from where the walk stopped, by their headers, to the end or
     /// the first piece that does not read; the chunk the trailer names is the footer.
-    fn walk_chunks(&mut self, file: &File) -> Result<(), String> {
+    fn walk_chunks<S: Source + ?Sized>(&mut self, file: &S) -> Result<(), String> {
         // The bytes from `walk.offset` on that have been read, from `pos` in `buf`.
         let (mut buf, mut pos, mut ended) = (Vec::new(), 0usize, false);
         let (mut first, mut block_text) = (true, 0u64);
@@ -430,14 +427,18 @@ impl Index {
 
     /// Reads the footer from the chunk the trailer names, which must be the last one
     /// walked, and takes it out of the last block; or says why not.
-    fn take_chunked_footer(&mut self, file: &File, footer_at: u64) -> Option<String> {
+    fn take_chunked_footer<S: Source + ?Sized>(
+        &mut self,
+        file: &S,
+        footer_at: u64,
+    ) -> Option<String> {
         let last = self.walk.last.filter(|last| last.offset == footer_at);
         let Some(last) = last else {
             return chunks::trailer_problem(footer_at, self.walk.last.map(|l| l.offset));
         };
         let not_a_footer = || Some("the trailer names a chunk that is not a footer".into());
         let mut packed = vec![0; last.len as usize];
-        if file.read_exact_at(&mut packed, last.offset).is_err() {
+        if read_exact_at(file, &mut packed, last.offset).is_err() {
             return not_a_footer();
         }
         let mut text = Vec::new();
@@ -471,9 +472,9 @@ impl Index {
 
     /// Decodes block `k` into `cache` (unless it holds it already), learning what it
     /// holds.
-    fn decode<'c>(
+    fn decode<'c, S: Source + ?Sized>(
         &self,
-        file: &File,
+        file: &S,
         cache: &'c mut BlockCache,
         k: u32,
     ) -> io::Result<&'c Decoded> {
@@ -486,7 +487,7 @@ impl Index {
         decoded.text.clear();
         decoded.frames.clear();
         cache.raw.resize(block.len as usize, 0);
-        file.read_exact_at(&mut cache.raw, block.offset)?;
+        read_exact_at(file, &mut cache.raw, block.offset)?;
         let damaged = |why: &str| {
             io::Error::new(
                 io::ErrorKind::InvalidData,
@@ -566,7 +567,12 @@ impl Index {
     }
 
     /// What block `k` holds, decoding it if nobody has yet.
-    fn learn(&self, file: &File, cache: &mut BlockCache, k: u32) -> io::Result<Learned> {
+    fn learn<S: Source + ?Sized>(
+        &self,
+        file: &S,
+        cache: &mut BlockCache,
+        k: u32,
+    ) -> io::Result<Learned> {
         if let Some(learned) = self.learned[k as usize].get() {
             return Ok(*learned);
         }
@@ -585,9 +591,9 @@ impl Index {
 
     /// The ticks of the file's first and last frames (None without frames), looked for
     /// in at most 64 blocks from each end.
-    pub fn ends(
+    pub fn ends<S: Source + ?Sized>(
         &self,
-        file: &File,
+        file: &S,
         cache: &mut BlockCache,
     ) -> io::Result<(Option<u64>, Option<u64>)> {
         let n = self.block_count();
@@ -613,7 +619,12 @@ impl Index {
     /// The first frame at or after `tick` (a file's ticks never go back): a binary
     /// search over the blocks, then over the frames of one. None if every frame is
     /// before it.
-    pub fn seek(&self, file: &File, cache: &mut BlockCache, tick: u64) -> io::Result<Option<At>> {
+    pub fn seek<S: Source + ?Sized>(
+        &self,
+        file: &S,
+        cache: &mut BlockCache,
+        tick: u64,
+    ) -> io::Result<Option<At>> {
         // The first block with a frame at or after `tick` is in lo..=hi (hi: none).
         let (mut lo, mut hi) = (0, self.block_count());
         while lo < hi {
@@ -647,9 +658,9 @@ impl Index {
     /// Where the frames up to `most` before `at` start, but not before `floor` (both
     /// places of frames, `floor` not after `at`), and how many frames that is: where a
     /// seek's lead-in starts.
-    pub fn back(
+    pub fn back<S: Source + ?Sized>(
         &self,
-        file: &File,
+        file: &S,
         cache: &mut BlockCache,
         at: At,
         floor: At,
@@ -679,9 +690,9 @@ impl Index {
     /// Reads frames from `from` on (the first frame at or after it): at least one if
     /// there is one, then more, up to `most` of them, while their text is at most
     /// `budget` bytes; and where the next read goes on. Empty at the end of the file.
-    pub fn read(
+    pub fn read<S: Source + ?Sized>(
         &self,
-        file: &File,
+        file: &S,
         cache: &mut BlockCache,
         from: At,
         most: usize,
@@ -765,6 +776,18 @@ mod tests {
 
     const HEADER: &str = r#"{"record":"header","format":1,"match":{"id":"m"},"scenario":{"sport":"baseball"},"seed":1}"#;
 
+    /// These tests keep replays in files (one grows while it is read), read as the
+    /// server reads its own.
+    impl crate::replay::Source for std::fs::File {
+        fn read_at(&self, buf: &mut [u8], at: u64) -> std::io::Result<usize> {
+            std::os::unix::fs::FileExt::read_at(self, buf, at)
+        }
+
+        fn size(&self) -> std::io::Result<u64> {
+            Ok(self.metadata()?.len())
+        }
+    }
+
     fn tempfile() -> std::fs::File {
         tempfile::tempfile().unwrap()
     }
@@ -832,10 +855,38 @@ mod tests {
         (bytes, truth)
     }
 
+    #[test]
+    fn bytes_in_memory_read_as_the_file_they_were_written_to() {
+        for encoding in [Encoding::Plain, Encoding::Zstd] {
+            let (bytes, truth) = sample(encoding, 2000, 7, true);
+            let index = Index::build(&bytes[..]).unwrap();
+            assert!(index.complete());
+            let mut cache = BlockCache::default();
+            assert_eq!(read_all(&index, &bytes[..], &mut cache).unwrap(), truth);
+            let on_disk = file_of(&bytes);
+            assert_eq!(
+                crate::replay::peek(&bytes[..]).unwrap(),
+                crate::replay::peek(&on_disk).unwrap()
+            );
+            // Cut anywhere, bytes and file stop at the same frame.
+            for cut in [0, 10, bytes.len() / 3, bytes.len() - 1] {
+                let (mem, disk) = (
+                    Index::build(&bytes[..cut]),
+                    Index::build(&file_of(&bytes[..cut])),
+                );
+                assert_eq!(
+                    mem.map(|i| i.frames()),
+                    disk.map(|i| i.frames()),
+                    "cut at {cut}"
+                );
+            }
+        }
+    }
+
     /// Every frame, read from the start a batch at a time.
-    fn read_all(
+    fn read_all<S: crate::replay::Source + ?Sized>(
         index: &Index,
-        file: &std::fs::File,
+        file: &S,
         cache: &mut BlockCache,
     ) -> std::io::Result<Vec<Frame>> {
         let (mut all, mut at) = (Vec::new(), At::START);

@@ -55,10 +55,10 @@
 //! reading detects and ignores; a finished file is flushed and synced before the match
 //! is reported ended.
 //!
-//! **Reading.** [`parse`] takes a whole file's bytes, for tools; the server reads
-//! through an [`Index`] (an entry per block of the file, never per frame, so a file's
-//! index is bounded by its bytes) and [`peek`], which bound every line and chunk they
-//! read.
+//! **Reading.** [`parse`] takes a whole file's bytes, for tools; the server reads a
+//! [`Source`] (its open file, at positions) through an [`Index`] (an entry per block of
+//! the file, never per frame, so a file's index is bounded by its bytes) and [`peek`],
+//! which bound every line and chunk they read.
 //!
 //! **Files.** `format.rs`: the format numbers, [`Encoding`], what a header says;
 //! `writer.rs`: the [`Recorder`] and the records it writes (to a writer the edge
@@ -84,12 +84,34 @@ pub use writer::{command_record, control_record, header, Durable, Recorder};
 
 use std::io;
 
-/// Reads `buf.len()` bytes at `at`, or fewer if the file ends first; returns how many.
-pub(crate) fn read_at(file: &std::fs::File, buf: &mut [u8], at: u64) -> io::Result<usize> {
-    use std::os::unix::fs::FileExt;
+/// A replay's bytes, read at positions: what the [`Index`] and [`peek`] read. The server
+/// hands in a file it opened (which may grow while it is read); tests and fuzz targets,
+/// bytes in memory. The core opens nothing.
+pub trait Source {
+    /// Reads into `buf` at `at`; how many bytes were read (0: nothing there).
+    fn read_at(&self, buf: &mut [u8], at: u64) -> io::Result<usize>;
+    /// How many bytes there are now.
+    fn size(&self) -> io::Result<u64>;
+}
+
+impl Source for [u8] {
+    fn read_at(&self, buf: &mut [u8], at: u64) -> io::Result<usize> {
+        let start = usize::try_from(at).unwrap_or(usize::MAX).min(self.len());
+        let n = buf.len().min(self.len() - start);
+        buf[..n].copy_from_slice(&self[start..start + n]);
+        Ok(n)
+    }
+
+    fn size(&self) -> io::Result<u64> {
+        Ok(<[u8]>::len(self) as u64)
+    }
+}
+
+/// Reads `buf.len()` bytes at `at`, or fewer if the source ends first; returns how many.
+pub(crate) fn read_at<S: Source + ?Sized>(src: &S, buf: &mut [u8], at: u64) -> io::Result<usize> {
     let mut filled = 0;
     while filled < buf.len() {
-        match file.read_at(&mut buf[filled..], at + filled as u64) {
+        match src.read_at(&mut buf[filled..], at + filled as u64) {
             Ok(0) => break,
             Ok(n) => filled += n,
             Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
@@ -97,4 +119,39 @@ pub(crate) fn read_at(file: &std::fs::File, buf: &mut [u8], at: u64) -> io::Resu
         }
     }
     Ok(filled)
+}
+
+/// Reads all of `buf` at `at`; an error if the source ends first.
+pub(crate) fn read_exact_at<S: Source + ?Sized>(
+    src: &S,
+    buf: &mut [u8],
+    at: u64,
+) -> io::Result<()> {
+    if read_at(src, buf, at)? < buf.len() {
+        return Err(io::Error::new(
+            io::ErrorKind::UnexpectedEof,
+            "the replay ends here",
+        ));
+    }
+    Ok(())
+}
+
+/// A source read on from a position, as [`io::Read`] (for buffered line and chunk reads).
+pub(crate) struct ReadFrom<'a, S: ?Sized> {
+    src: &'a S,
+    at: u64,
+}
+
+impl<'a, S: Source + ?Sized> ReadFrom<'a, S> {
+    pub(crate) fn new(src: &'a S, at: u64) -> ReadFrom<'a, S> {
+        ReadFrom { src, at }
+    }
+}
+
+impl<S: Source + ?Sized> io::Read for ReadFrom<'_, S> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let n = self.src.read_at(buf, self.at)?;
+        self.at += n as u64;
+        Ok(n)
+    }
 }

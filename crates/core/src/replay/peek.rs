@@ -3,7 +3,7 @@
 
 use super::chunks;
 use super::format::{Encoding, FORMAT};
-use super::read_at;
+use super::{read_at, ReadFrom, Source};
 use crate::sim::Scenario;
 use serde_json::Value;
 use std::io;
@@ -19,7 +19,7 @@ const TAIL_BYTES: u64 = 64 * 1024;
 /// between them: for listing many large files. Reads at most [`MAX_HEADER_BYTES`] from
 /// the start and 64 KiB from the end, whatever the file holds (in format 2: the header
 /// chunk, the trailer and the footer chunk it names).
-pub fn peek(file: &std::fs::File) -> Result<(Value, Option<Value>), String> {
+pub fn peek<S: Source + ?Sized>(file: &S) -> Result<(Value, Option<Value>), String> {
     match Encoding::of_file(file)? {
         Encoding::Plain => peek_plain(file),
         Encoding::Zstd => {
@@ -29,15 +29,14 @@ pub fn peek(file: &std::fs::File) -> Result<(Value, Option<Value>), String> {
     }
 }
 
-fn peek_plain(mut file: &std::fs::File) -> Result<(Value, Option<Value>), String> {
-    use std::io::{BufRead, Read, Seek, SeekFrom};
-    file.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
+fn peek_plain<S: Source + ?Sized>(file: &S) -> Result<(Value, Option<Value>), String> {
+    use std::io::{BufRead, Read};
     let mut first = Vec::new();
-    io::BufReader::new(file.take(MAX_HEADER_BYTES))
+    io::BufReader::new(ReadFrom::new(file, 0).take(MAX_HEADER_BYTES))
         .read_until(b'\n', &mut first)
         .map_err(|e| e.to_string())?;
     let (header, _) = parse_header(&first)?;
-    let len = file.metadata().map_err(|e| e.to_string())?.len();
+    let len = file.size().map_err(|e| e.to_string())?;
     let start = len.saturating_sub(TAIL_BYTES);
     let mut tail = vec![0; (len - start) as usize];
     let filled = read_at(file, &mut tail, start).map_err(|e| e.to_string())?;
@@ -51,10 +50,9 @@ fn peek_plain(mut file: &std::fs::File) -> Result<(Value, Option<Value>), String
 }
 
 /// The header of a format 2 file, from its first chunk (read with bounds).
-pub(crate) fn chunked_header(mut file: &std::fs::File) -> Result<(Value, Scenario), String> {
-    use std::io::{Read, Seek, SeekFrom};
-    file.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
-    let mut input = io::BufReader::new(file.take(MAX_HEADER_BYTES));
+pub(crate) fn chunked_header<S: Source + ?Sized>(file: &S) -> Result<(Value, Scenario), String> {
+    use std::io::Read;
+    let mut input = io::BufReader::new(ReadFrom::new(file, 0).take(MAX_HEADER_BYTES));
     let mut unpacker = chunks::Unpacker::new(0).map_err(|e| e.to_string())?;
     let mut text = Vec::new();
     let piece = unpacker
@@ -79,8 +77,8 @@ pub(crate) fn chunked_header(mut file: &std::fs::File) -> Result<(Value, Scenari
 
 /// The footer of a format 2 file, found through its trailer; None if the file has no
 /// trailer (it is incomplete) or the trailer does not lead to a footer.
-fn chunked_footer(file: &std::fs::File) -> Result<Option<Value>, String> {
-    let len = file.metadata().map_err(|e| e.to_string())?.len();
+fn chunked_footer<S: Source + ?Sized>(file: &S) -> Result<Option<Value>, String> {
+    let len = file.size().map_err(|e| e.to_string())?;
     let trailer_at = len.saturating_sub(chunks::TRAILER_BYTES as u64);
     let mut trailer = [0; chunks::TRAILER_BYTES];
     if read_at(file, &mut trailer, trailer_at).map_err(|e| e.to_string())? < trailer.len() {
