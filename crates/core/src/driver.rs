@@ -439,14 +439,16 @@ impl MatchDriver {
         if !self.seated_at(agent, conn) {
             return; // a replaced or closed connection
         }
-        let world_tick = self.session.world.tick();
-        let every = self.perceive_every;
+        // A command is read once: its tick, what it asks, and whether its tick is in
+        // the window (only then may it act, or answer a perception).
+        let (now_tick, every) = (self.session.world.tick(), self.perceive_every);
+        let said = said.map(|ClientMessage::Command { tick, action }| {
+            (tick, action, in_window(tick, now_tick, every))
+        });
         let seat = self.seats[agent].as_mut().expect("seated");
         let answers = match &said {
-            Ok(ClientMessage::Command { tick, .. }) => {
-                in_window(*tick, world_tick, every).is_ok() && seat.settle(*tick)
-            }
-            Err(_) => false,
+            Ok((tick, _, Ok(()))) => seat.settle(*tick),
+            _ => false,
         };
         if !answers {
             match seat.budget.charge(now) {
@@ -466,16 +468,15 @@ impl MatchDriver {
             }
         }
         match said {
-            Ok(ClientMessage::Command { tick, action }) => self.command(agent, conn, tick, &action),
+            Ok((_, action, Ok(()))) => self.command(agent, conn, &action),
+            Ok((_, _, Err((code, text)))) => self.tell(conn, code, &text),
             Err((code, message)) => self.tell(conn, code, &message),
         }
     }
 
-    fn command(&mut self, agent: usize, conn: Conn, tick: u64, action: &Action) {
+    /// A command whose tick is in the window, for the world.
+    fn command(&mut self, agent: usize, conn: Conn, action: &Action) {
         let now = self.session.world.tick();
-        if let Err((code, text)) = in_window(tick, now, self.perceive_every) {
-            return self.tell(conn, code, &text);
-        }
         // Any command in the window answers its tick, even one the world rejects:
         // lockstep waits for bots to speak, not to be right.
         match self.session.world.command(agent, action) {

@@ -191,9 +191,7 @@ impl MatchTask {
                 panic = panic_message(panic.as_ref()),
                 "the match task panicked; ending the match"
             );
-            self.driver.stop(EndReason::Error);
-            self.carry_out(Instant::now())
-                .expect("a stopped driver says how the match ended")
+            self.stop(EndReason::Error)
         });
         self.end(ending).await;
     }
